@@ -1,0 +1,107 @@
+/// @file obj_loader.cpp
+/// Wavefront OBJ loading through tinyobjloader (the only file that includes it), with welding by
+/// position and area-weighted vertex normals. See load_obj() in qsil/scene.h.
+
+#include "qsil/error.h"
+#include "qsil/scene.h"
+
+#define TINYOBJLOADER_IMPLEMENTATION
+#include <tiny_obj_loader.h>
+
+#include <map>
+#include <sstream>
+
+namespace qsil {
+
+std::vector<Vec3> vertex_normals(const TriangleMesh& mesh) {
+  std::vector<Vec3> n(mesh.positions.size(), Vec3::Zero());
+  for (int f = 0; f < mesh.num_triangles(); ++f) {
+    const Vec3 c = mesh.face_cross(f);  // length = 2 * area: area weighting
+    for (int k = 0; k < 3; ++k) n[mesh.triangles[f][k]] += c;
+  }
+  for (auto& v : n) {
+    const double len = v.norm();
+    v = len > 0 ? Vec3(v / len) : Vec3(0, 0, 1);
+  }
+  return n;
+}
+
+TriangleMesh load_obj(const std::filesystem::path& path, bool weld, std::vector<std::string>* warnings) {
+  const std::string name = path.string();
+  if (!std::filesystem::exists(path)) throw Error(name + ": file not found");
+  tinyobj::ObjReaderConfig config;
+  config.triangulate = true;
+  config.vertex_color = false;
+  tinyobj::ObjReader reader;
+  if (!reader.ParseFromFile(name, config)) {
+    std::string msg = reader.Error();
+    while (!msg.empty() && (msg.back() == '\n' || msg.back() == '\r')) msg.pop_back();
+    if (auto nl = msg.find('\n'); nl != std::string::npos) msg = msg.substr(0, nl);
+    throw Error(name + ": cannot parse OBJ" + (msg.empty() ? "" : ": " + msg));
+  }
+  const auto& attrib = reader.GetAttrib();
+  const auto& shapes = reader.GetShapes();
+  const size_t nv = attrib.vertices.size() / 3;
+  for (size_t i = 0; i < attrib.vertices.size(); ++i)
+    if (!std::isfinite(attrib.vertices[i]))
+      throw Error(name + ": vertex " + std::to_string(i / 3 + 1) + " has a non-finite coordinate");
+  const bool has_normals = !attrib.normals.empty() && !weld;
+
+  TriangleMesh mesh;
+  // Welding: identical positions map to one vertex, so that faces on either side of a UV or
+  // normal seam share their edge (the edge forest needs mesh adjacency). Without welding, each
+  // distinct (position, normal) index pair becomes a vertex.
+  std::map<std::array<double, 3>, int> by_position;
+  std::map<std::pair<int, int>, int> by_pair;
+  auto vertex_of = [&](const tinyobj::index_t& idx) -> int {
+    if (idx.vertex_index < 0 || size_t(idx.vertex_index) >= nv)
+      throw Error(name + ": face refers to vertex " + std::to_string(idx.vertex_index + 1) + " of " +
+                  std::to_string(nv));
+    const Vec3 p(attrib.vertices[3 * idx.vertex_index], attrib.vertices[3 * idx.vertex_index + 1],
+                 attrib.vertices[3 * idx.vertex_index + 2]);
+    if (weld) {
+      auto [it, inserted] = by_position.try_emplace({p.x(), p.y(), p.z()}, mesh.num_vertices());
+      if (inserted) mesh.positions.push_back(p);
+      return it->second;
+    }
+    const int nidx = has_normals ? idx.normal_index : -1;
+    auto [it, inserted] = by_pair.try_emplace({idx.vertex_index, nidx}, mesh.num_vertices());
+    if (inserted) {
+      mesh.positions.push_back(p);
+      if (has_normals) {
+        Vec3 n = nidx >= 0 ? Vec3(attrib.normals[3 * nidx], attrib.normals[3 * nidx + 1],
+                                  attrib.normals[3 * nidx + 2])
+                           : Vec3::Zero();
+        mesh.normals.push_back(n);
+      }
+    }
+    return it->second;
+  };
+  size_t degenerate = 0;
+  for (const auto& shape : shapes) {
+    const auto& ids = shape.mesh.indices;
+    for (size_t f = 0; f + 2 < ids.size(); f += 3) {
+      Eigen::Vector3i tri(vertex_of(ids[f]), vertex_of(ids[f + 1]), vertex_of(ids[f + 2]));
+      mesh.triangles.push_back(tri);
+      if (!(mesh.area(mesh.num_triangles() - 1) > 0)) {
+        mesh.triangles.pop_back();
+        ++degenerate;
+      }
+    }
+  }
+  if (mesh.triangles.empty() && degenerate == 0) throw Error(name + ": OBJ has no faces");
+  if (mesh.triangles.empty()) throw Error(name + ": every face of the OBJ has zero area");
+  if (degenerate > 0 && warnings)
+    warnings->push_back(name + ": dropped " + std::to_string(degenerate) + " zero-area triangle(s)");
+  // Vertices only referenced by dropped faces stay in the array; they are harmless (unreferenced).
+  bool normals_ok = has_normals;
+  for (auto& n : mesh.normals) {
+    const double len = n.norm();
+    if (!(len > 0) || !std::isfinite(len)) { normals_ok = false; break; }
+    n /= len;
+  }
+  if (!normals_ok) mesh.normals = vertex_normals(mesh);
+  return mesh;
+}
+
+}  // namespace qsil
