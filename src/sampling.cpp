@@ -1,0 +1,185 @@
+/// @file sampling.cpp
+/// Warps and piecewise-constant distributions (see include/qsil/sampling.h).
+
+#include "qsil/sampling.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace qsil {
+
+namespace {
+/// Largest double below 1: the upper end of every "[0,1)" output.
+constexpr double kOneMinusEpsilon = 1.0 - std::numeric_limits<double>::epsilon() / 2;
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// Warps
+// ---------------------------------------------------------------------------------------------
+
+Vec3 square_to_uniform_sphere(const Vec2& u) {
+  // z uniform in [-1,1] (Archimedes), phi uniform.
+  const double z = 1.0 - 2.0 * u.x();
+  const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
+  const double phi = 2.0 * kPi * u.y();
+  return {r * std::cos(phi), r * std::sin(phi), z};
+}
+
+Vec3 square_to_uniform_hemisphere(const Vec2& u) {
+  const double z = u.x();
+  const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
+  const double phi = 2.0 * kPi * u.y();
+  return {r * std::cos(phi), r * std::sin(phi), z};
+}
+
+Vec2 square_to_concentric_disk(const Vec2& u) {
+  // pbrt-v4 SampleUniformDiskConcentric.
+  const double ox = 2.0 * u.x() - 1.0, oy = 2.0 * u.y() - 1.0;
+  if (ox == 0.0 && oy == 0.0) return Vec2::Zero();
+  double r, theta;
+  if (std::abs(ox) > std::abs(oy)) {
+    r = ox;
+    theta = 0.25 * kPi * (oy / ox);
+  } else {
+    r = oy;
+    theta = 0.5 * kPi - 0.25 * kPi * (ox / oy);
+  }
+  return {r * std::cos(theta), r * std::sin(theta)};
+}
+
+Vec3 square_to_cosine_hemisphere(const Vec2& u) {
+  const Vec2 d = square_to_concentric_disk(u);
+  const double z = std::sqrt(std::max(0.0, 1.0 - d.squaredNorm()));
+  return {d.x(), d.y(), z};
+}
+
+Vec3 square_to_uniform_triangle(const Vec2& u) {
+  // pbrt-v4 SampleUniformTriangle (Heitz 2019, "A Low-Distortion Map Between Triangle and Square").
+  double b0, b1;
+  if (u.x() < u.y()) {
+    b0 = u.x() / 2;
+    b1 = u.y() - b0;
+  } else {
+    b1 = u.y() / 2;
+    b0 = u.x() - b1;
+  }
+  return {b0, b1, 1.0 - b0 - b1};
+}
+
+// ---------------------------------------------------------------------------------------------
+// Distribution1D
+// ---------------------------------------------------------------------------------------------
+
+Distribution1D::Distribution1D(std::span<const double> f) : f_(f.begin(), f.end()) {
+  if (f_.empty()) throw std::invalid_argument("Distribution1D: no bins");
+  for (size_t i = 0; i < f_.size(); ++i)
+    if (!(f_[i] >= 0.0) || !std::isfinite(f_[i]))
+      throw std::invalid_argument("Distribution1D: weight " + std::to_string(i) +
+                                  " is negative or not finite");
+  const size_t n = f_.size();
+  cdf_.assign(n + 1, 0.0);
+  for (size_t i = 0; i < n; ++i) cdf_[i + 1] = cdf_[i] + f_[i];
+  sum_ = cdf_[n];
+  is_zero_ = !(sum_ > 0.0);
+  if (is_zero_) {
+    // Degenerate: keep a uniform CDF so that sample() still yields well-formed numbers.
+    for (size_t i = 0; i <= n; ++i) cdf_[i] = double(i) / double(n);
+  } else {
+    // Dividing the prefix sums by their total keeps them monotone and makes cdf_[n] exactly 1;
+    // a zero-weight bin keeps exactly zero width.
+    for (size_t i = 1; i < n; ++i) cdf_[i] /= sum_;
+    cdf_[n] = 1.0;
+  }
+}
+
+int Distribution1D::find_bin(double u) const {
+  const int n = size();
+  // Largest i with cdf[i] <= u, clamped to [0, n-1].
+  int i = int(std::upper_bound(cdf_.begin(), cdf_.end(), u) - cdf_.begin()) - 1;
+  i = std::clamp(i, 0, n - 1);
+  if (is_zero_ || f_[size_t(i)] > 0.0) return i;
+  // Rounding put u on a zero-width bin (u at or beyond the top of the CDF, or on a plateau):
+  // move to the nearest bin of non-zero weight, preferring the one below (the CDF plateau is
+  // reached from below), never a zero-probability bin and never an arbitrary fallback index.
+  for (int j = i - 1; j >= 0; --j)
+    if (f_[size_t(j)] > 0.0) return j;
+  for (int j = i + 1; j < n; ++j)
+    if (f_[size_t(j)] > 0.0) return j;
+  return i;  // unreachable for a non-degenerate distribution
+}
+
+Distribution1D::Sample Distribution1D::sample(double u) const {
+  Sample s;
+  const int n = size();
+  if (n == 0) return s;
+  u = std::clamp(u, 0.0, kOneMinusEpsilon);
+  const int i = find_bin(u);
+  const double width = cdf_[size_t(i) + 1] - cdf_[size_t(i)];
+  double du = width > 0.0 ? (u - cdf_[size_t(i)]) / width : 0.5;
+  du = std::clamp(du, 0.0, kOneMinusEpsilon);
+  double x = (double(i) + du) / double(n);
+  // Keep x inside bin i despite rounding of (i + du)/n, so that pdf(x) refers to the same bin.
+  while (x > 0.0 && int(x * n) > i) x = std::nextafter(x, 0.0);
+  while (int(x * n) < i) x = std::nextafter(x, 1.0);
+  s.x = x;
+  s.index = i;
+  if (!is_zero_) {
+    s.pmf = f_[size_t(i)] / sum_;
+    s.pdf = f_[size_t(i)] / integral();
+  }
+  return s;
+}
+
+Distribution1D::Sample Distribution1D::sample_discrete(double u) const {
+  Sample s = sample(u);
+  // Position of u inside the chosen bin, reusable as a fresh uniform number.
+  s.x = std::clamp(s.x * size() - s.index, 0.0, kOneMinusEpsilon);
+  s.pdf = 0;
+  return s;
+}
+
+double Distribution1D::pdf(double x) const {
+  if (is_zero_ || !(x >= 0.0) || !(x < 1.0)) return 0.0;
+  const int i = std::min(int(x * size()), size() - 1);
+  return f_[size_t(i)] / integral();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Distribution2D
+// ---------------------------------------------------------------------------------------------
+
+Distribution2D::Distribution2D(std::span<const double> f, int nu, int nv) : nu_(nu), nv_(nv) {
+  if (nu <= 0 || nv <= 0 || f.size() != size_t(nu) * size_t(nv))
+    throw std::invalid_argument("Distribution2D: size mismatch");
+  conditional_.reserve(size_t(nv));
+  std::vector<double> row_integrals(static_cast<size_t>(nv));
+  for (int v = 0; v < nv; ++v) {
+    conditional_.emplace_back(f.subspan(size_t(v) * size_t(nu), size_t(nu)));
+    row_integrals[size_t(v)] = conditional_.back().integral();
+  }
+  marginal_ = Distribution1D(row_integrals);
+}
+
+Distribution2D::Sample Distribution2D::sample(const Vec2& u) const {
+  Sample s;
+  if (nv_ == 0) return s;
+  const Distribution1D::Sample row = marginal_.sample(u.y());
+  // The marginal never picks a row of zero integral, so the conditional is non-degenerate.
+  const Distribution1D::Sample col = conditional_[size_t(row.index)].sample(u.x());
+  s.p = Vec2(col.x, row.x);
+  s.iu = col.index;
+  s.iv = row.index;
+  s.pdf = row.pdf * col.pdf;
+  return s;
+}
+
+double Distribution2D::pdf(const Vec2& p) const {
+  if (marginal_.is_zero() || !(p.x() >= 0.0 && p.x() < 1.0 && p.y() >= 0.0 && p.y() < 1.0)) return 0.0;
+  const int iu = std::min(int(p.x() * nu_), nu_ - 1);
+  const int iv = std::min(int(p.y() * nv_), nv_ - 1);
+  return conditional_[size_t(iv)].weight(iu) / marginal_.integral();
+}
+
+}  // namespace qsil
