@@ -4,6 +4,7 @@
 
 #include "qsil/error.h"
 #include "qsil/scene.h"
+#include "qsil/vertex_normals.h"
 
 #define TINYOBJLOADER_IMPLEMENTATION
 #include <tiny_obj_loader.h>
@@ -14,16 +15,7 @@
 namespace qsil {
 
 std::vector<Vec3> vertex_normals(const TriangleMesh& mesh) {
-  std::vector<Vec3> n(mesh.positions.size(), Vec3::Zero());
-  for (int f = 0; f < mesh.num_triangles(); ++f) {
-    const Vec3 c = mesh.face_cross(f);  // length = 2 * area: area weighting
-    for (int k = 0; k < 3; ++k) n[mesh.triangles[f][k]] += c;
-  }
-  for (auto& v : n) {
-    const double len = v.norm();
-    v = len > 0 ? Vec3(v / len) : Vec3(0, 0, 1);
-  }
-  return n;
+  return vertex_normals_t<double>(mesh, mesh.positions);
 }
 
 TriangleMesh load_obj(const std::filesystem::path& path, bool weld, std::vector<std::string>* warnings) {

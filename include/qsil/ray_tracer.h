@@ -1,0 +1,69 @@
+#pragma once
+/// @file ray_tracer.h
+/// Ray queries against a scene's triangle meshes through Embree 3 (src/ray_tracer.cpp is the only
+/// file that includes Embree). One RTCScene per RayTracer, one geometry per shape (geometry id =
+/// shape index), robust mode. Geometry is uploaded in float; callers that need exact hit points
+/// recompute them in double from the hit's triangle (DESIGN.md §4: Embree only chooses the triangle).
+
+#include "qsil/math.h"
+#include "qsil/scene.h"
+
+#include <array>
+#include <memory>
+
+namespace qsil {
+
+/// A ray hit: which triangle, and Embree's (float-accurate) distance and barycentrics.
+struct Hit {
+  int shape = -1;     ///< shape index, -1 for a miss
+  int triangle = -1;  ///< triangle index within the shape
+  double t = kInf;    ///< distance along the (unit) ray direction, scene units
+  double u = 0, v = 0;///< barycentrics of vertices 1 and 2
+  bool valid() const { return shape >= 0; }
+};
+
+/// Up to two triangles that a ray must not hit (e.g. the two faces of a sampled edge, or the
+/// triangle the ray starts on). shape = -1 marks an unused slot.
+struct IgnoreSet {
+  std::array<std::pair<int, int>, 2> prims{{{-1, -1}, {-1, -1}}};
+  bool contains(int shape, int tri) const {
+    return (prims[0].first == shape && prims[0].second == tri) ||
+           (prims[1].first == shape && prims[1].second == tri);
+  }
+  bool empty() const { return prims[0].first < 0 && prims[1].first < 0; }
+};
+
+/// Embree scene over all shapes of a Scene. Thread-safe for queries after construction.
+class RayTracer {
+ public:
+  /// Builds the acceleration structure over `scene.shapes` (positions converted to float).
+  /// Throws qsil::Error if Embree cannot be initialised.
+  explicit RayTracer(const Scene& scene);
+  /// Same, with replaced vertex positions per shape (used by finite differences); positions[s]
+  /// must have as many vertices as scene.shapes[s].
+  RayTracer(const Scene& scene, const std::vector<std::vector<Vec3>>& positions);
+  ~RayTracer();
+  RayTracer(const RayTracer&) = delete;
+  RayTracer& operator=(const RayTracer&) = delete;
+
+  /// Closest hit of the ray origin + t*dir, t in [0, tmax), dir unit length (world space).
+  Hit intersect(const Vec3& origin, const Vec3& dir, double tmax = kInf, const IgnoreSet& ignore = {}) const;
+  /// True if anything is hit for t in [0, tmax).
+  bool occluded(const Vec3& origin, const Vec3& dir, double tmax, const IgnoreSet& ignore = {}) const;
+
+ private:
+  struct Impl;
+  static void build_impl(Impl& impl, const Scene& scene, const std::vector<std::vector<Vec3>>* positions);
+  std::unique_ptr<Impl> impl_;
+};
+
+/// Origin offset for a ray leaving a surface point p with geometric normal ng toward dir: moves p
+/// along ±ng by a distance relative to the coordinate magnitude `scale` (the largest absolute
+/// vertex coordinate of the triangle), which bounds the float error of Embree's geometry. No
+/// absolute epsilon (DESIGN.md §5): scenes span 1e-3 to 1e4 units.
+Vec3 offset_ray_origin(const Vec3& p, const Vec3& ng, const Vec3& dir, double scale);
+
+/// Relative size of the offset used by offset_ray_origin (times the coordinate magnitude).
+inline constexpr double kRayOffsetRelative = 1.0 / 32768.0;
+
+}  // namespace qsil

@@ -1,0 +1,181 @@
+#pragma once
+/// @file path_tracer.h
+/// Unidirectional path tracing with next-event estimation and MIS (power heuristic) between BSDF
+/// sampling and emitter sampling, written once over a geometry view (PrimalView: radiance;
+/// DualView<N>: radiance and its interior-term derivative in forward mode).
+///
+/// Parametrization (DESIGN.md §4, [QSS Eq. 2]): every direction is sampled from detached values
+/// and then held fixed; what depends on theta is recomputed along the fixed directions: hit
+/// points (t and barycentrics from the moving vertices and the moving origin), normals, BSDF
+/// values and cosines. Pdfs and MIS weights are computed from detached values: differentiating the
+/// density of a detached sample would bias the estimate. NEE samples a light point but keeps only
+/// its direction; the emitted radiance along it is constant, so it carries no derivative, and
+/// there is no geometry term. Env-map radiance depends on direction only: zero derivative.
+///
+/// Depth follows Mitsuba 3: max_depth counts path segments (1 = directly seen emitters,
+/// 2 = direct illumination); -1 means unbounded, capped at kUnboundedDepthCap segments.
+
+#include "integrators/surface_interaction.h"
+#include "qsil/area_lights.h"
+#include "qsil/bsdf.h"
+#include "qsil/dual.h"
+#include "qsil/environment_light.h"
+#include "qsil/ray_tracer.h"
+#include "qsil/rng.h"
+#include "qsil/scene.h"
+
+namespace qsil {
+
+/// Segment cap for max_depth = -1 (Russian roulette is off: it adds variance to gradients).
+inline constexpr int kUnboundedDepthCap = 64;
+
+/// What every path needs: scene, ray tracer and the light samplers. Built once per render.
+struct PathContext {
+  const Scene* scene = nullptr;
+  const RayTracer* tracer = nullptr;
+  const EnvironmentLight* environment = nullptr;
+  const AreaLights* area_lights = nullptr;
+  int max_depth = 3;          ///< segments; already resolved (never -1)
+  double p_environment = 0;   ///< probability that NEE samples the environment (else area lights)
+
+  static int resolve_depth(int max_depth) { return max_depth < 0 ? kUnboundedDepthCap : max_depth; }
+};
+
+/// Counters of one thread's work (summed for the final report).
+struct PathStats {
+  uint64_t rays = 0;
+};
+
+/// Power heuristic weight of a strategy with pdf a against one with pdf b (Veach 1997). Detached.
+inline double power_heuristic(double a, double b) {
+  if (!(a > 0)) return 0.0;
+  if (!std::isfinite(a)) return 1.0;
+  const double a2 = a * a, b2 = b * b;
+  return a2 / (a2 + b2);
+}
+
+/// Solid-angle pdf with which NEE would have chosen direction `dir` toward an area-light point at
+/// distance `dist` with unit normal `light_n` (0 for the back side). Detached.
+inline double nee_area_pdf(const PathContext& ctx, double dist, const Vec3& dir, const Vec3& light_n) {
+  const double cos_l = -light_n.dot(dir);
+  if (!(cos_l > 0) || !ctx.area_lights || ctx.area_lights->empty()) return 0.0;
+  return (1.0 - ctx.p_environment) * ctx.area_lights->pdf_area() * dist * dist / cos_l;
+}
+
+/// The BSDF of a surface interaction, with the shading frame over T.
+template <class T> struct ShadingPoint {
+  const BSDFDesc* bsdf;
+  FrameT<T> frame;     ///< shading frame over T (moves with the surface)
+  Frame frame_value;   ///< its detached value (sampling happens here)
+};
+
+template <class T> ShadingPoint<T> make_shading_point(const PathContext& ctx, const SurfaceInteraction<T>& si) {
+  const Shape& shape = ctx.scene->shapes[si.shape];
+  ShadingPoint<T> sp{&ctx.scene->bsdfs[shape.bsdf], FrameT<T>(si.ns), Frame(value(si.ns))};
+  return sp;
+}
+
+/// Radiance arriving at `origin` from fixed direction `dir` along a path, plus its forward-mode
+/// derivative when T is a dual. `first_hit` is the already-traced hit of that ray (so the caller
+/// can reuse it); `segments` is the number of segments already used before this one (0 for a
+/// camera ray); `prev_bsdf_pdf` is the detached solid-angle pdf with which `dir` was chosen by
+/// BSDF sampling (0: the direction was not BSDF-sampled, so emission found along it is counted
+/// with weight 1).
+template <class View>
+ColorT<typename View::Real> trace_path(const PathContext& ctx, const View& view, const Vec3T<typename View::Real>& origin,
+                                       const Vec3& dir, const Hit& first_hit, int segments, double prev_bsdf_pdf,
+                                       Sampler& sampler, PathStats& stats) {
+  using T = typename View::Real;
+  ColorT<T> L = lift<T>(Color::Zero().eval());
+  ColorT<T> beta = lift<T>(Color::Ones().eval());
+  Vec3T<T> o = origin;
+  Vec3 d = dir;
+  Hit hit = first_hit;
+  double bsdf_pdf_prev = prev_bsdf_pdf;
+  for (int seg = segments + 1;; ++seg) {
+    // ---- The ray escaped: it sees the environment (MIS against environment NEE).
+    if (!hit.valid()) {
+      if (ctx.environment && ctx.environment->present()) {
+        double w = 1.0;
+        if (bsdf_pdf_prev > 0 && ctx.p_environment > 0)
+          w = power_heuristic(bsdf_pdf_prev, ctx.p_environment * ctx.environment->pdf(d));
+        L += beta * lift<T>(Color(ctx.environment->eval(d) * w));
+      }
+      break;
+    }
+    const SurfaceInteraction<T> si = make_interaction(view, hit, o, d);
+    const Shape& shape = ctx.scene->shapes[si.shape];
+    const Vec3 p = value(si.p);
+    const Vec3 ng = value(si.ng);
+    const Vec3 wo_world = -d;
+
+    // ---- Emission found by this segment (MIS against area-light NEE).
+    if (shape.is_emitter && ng.dot(wo_world) > 0) {
+      double w = 1.0;
+      if (bsdf_pdf_prev > 0) w = power_heuristic(bsdf_pdf_prev, nee_area_pdf(ctx, value(si.t), d, ng));
+      L += beta * lift<T>(Color(shape.radiance * w));
+    }
+    if (seg >= ctx.max_depth) break;
+
+    const ShadingPoint<T> sp = make_shading_point(ctx, si);
+    const Vec3T<T> wo = sp.frame.to_local(lift<T>(wo_world));
+    const Vec3 wo_value = value(wo);
+
+    // ---- Next-event estimation: keep only the sampled direction; re-evaluate along it.
+    {
+      const bool use_env = ctx.p_environment > 0 && sampler.next() < ctx.p_environment;
+      const Vec2 u = sampler.next2();
+      const double u_tri = sampler.next();
+      Vec3 wi;
+      Color Le = Color::Zero();
+      double pdf_light = 0, tmax = kInf;
+      if (use_env) {
+        const auto s = ctx.environment->sample(u);
+        if (s.pdf > 0) {
+          wi = s.dir;
+          Le = s.radiance;
+          pdf_light = ctx.p_environment * s.pdf;
+        }
+      } else if (ctx.area_lights && !ctx.area_lights->empty()) {
+        const auto s = ctx.area_lights->sample(u, u_tri);
+        const Vec3 to = s.point - p;
+        const double dist = to.norm();
+        if (s.pdf_area > 0 && dist > 0) {
+          wi = to / dist;
+          pdf_light = nee_area_pdf(ctx, dist, wi, s.normal);
+          if (pdf_light > 0) {
+            Le = ctx.area_lights->radiance(s.shape, s.normal, -wi);
+            tmax = dist * (1.0 - 1.0 / 4096.0);  // stop short of the light's own triangle (relative)
+          }
+        }
+      }
+      if (pdf_light > 0 && (Le > 0).any()) {
+        const Vec3T<T> wi_local = sp.frame.to_local(lift<T>(wi));
+        const ColorT<T> f = bsdf_eval<T>(*sp.bsdf, wi_local, wo);
+        if ((value(f) != 0).any()) {
+          ++stats.rays;
+          if (!ctx.tracer->occluded(offset_ray_origin(p, ng, wi, si.scale), wi, tmax)) {
+            const double w = power_heuristic(pdf_light, bsdf_pdf(*sp.bsdf, value(wi_local), wo_value));
+            L += beta * f * lift<T>(Color(Le * (w / pdf_light)));
+          }
+        }
+      }
+    }
+
+    // ---- BSDF sampling: a detached direction, then the throughput re-evaluated over T.
+    const BSDFSample bs = bsdf_sample(*sp.bsdf, wo_value, sampler.next2());
+    if (!bs.valid || !(bs.pdf > 0)) break;
+    const Vec3 wi = sp.frame_value.to_world(bs.wi).normalized();
+    const ColorT<T> f = bsdf_eval<T>(*sp.bsdf, sp.frame.to_local(lift<T>(wi)), wo);
+    beta = beta * f / T(bs.pdf);
+    if ((value(beta) == 0).all()) break;
+    bsdf_pdf_prev = bs.pdf;
+    ++stats.rays;
+    hit = ctx.tracer->intersect(offset_ray_origin(p, ng, wi, si.scale), wi);
+    o = si.p;
+    d = wi;
+  }
+  return L;
+}
+
+}  // namespace qsil

@@ -1,0 +1,218 @@
+/// @file render.cpp
+/// Primal and gradient image loops; see render.h.
+
+#include "integrators/render.h"
+
+#include "integrators/geometry_view.h"
+#include "integrators/path_tracer.h"
+#include "integrators/pixel_loop.h"
+#include "qsil/error.h"
+
+#include <tbb/enumerable_thread_specific.h>
+
+#include <atomic>
+#include <memory>
+#include <chrono>
+
+namespace qsil {
+
+namespace {
+
+int resolve_spp(const Scene& scene, const RenderOptions& o) {
+  const int spp = o.spp > 0 ? o.spp : scene.camera.spp;
+  if (spp <= 0) throw Error("spp must be positive (got " + std::to_string(spp) + ")");
+  return spp;
+}
+
+/// Builds the light samplers and path context of a scene.
+struct LightSetup {
+  EnvironmentLight environment;
+  AreaLights area_lights;
+  explicit LightSetup(const Scene& scene) : environment(scene.environment), area_lights(scene) {}
+  PathContext context(const Scene& scene, const RayTracer& tracer) const {
+    PathContext ctx;
+    ctx.scene = &scene;
+    ctx.tracer = &tracer;
+    ctx.environment = &environment;
+    ctx.area_lights = &area_lights;
+    ctx.max_depth = PathContext::resolve_depth(scene.max_depth);
+    const bool env = environment.present(), area = !area_lights.empty();
+    ctx.p_environment = env && area ? 0.5 : (env ? 1.0 : 0.0);
+    return ctx;
+  }
+};
+
+/// One estimator pass over all pixels: `sample(x, y, s, sampler, stats, out)` fills out[0..C).
+template <class SampleFn>
+RenderResult run_pixels(const Scene& scene, const RenderOptions& options, int channels, const std::string& label,
+                        SampleFn&& sample) {
+  RenderResult result;
+  result.spp = resolve_spp(scene, options);
+  const int W = scene.camera.width, H = scene.camera.height;
+  result.film = Film(W, H, channels);
+  tbb::enumerable_thread_specific<PathStats> stats;
+  std::atomic<uint64_t> nonfinite{0};
+  const auto t0 = std::chrono::steady_clock::now();
+  for_each_pixel(W, H, options.threads, options.progress ? label : "", [&](int x, int y) {
+    std::vector<double> out(channels);
+    PathStats& st = stats.local();
+    const uint64_t pixel = uint64_t(y) * W + x;
+    for (int s = 0; s < result.spp; ++s) {
+      Sampler sampler(options.seed, pixel, uint64_t(s));
+      sample(x, y, sampler, st, out.data());
+      bool finite = true;
+      for (double v : out) finite = finite && std::isfinite(v);
+      if (!finite) {
+        nonfinite.fetch_add(1);
+        std::fill(out.begin(), out.end(), 0.0);
+      }
+      result.film.add_sample(x, y, out.data());
+    }
+  });
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  for (const auto& st : stats) result.rays += st.rays;
+  result.nonfinite = nonfinite.load();
+  return result;
+}
+
+template <int N>
+RenderResult render_gradient_n(const Scene& scene, const std::vector<ParameterSpec>& params, const RenderOptions& options) {
+  const SceneVelocities vel = compute_velocities(scene, params);
+  const RayTracer tracer(scene);
+  const LightSetup lights(scene);
+  const PathContext ctx = lights.context(scene, tracer);
+  const DualView<N> view{&scene, &vel};
+  const int K = int(params.size());
+  const Camera& cam = scene.camera;
+  const Vec3 origin = cam.origin();
+  return run_pixels(scene, options, gradient_film_channels(K), "grad",
+                    [&](int x, int y, Sampler& sampler, PathStats& st, double* out) {
+    const Vec2 u = sampler.next2();
+    const Vec3 d = cam.direction(x + u.x(), y + u.y());
+    ++st.rays;
+    const Hit hit = tracer.intersect(origin, d);
+    const ColorT<Dual<N>> L = trace_path(ctx, view, lift<Dual<N>>(origin), d, hit, 0, 0.0, sampler, st);
+    for (int c = 0; c < 3; ++c) out[c] = L[c].value();
+    for (int k = 0; k < K; ++k) {
+      for (int c = 0; c < 3; ++c) out[3 * (1 + k) + c] = L[c].derivatives()[k];
+      out[3 * (1 + K) + k] = (out[3 * (1 + k)] + out[3 * (1 + k) + 1] + out[3 * (1 + k) + 2]) / 3.0;
+    }
+  });
+}
+
+}  // namespace
+
+RenderResult render_primal(const Scene& scene, const RenderOptions& options) {
+  const RayTracer tracer(scene);
+  const LightSetup lights(scene);
+  const PathContext ctx = lights.context(scene, tracer);
+  const PrimalView view{&scene};
+  const Camera& cam = scene.camera;
+  const Vec3 origin = cam.origin();
+  return run_pixels(scene, options, 3, "render", [&](int x, int y, Sampler& sampler, PathStats& st, double* out) {
+    const Vec2 u = sampler.next2();
+    const Vec3 d = cam.direction(x + u.x(), y + u.y());
+    ++st.rays;
+    const Hit hit = tracer.intersect(origin, d);
+    const Color L = trace_path(ctx, view, origin, d, hit, 0, 0.0, sampler, st);
+    for (int c = 0; c < 3; ++c) out[c] = L[c];
+  });
+}
+
+std::vector<std::string> gradient_channel_names(int num_params) {
+  std::vector<std::string> names{"R", "G", "B"};
+  for (int k = 0; k < num_params; ++k)
+    for (const char* c : {"R", "G", "B"}) names.push_back("dtheta" + std::to_string(k) + "." + c);
+  return names;
+}
+
+int gradient_film_channels(int num_params) { return 3 * (1 + num_params) + num_params; }
+
+ImageSum derivative_image_sum(const Film& film, int num_params, int k) {
+  const int c = 3 * (1 + num_params) + k;
+  ImageSum s;
+  double var = 0;
+  for (int y = 0; y < film.height(); ++y)
+    for (int x = 0; x < film.width(); ++x) {
+      s.sum += film.mean(c, x, y);
+      const double se = film.standard_error(c, x, y);
+      var += se * se;
+    }
+  s.standard_error = std::sqrt(var);
+  return s;
+}
+
+double default_fd_step(const Scene& scene, const ParameterSpec& param) {
+  switch (param.kind) {
+    case ParameterSpec::Kind::Translate:
+    case ParameterSpec::Kind::Vertex: return 1e-3 * scene.bounds().diagonal() / param.direction.norm();
+    case ParameterSpec::Kind::Rotate:
+    case ParameterSpec::Kind::Scale: return 1e-3;
+  }
+  return 1e-3;
+}
+
+RenderResult render_finite_differences(const Scene& scene, const std::vector<ParameterSpec>& params,
+                                       const std::vector<double>& steps, const RenderOptions& options) {
+  const int K = int(params.size());
+  if (K == 0) throw Error("fd needs at least one --param");
+  if (K > kMaxParameters) throw Error("at most 8 parameters per run (got " + std::to_string(K) + ")");
+  if (steps.size() != params.size()) throw Error("fd: one step per parameter expected");
+  for (double h : steps)
+    if (!(h > 0) || !std::isfinite(h)) throw Error("fd: step h must be positive and finite (got " + std::to_string(h) + ")");
+  // One scene, tracer and light setup per side of each parameter (lights move with their shapes).
+  struct Side {
+    Scene scene;
+    std::unique_ptr<RayTracer> tracer;
+    std::unique_ptr<LightSetup> lights;
+    PathContext ctx;
+  };
+  std::vector<std::unique_ptr<Side>> sides;
+  auto make_side = [&](Scene s) {
+    auto side = std::make_unique<Side>();
+    side->scene = std::move(s);
+    side->tracer = std::make_unique<RayTracer>(side->scene);
+    side->lights = std::make_unique<LightSetup>(side->scene);
+    side->ctx = side->lights->context(side->scene, *side->tracer);
+    return side;
+  };
+  sides.push_back(make_side(scene));
+  for (int k = 0; k < K; ++k) {
+    sides.push_back(make_side(displaced_scene(scene, params, k, +steps[k])));
+    sides.push_back(make_side(displaced_scene(scene, params, k, -steps[k])));
+  }
+  const Camera& cam = scene.camera;
+  const Vec3 origin = cam.origin();
+  auto radiance = [&](const Side& side, Sampler sampler, PathStats& st, const Vec2& u, int x, int y) {
+    const Vec3 d = cam.direction(x + u.x(), y + u.y());
+    ++st.rays;
+    const Hit hit = side.tracer->intersect(origin, d);
+    return trace_path(side.ctx, PrimalView{&side.scene}, origin, d, hit, 0, 0.0, sampler, st);
+  };
+  return run_pixels(scene, options, gradient_film_channels(K), "fd",
+                    [&](int x, int y, Sampler& sampler, PathStats& st, double* out) {
+    const Vec2 u = sampler.next2();
+    // Common random numbers: every side continues from a copy of the same sampler state.
+    const Color L0 = radiance(*sides[0], sampler, st, u, x, y);
+    for (int c = 0; c < 3; ++c) out[c] = L0[c];
+    for (int k = 0; k < K; ++k) {
+      const Color Lp = radiance(*sides[1 + 2 * k], sampler, st, u, x, y);
+      const Color Lm = radiance(*sides[2 + 2 * k], sampler, st, u, x, y);
+      const Color dL = (Lp - Lm) / (2.0 * steps[k]);
+      for (int c = 0; c < 3; ++c) out[3 * (1 + k) + c] = dL[c];
+      out[3 * (1 + K) + k] = dL.mean();
+    }
+  });
+}
+
+RenderResult render_gradient(const Scene& scene, const std::vector<ParameterSpec>& params, const RenderOptions& options) {
+  const size_t K = params.size();
+  if (K == 0) throw Error("grad needs at least one --param");
+  if (K == 1) return render_gradient_n<1>(scene, params, options);
+  if (K == 2) return render_gradient_n<2>(scene, params, options);
+  if (K <= 4) return render_gradient_n<4>(scene, params, options);
+  if (K <= 8) return render_gradient_n<8>(scene, params, options);
+  throw Error("at most 8 parameters per run (got " + std::to_string(K) + ")");
+}
+
+}  // namespace qsil

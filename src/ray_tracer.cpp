@@ -1,0 +1,143 @@
+/// @file ray_tracer.cpp
+/// Embree 3 wrapper: the only file that includes Embree (DESIGN.md §1).
+
+#include "qsil/ray_tracer.h"
+
+#include "qsil/error.h"
+
+#include <embree3/rtcore.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace qsil {
+
+namespace {
+/// Intersection context extended with the primitives to ignore (Embree 3 context filter).
+struct FilterContext {
+  RTCIntersectContext context;
+  const IgnoreSet* ignore;
+};
+
+void ignore_filter(const RTCFilterFunctionNArguments* args) {
+  const auto* ctx = reinterpret_cast<const FilterContext*>(args->context);
+  if (!ctx->ignore || ctx->ignore->empty()) return;
+  for (unsigned i = 0; i < args->N; ++i) {
+    if (args->valid[i] != -1) continue;
+    const unsigned geom = RTCHitN_geomID(args->hit, args->N, i);
+    const unsigned prim = RTCHitN_primID(args->hit, args->N, i);
+    if (ctx->ignore->contains(int(geom), int(prim))) args->valid[i] = 0;
+  }
+}
+
+void embree_error(void*, RTCError code, const char* str) {
+  (void)code;
+  (void)str;  // Errors are checked where they matter (device creation, commit).
+}
+}  // namespace
+
+struct RayTracer::Impl {
+  RTCDevice device = nullptr;
+  RTCScene scene = nullptr;
+};
+
+void RayTracer::build_impl(Impl& impl, const Scene& scene, const std::vector<std::vector<Vec3>>* positions) {
+  impl.device = rtcNewDevice(nullptr);
+  if (!impl.device) throw Error("Embree: cannot create device");
+  rtcSetDeviceErrorFunction(impl.device, embree_error, nullptr);
+  impl.scene = rtcNewScene(impl.device);
+  rtcSetSceneFlags(impl.scene, RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION);
+  rtcSetSceneBuildQuality(impl.scene, RTC_BUILD_QUALITY_HIGH);
+  for (size_t s = 0; s < scene.shapes.size(); ++s) {
+    const TriangleMesh& mesh = scene.shapes[s].mesh;
+    const auto& pos = positions ? (*positions)[s] : mesh.positions;
+    RTCGeometry geom = rtcNewGeometry(impl.device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                           3 * sizeof(float), pos.size()));
+    for (size_t i = 0; i < pos.size(); ++i)
+      for (int k = 0; k < 3; ++k) vb[3 * i + k] = float(pos[i][k]);
+    auto* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                              3 * sizeof(unsigned), mesh.triangles.size()));
+    for (size_t f = 0; f < mesh.triangles.size(); ++f)
+      for (int k = 0; k < 3; ++k) ib[3 * f + k] = unsigned(mesh.triangles[f][k]);
+    rtcCommitGeometry(geom);
+    rtcAttachGeometryByID(impl.scene, geom, unsigned(s));
+    rtcReleaseGeometry(geom);
+  }
+  rtcCommitScene(impl.scene);
+  if (rtcGetDeviceError(impl.device) != RTC_ERROR_NONE) throw Error("Embree: scene build failed");
+}
+
+RayTracer::RayTracer(const Scene& scene) : impl_(std::make_unique<Impl>()) { build_impl(*impl_, scene, nullptr); }
+
+RayTracer::RayTracer(const Scene& scene, const std::vector<std::vector<Vec3>>& positions)
+    : impl_(std::make_unique<Impl>()) {
+  build_impl(*impl_, scene, &positions);
+}
+
+RayTracer::~RayTracer() {
+  if (impl_->scene) rtcReleaseScene(impl_->scene);
+  if (impl_->device) rtcReleaseDevice(impl_->device);
+}
+
+Hit RayTracer::intersect(const Vec3& origin, const Vec3& dir, double tmax, const IgnoreSet& ignore) const {
+  FilterContext ctx;
+  rtcInitIntersectContext(&ctx.context);
+  ctx.context.filter = ignore.empty() ? nullptr : ignore_filter;
+  ctx.ignore = &ignore;
+  RTCRayHit rh;
+  rh.ray.org_x = float(origin.x());
+  rh.ray.org_y = float(origin.y());
+  rh.ray.org_z = float(origin.z());
+  rh.ray.dir_x = float(dir.x());
+  rh.ray.dir_y = float(dir.y());
+  rh.ray.dir_z = float(dir.z());
+  rh.ray.tnear = 0.0f;
+  rh.ray.tfar = std::isfinite(tmax) ? float(tmax) : std::numeric_limits<float>::infinity();
+  rh.ray.mask = 0xFFFFFFFFu;
+  rh.ray.flags = 0;
+  rh.ray.time = 0.0f;
+  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  rtcIntersect1(impl_->scene, &ctx.context, &rh);
+  Hit hit;
+  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return hit;
+  hit.shape = int(rh.hit.geomID);
+  hit.triangle = int(rh.hit.primID);
+  hit.t = rh.ray.tfar;
+  hit.u = rh.hit.u;
+  hit.v = rh.hit.v;
+  return hit;
+}
+
+bool RayTracer::occluded(const Vec3& origin, const Vec3& dir, double tmax, const IgnoreSet& ignore) const {
+  FilterContext ctx;
+  rtcInitIntersectContext(&ctx.context);
+  ctx.context.filter = ignore.empty() ? nullptr : ignore_filter;
+  ctx.ignore = &ignore;
+  RTCRay ray;
+  ray.org_x = float(origin.x());
+  ray.org_y = float(origin.y());
+  ray.org_z = float(origin.z());
+  ray.dir_x = float(dir.x());
+  ray.dir_y = float(dir.y());
+  ray.dir_z = float(dir.z());
+  ray.tnear = 0.0f;
+  ray.tfar = std::isfinite(tmax) ? float(tmax) : std::numeric_limits<float>::infinity();
+  ray.mask = 0xFFFFFFFFu;
+  ray.flags = 0;
+  ray.time = 0.0f;
+  rtcOccluded1(impl_->scene, &ctx.context, &ray);
+  return ray.tfar < 0.0f;  // Embree sets tfar = -inf on a hit
+}
+
+Vec3 offset_ray_origin(const Vec3& p, const Vec3& ng, const Vec3& dir, double scale) {
+  const double len = ng.norm();
+  if (!(len > 0)) return p;
+  const double d = kRayOffsetRelative * std::max(scale, p.cwiseAbs().maxCoeff());
+  const Vec3 n = ng / len;
+  return n.dot(dir) >= 0 ? Vec3(p + d * n) : Vec3(p - d * n);
+}
+
+}  // namespace qsil

@@ -1,0 +1,62 @@
+#pragma once
+/// @file cli_common.h
+/// Pieces shared by the subcommands: scene loading with -D overrides and warnings, common render
+/// flags, EXR/PNG output with metadata, and the one-line summary.
+
+#include "integrators/render.h"
+#include "qsil/parameters.h"
+#include "qsil/image.h"
+#include "qsil/scene.h"
+
+#include <CLI/CLI.hpp>
+
+#include <map>
+#include <string>
+#include <vector>
+
+namespace qsil::cli {
+
+/// Flags every rendering subcommand has.
+struct CommonFlags {
+  std::string scene;
+  std::vector<std::string> defines;  ///< -D name=value
+  RenderOptions render;
+  std::string output;
+  std::string preview;
+  double exposure = 0;               ///< preview exposure in stops
+};
+
+/// Adds SCENE, -D, --spp, --seed, --threads, -o, --preview, --exposure, --quiet to `app`.
+void add_common_flags(CLI::App& app, CommonFlags& flags, const std::string& default_output);
+
+/// Parses the -D list and loads the scene, printing counted warnings to stderr. Throws qsil::Error.
+Scene load_scene_with_flags(const CommonFlags& flags);
+
+/// Writes a tonemapped sRGB preview of channels R,G,B of `image` (exposure in stops).
+void write_preview_png(const std::string& path, const Image& image, double exposure);
+
+/// Writes a diverging-colormap preview (blue negative, white zero, red positive) of the luminance
+/// of the RGB derivative channels prefix.R/G/B, with a symmetric range set by the 99.5th
+/// percentile of |value|. Returns that range.
+double write_derivative_png(const std::string& path, const Image& image, const std::string& prefix);
+
+/// Standard EXR attributes (qsil version, scene, spp, seed, seconds).
+void add_render_attributes(Image& image, const CommonFlags& flags, const RenderResult& r);
+
+/// Prints a warning line if samples were non-finite (they were replaced by 0).
+void report_nonfinite(const RenderResult& r);
+
+}  // namespace qsil::cli
+
+namespace qsil::cli {
+
+/// Parses every --param spec against the scene (1 to 8). Throws qsil::Error.
+std::vector<ParameterSpec> parse_parameters(const std::vector<std::string>& specs, const Scene& scene);
+
+/// Writes a gradient EXR (R,G,B + dtheta<k>.R/G/B, each parameter spec as attribute
+/// qsil:param<k>), and with a preview directory one diverging PNG per parameter plus the primal
+/// PNG; prints each parameter's preview range and image sum +- standard error.
+void write_gradient_outputs(const CommonFlags& flags, const std::vector<ParameterSpec>& params,
+                            const RenderResult& r, const std::string& preview_dir, const std::string& method);
+
+}  // namespace qsil::cli
