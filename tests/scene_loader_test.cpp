@@ -256,12 +256,28 @@ INSTANTIATE_TEST_SUITE_P(
         ErrorCase{"bad_no_sensor.xml", "bad_no_sensor.xml:1:", "no <sensor>"},
         ErrorCase{"bad_camera_scale.xml", "bad_camera_scale.xml:3:", "must be rigid"},
         ErrorCase{"bad_empty.xml", "bad_empty.xml:1:", "no shapes and no emitter"},
+        ErrorCase{"bad_duplicate_id.xml", "bad_duplicate_id.xml:4:", "duplicate id 'a' (first at line 3)"},
+        ErrorCase{"bad_param_type.xml", "bad_param_type.xml:5:", "parameter 'alpha' of plugin 'roughconductor' must be <float> or <integer>, not <string>"},
         ErrorCase{"does_not_exist.xml", "does_not_exist.xml", "file not found"}),
     [](const auto& info) {
       std::string n = info.param.file;
       n = n.substr(0, n.find('.'));
       return n;
     });
+
+TEST(SceneLoaderTest, MitsubaCameraDefaults) {
+  std::vector<std::string> warnings;
+  const Scene s = load_scene(data("default_camera.xml"), {}, &warnings);
+  EXPECT_EQ(s.camera.width, 768);
+  EXPECT_EQ(s.camera.height, 576);
+  EXPECT_EQ(s.camera.spp, 4);
+  EXPECT_EQ(s.max_depth, -1);
+  // No fov: a 50 mm lens on 36 x 24 mm film, as a diagonal field of view (Mitsuba's parse_fov).
+  EXPECT_EQ(s.camera.fov_axis, "diagonal");
+  EXPECT_NEAR(s.camera.fov_deg, 2 * std::atan(std::hypot(36.0, 24.0) / 100.0) * 180 / kPi, 1e-12);
+  EXPECT_EQ(s.camera.to_world, Mat4::Identity());
+  EXPECT_TRUE(s.shapes.empty());  // allowed: there is an emitter
+}
 
 TEST(SceneLoaderTest, MissingFileNamesThePath) {
   EXPECT_THAT(load_error(data("bad_missing_obj.xml")), HasSubstr("does_not_exist.obj"));
