@@ -9,6 +9,8 @@
 #define TINYOBJLOADER_IMPLEMENTATION
 #include <tiny_obj_loader.h>
 
+#include <cstdlib>
+#include <fstream>
 #include <map>
 #include <sstream>
 
@@ -18,9 +20,30 @@ std::vector<Vec3> vertex_normals(const TriangleMesh& mesh) {
   return vertex_normals_t<double>(mesh, mesh.positions);
 }
 
+namespace {
+/// tinyobjloader reads a literal `nan` or `inf` coordinate as 0; scan the `v` lines first so that a
+/// non-finite coordinate is an error naming its line, never a silently wrong mesh.
+void check_finite_vertices(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  std::string line;
+  for (int number = 1; std::getline(in, line); ++number) {
+    if (line.size() < 2 || line[0] != 'v' || (line[1] != ' ' && line[1] != '\t')) continue;
+    std::istringstream is(line.substr(2));
+    std::string token;
+    for (int k = 0; k < 3 && is >> token; ++k) {
+      char* end = nullptr;
+      const double x = std::strtod(token.c_str(), &end);
+      if (!std::isfinite(x))
+        throw Error(path.string() + ":" + std::to_string(number) + ": non-finite vertex coordinate '" + token + "'");
+    }
+  }
+}
+}  // namespace
+
 TriangleMesh load_obj(const std::filesystem::path& path, bool weld, std::vector<std::string>* warnings) {
   const std::string name = path.string();
   if (!std::filesystem::exists(path)) throw Error(name + ": file not found");
+  check_finite_vertices(path);
   tinyobj::ObjReaderConfig config;
   config.triangulate = true;
   config.vertex_color = false;

@@ -85,7 +85,8 @@ struct Environment {
 /// with +x to the left and +y up in the image; box pixel filter.
 struct Camera {
   Mat4 to_world = Mat4::Identity();  ///< camera-to-world, rigid (scale is rejected)
-  double fov_deg = 39.3077;          ///< full field of view along fov_axis, degrees
+  double fov_deg = 46.7930;          ///< full field of view along fov_axis, degrees (the loader's
+                                     ///< default is Mitsuba 3's: a 50 mm lens on the diagonal)
   std::string fov_axis = "x";        ///< x, y, diagonal, smaller, larger
   int width = 768;
   int height = 576;
