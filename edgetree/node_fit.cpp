@@ -1,0 +1,131 @@
+/// @file node_fit.cpp
+/// One node's dual bound [QSS 3.2-3.3, 4.2-4.4].
+
+#include "edgetree/node_fit.h"
+
+#include "edgetree/offset_direction.h"
+#include "edgetree/quadric_fit.h"
+#include "edgetree/quadric_offsets.h"
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+namespace qsil::edgetree {
+
+NodeFit fit_node(std::span<const Vec4> planes, std::span<const Wedge> wedges, const Box3& bp,
+                 const NodeFit* parent, const NodeFitOptions& options) {
+  NodeFit out;
+  NodeBound& b = out.bound;
+  b.frame = LocalFrame::of_box(bp);
+  if (planes.empty() || wedges.empty()) {
+    out.flags |= kNodeUnrejectable;
+    return out;
+  }
+  std::vector<Vec4> local;
+  local.reserve(planes.size());
+  for (const Vec4& q : planes) local.push_back(b.frame.plane(q));
+
+  // ---- offset direction D and basis A [QSS 4.4]
+  const OffsetDirection od = choose_offset_direction(local);
+  if (od.used_lp) out.flags |= kNodeUsedLp;
+  if (od.kind == OffsetDirection::Kind::Unrejectable) {
+    out.flags |= kNodeUnrejectable;
+    return out;
+  }
+  b.D = od.D;
+  b.A = basis_from_direction(od.D);
+  const Vec4 Z = b.A.col(3);
+
+  // ---- dual box B_q [QSS 3.2]: the endpoints suffice (central projection maps each wedge
+  // segment into the hull of its endpoints' images).
+  b.bq_lo = Vec3::Constant(kInf);
+  b.bq_hi = Vec3::Constant(-kInf);
+  for (const Vec4& q : local) {
+    const double zq = Z.dot(q);
+    if (!(zq > 0.0)) {  // cannot happen after the guard; stay sound if it does
+      out.flags |= kNodeUnrejectable;
+      return out;
+    }
+    const Vec3 r = (b.A.transpose() * q).head<3>() / zq;
+    b.bq_lo = b.bq_lo.cwiseMin(r);
+    b.bq_hi = b.bq_hi.cwiseMax(r);
+  }
+  const double rmag = std::max(b.bq_lo.cwiseAbs().maxCoeff(), b.bq_hi.cwiseAbs().maxCoeff());
+  if (!std::isfinite(rmag)) {
+    out.flags |= kNodeUnrejectable;
+    return out;
+  }
+  const double pad = kFitPad * (rmag + 1.0);
+  b.bq_lo.array() -= pad;
+  b.bq_hi.array() += pad;
+
+  // ---- fitted quadric Q_f [QSS 4.3], or the parent's, or none
+  if (!options.fit_quadrics) {
+    out.flags |= kNodeBoxOnly;
+    return out;
+  }
+  Mat4 qf;
+  bool have = false;
+  if (int(planes.size()) >= options.min_fit_planes) have = fit_dual_quadric(local, &qf);
+  if (have) {
+    out.has_qf = true;
+    out.qf = qf;
+  } else if (parent && parent->has_qf) {
+    qf = transfer_dual_quadric(parent->qf, parent->bound.frame, b.frame);
+    const double mx = qf.cwiseAbs().maxCoeff();
+    if (mx > 0.0 && qf.allFinite()) {
+      qf /= mx;
+      have = true;
+      out.flags |= kNodeInherited;
+      out.has_qf = true;
+      out.qf = qf;
+    }
+  }
+  if (!have) {
+    out.flags |= kNodeBoxOnly;
+    return out;
+  }
+
+  // ---- offsets lambda0, lambda1 over every wedge [QSS 4.2, Appendix D]
+  const Vec4& D = b.D;
+  double l0 = kInf, l1 = -kInf, lscale = 0.0;
+  const double qmax = qf.cwiseAbs().maxCoeff();
+  for (const Wedge& w : wedges) {
+    const Vec4 q0 = b.frame.plane(w.q0), q1 = b.frame.plane(w.q1);
+    const double d0 = D.dot(q0), d1 = D.dot(q1);
+    if (!(d0 > 0.0 && d1 > 0.0)) {
+      out.flags |= kNodeBoxOnly;
+      return out;
+    }
+    const Vec2 r = wedge_lambda_range(qf, D, q0, q1);
+    l0 = std::min(l0, r[0]);
+    l1 = std::max(l1, r[1]);
+    // Magnitude of lambda's terms on the wedge: |Qf| |q|_1^2 / (D.q)^2 (D.q is linear in t,
+    // so its minimum over the wedge is at an endpoint).
+    const double qn = std::max(q0.cwiseAbs().sum(), q1.cwiseAbs().sum());
+    const double dmin = std::min(d0, d1);
+    lscale = std::max(lscale, qmax * qn * qn / (dmin * dmin));
+  }
+  if (!(std::isfinite(l0) && std::isfinite(l1) && std::isfinite(lscale))) {
+    out.flags |= kNodeBoxOnly;
+    return out;
+  }
+  const double lpad = kFitPad * (lscale + std::max(std::abs(l0), std::abs(l1)));
+  l0 -= lpad;
+  l1 += lpad;
+  b.lambda0 = l0;
+  b.lambda1 = l1;
+  const Mat4 Q0 = qf + l0 * D * D.transpose();
+  b.G0 = b.A.transpose() * Q0 * b.A;
+  b.G0 = 0.5 * (b.G0 + b.G0.transpose()).eval();
+  b.delta = (l1 - l0) * D.squaredNorm();
+  if (!b.G0.allFinite() || !std::isfinite(b.delta) || !(b.delta >= 0.0)) {
+    b.G0.setZero();
+    b.delta = 0.0;
+    out.flags |= kNodeBoxOnly;
+  }
+  return out;
+}
+
+}  // namespace qsil::edgetree

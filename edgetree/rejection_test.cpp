@@ -1,0 +1,179 @@
+/// @file rejection_test.cpp
+/// Node rejection test [QSS 3.4, Appendix C].
+
+#include "edgetree/rejection_test.h"
+
+#include "edgetree/conic.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+
+namespace qsil::edgetree {
+
+namespace {
+constexpr double kEps = std::numeric_limits<double>::epsilon();
+
+// Sign-change or touching test of the quadratic f(t) = A t^2 + B t + F on [0,1] with end values
+// F and Fe (Fe = f(1), computed directly), tolerance tol: true if f has a root in [0,1] up to tol.
+bool quadratic_has_root(double A, double B, double F, double Fe, double tol) {
+  if ((F <= tol && Fe >= -tol) || (F >= -tol && Fe <= tol)) return true;
+  if (F > tol && Fe > tol) {  // both positive: an interior minimum <= 0?
+    if (A > 0.0 && -B > 0.0 && -B < 2.0 * A) return 4.0 * A * F - B * B <= 4.0 * A * tol;
+    return false;
+  }
+  if (F < -tol && Fe < -tol) {  // both negative: an interior maximum >= 0?
+    if (A < 0.0 && B > 0.0 && B < -2.0 * A) return 4.0 * A * F - B * B <= -4.0 * A * tol;
+    return false;
+  }
+  return true;  // NaN
+}
+}  // namespace
+
+bool bound_may_have_silhouette(const NodeBound& b, bool box_only, const Vec3& p) {
+  const LocalFrame& fr = b.frame;
+  const Vec4 x = fr.point(p);
+  if (!x.allFinite()) return true;
+  // Rounding of the world-frame ground truth (q.x evaluated with |p|, |c| ~ m s): relative
+  // tolerance grows with the world magnitude expressed in local units.
+  const double m =
+      1.0 + (p.cwiseAbs().maxCoeff() + fr.center.cwiseAbs().maxCoeff()) / fr.scale;
+  const double rel = kRejectTol + 64.0 * kEps * m;
+  const Vec4 a = b.A.transpose() * x;
+
+  // ---- 1. does the dual plane [r,1].a = 0 meet the box B_q?
+  double fmin = a[3], fmax = a[3], fmag = std::abs(a[3]);
+  double rb = 0.0;
+  for (int i = 0; i < 3; ++i) {
+    const double u = a[i] * b.bq_lo[i], v = a[i] * b.bq_hi[i];
+    fmin += std::min(u, v);
+    fmax += std::max(u, v);
+    fmag += std::max(std::abs(u), std::abs(v));
+    rb = std::max({rb, std::abs(b.bq_lo[i]), std::abs(b.bq_hi[i])});
+  }
+  const double ftol = rel * (fmag + rb + 1.0);
+  if (!(std::isfinite(fmin) && std::isfinite(fmax) && std::isfinite(ftol))) return true;
+  if (fmin > ftol || fmax < -ftol) return false;
+  if (box_only) return true;
+
+  // ---- polygon C: the plane's intersections with the box's 12 edges
+  const Vec3 an = a.head<3>();
+  const double an_norm = an.norm();
+  if (!(an_norm > 0.0)) return true;
+  std::array<Vec3, 8> corner;
+  std::array<double, 8> fc;
+  for (int k = 0; k < 8; ++k) {
+    corner[k] = Vec3(k & 1 ? b.bq_hi.x() : b.bq_lo.x(), k & 2 ? b.bq_hi.y() : b.bq_lo.y(),
+                     k & 4 ? b.bq_hi.z() : b.bq_lo.z());
+    fc[k] = an.dot(corner[k]) + a[3];
+  }
+  std::array<Vec3, 12> pts;
+  int np = 0;
+  for (int k = 0; k < 8; ++k) {
+    if (fc[k] == 0.0 && np < 12) pts[np++] = corner[k];
+    for (int bit = 1; bit < 8; bit <<= 1) {
+      const int j = k | bit;
+      if (j == k) continue;
+      if ((fc[k] < 0.0 && fc[j] > 0.0) || (fc[k] > 0.0 && fc[j] < 0.0)) {
+        const double t = fc[k] / (fc[k] - fc[j]);
+        if (np < 12) pts[np++] = corner[k] + t * (corner[j] - corner[k]);
+      }
+    }
+  }
+  if (np == 0) return true;  // touches within tolerance only: degenerate, accept
+
+  // 2D coordinates in the plane, origin at the vertices' mean (inside the convex polygon).
+  const Frame pf(an / an_norm);
+  Vec3 o = Vec3::Zero();
+  for (int i = 0; i < np; ++i) o += pts[i];
+  o /= np;
+  std::array<Vec2, 12> poly;
+  std::array<double, 12> ang;
+  std::array<int, 12> order;
+  double diam = 0.0;
+  for (int i = 0; i < np; ++i) {
+    const Vec3 d = pts[i] - o;
+    poly[i] = Vec2(pf.s.dot(d), pf.t.dot(d));
+    ang[i] = std::atan2(poly[i].y(), poly[i].x());
+    order[i] = i;
+    diam = std::max(diam, poly[i].norm());
+  }
+  std::sort(order.begin(), order.begin() + np, [&](int i, int j) { return ang[i] < ang[j]; });
+  std::array<Vec2, 12> v;
+  int nv = 0;
+  for (int k = 0; k < np; ++k) {
+    const Vec2& q = poly[order[k]];
+    if (nv > 0 && (q - v[nv - 1]).norm() <= 1e-12 * diam) continue;
+    v[nv++] = q;
+  }
+  while (nv > 1 && (v[nv - 1] - v[0]).norm() <= 1e-12 * diam) --nv;
+
+  // Conic of Q~0 in the plane: [r,1] = P [alpha, 1], P = [[u1, u2, o], [0, 0, 1]].
+  Eigen::Matrix<double, 4, 3> P = Eigen::Matrix<double, 4, 3>::Zero();
+  P.block<3, 1>(0, 0) = pf.s;
+  P.block<3, 1>(0, 1) = pf.t;
+  P.block<3, 1>(0, 2) = o;
+  P(3, 2) = 1.0;
+  Mat3 C0 = P.transpose() * b.G0 * P;
+  C0 = 0.5 * (C0 + C0.transpose()).eval();
+  const double delta = b.delta;
+  const double R1 = 3.0 * rb + 1.0;
+  const double kappa = rel * (b.G0.cwiseAbs().maxCoeff() * 16.0 * R1 * R1 + delta);
+  if (!(C0.allFinite() && std::isfinite(kappa))) return true;
+
+  // ---- 2. a vertex with Q~0 <= 0 <= Q~1 = Q~0 + delta
+  std::array<double, 12> h;
+  for (int i = 0; i < nv; ++i) {
+    h[i] = conic_value(C0, v[i]);
+    if (h[i] <= kappa && h[i] + delta >= -kappa) return true;
+    if (!std::isfinite(h[i])) return true;
+  }
+  // ---- 3. a root of Q~0 or Q~1 on an edge
+  const int ne = nv == 2 ? 1 : (nv >= 3 ? nv : 0);
+  for (int i = 0; i < ne; ++i) {
+    const int j = (i + 1) % nv;
+    const Vec2 d = v[j] - v[i];
+    const double A = d.dot(C0.topLeftCorner<2, 2>() * d);
+    const double B = 2.0 * (v[i].dot(C0.topLeftCorner<2, 2>() * d) + C0.block<1, 2>(2, 0) * d);
+    if (quadratic_has_root(A, B, h[i], h[j], kappa)) return true;
+    if (quadratic_has_root(A, B, h[i] + delta, h[j] + delta, kappa)) return true;
+  }
+  // ---- 4. a point of either conic inside C [QSS Appendix C]
+  if (nv >= 3) {
+    const std::span<const Vec2> polygon(v.data(), size_t(nv));
+    for (int k = 0; k < 2; ++k) {
+      Mat3 C = C0;
+      if (k == 1) C(2, 2) += delta;
+      std::array<Vec2, 4> cp;
+      const int n = find_conic_points(C, &cp);
+      for (int i = 0; i < n; ++i)
+        if (point_in_convex_polygon(polygon, cp[i])) return true;
+    }
+  }
+  // ---- 5. no plane of the bound is incident to p
+  return false;
+}
+
+bool leaf_has_silhouette(const EdgeForest& forest, int leaf, const Vec3& p) {
+  for (const ForestEdge& e : forest.leaf_edges(leaf))
+    if (edge_is_silhouette(e, p)) return true;
+  return false;
+}
+
+bool may_have_silhouette(const EdgeForest& forest, int node, const Vec3& p, RejectionMode mode) {
+  const ForestNode& n = forest.node(node);
+  if (n.is_leaf()) return leaf_has_silhouette(forest, node, p);
+  if (n.unrejectable() || n.bound < 0) return true;
+  return bound_may_have_silhouette(forest.bounds()[n.bound],
+                                   mode == RejectionMode::Box || n.box_only(), p);
+}
+
+bool node_has_silhouette(const EdgeForest& forest, int node, const Vec3& p) {
+  const ForestNode& n = forest.node(node);
+  for (int i = n.edge_begin; i < n.edge_end; ++i)
+    if (edge_is_silhouette(forest.edges()[i], p)) return true;
+  return false;
+}
+
+}  // namespace qsil::edgetree

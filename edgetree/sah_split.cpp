@@ -1,0 +1,80 @@
+/// @file sah_split.cpp
+/// Binned SAH split of edges [QSS 4.1].
+
+#include "edgetree/sah_split.h"
+
+#include <algorithm>
+#include <vector>
+
+namespace qsil::edgetree {
+
+namespace {
+double box_area(const Box3& b) {
+  if (b.empty()) return 0.0;
+  const Vec3 e = b.extent();
+  return 2.0 * (e.x() * e.y() + e.y() * e.z() + e.z() * e.x());
+}
+}  // namespace
+
+int sah_split(std::span<ForestEdge> edges, int buckets) {
+  const int n = int(edges.size());
+  Box3 cb;
+  for (const auto& e : edges) cb.expand(0.5 * (e.p0 + e.p1));
+  int axis = 0;
+  cb.extent().maxCoeff(&axis);
+  const double lo = cb.lo[axis], ext = cb.hi[axis] - cb.lo[axis];
+  auto median = [&]() {
+    const int mid = n / 2;
+    std::stable_sort(edges.begin(), edges.end(), [axis](const ForestEdge& a, const ForestEdge& b) {
+      return a.p0[axis] + a.p1[axis] < b.p0[axis] + b.p1[axis];
+    });
+    return mid;
+  };
+  if (!(ext > 0.0)) return median();
+
+  const int B = std::max(2, buckets);
+  auto bucket_of = [&](const ForestEdge& e) {
+    const double c = 0.5 * (e.p0[axis] + e.p1[axis]);
+    return std::clamp(int(B * ((c - lo) / ext)), 0, B - 1);
+  };
+  std::vector<int> cnt(B, 0);
+  std::vector<Box3> box(B);
+  for (const auto& e : edges) {
+    const int k = bucket_of(e);
+    cnt[k]++;
+    box[k].expand(e.p0);
+    box[k].expand(e.p1);
+  }
+  // Sweep: prefix from the left, suffix from the right.
+  std::vector<double> left_cost(B, 0.0);
+  std::vector<int> left_n(B, 0);
+  Box3 acc;
+  int accn = 0;
+  for (int k = 0; k < B; ++k) {
+    acc.expand(box[k]);
+    accn += cnt[k];
+    left_cost[k] = box_area(acc) * accn;
+    left_n[k] = accn;
+  }
+  acc = Box3();
+  accn = 0;
+  double best = kInf;
+  int best_k = -1;
+  for (int k = B - 1; k >= 1; --k) {
+    acc.expand(box[k]);
+    accn += cnt[k];
+    // split between bucket k-1 and k
+    if (left_n[k - 1] == 0 || accn == 0) continue;
+    const double c = left_cost[k - 1] + box_area(acc) * accn;
+    if (c < best) {
+      best = c;
+      best_k = k;
+    }
+  }
+  if (best_k < 0) return median();
+  auto it = std::stable_partition(edges.begin(), edges.end(),
+                                  [&](const ForestEdge& e) { return bucket_of(e) < best_k; });
+  return int(it - edges.begin());
+}
+
+}  // namespace qsil::edgetree

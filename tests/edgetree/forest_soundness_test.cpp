@@ -1,0 +1,328 @@
+/// @file forest_soundness_test.cpp
+/// Soundness of the rejection test by brute force (DESIGN.md §5, §9): for every inner node of
+/// the forests of spot, torus, bunny and a subdivided cube, and many shading points (uniform in a
+/// box 3x the mesh's size, very close to the surface, exactly on triangle planes), whenever a
+/// node's patch has a silhouette edge (edge_is_silhouette, double, world frame) the test must
+/// accept: zero false rejects, in quadric and box modes. Ground truth is computed bottom-up (a
+/// node has a silhouette iff a child does; leaves exactly). Also degenerate meshes (translated by
+/// 1e4, scaled by 1e-4, near-planar open sheet) and degenerate patches fitted directly (planar,
+/// single wedge, nearly parallel planes). Fixed seeds. The quick suite uses 1e4 points per mesh,
+/// the Slow suite 1e5.
+
+#include "edgetree/edge_forest.h"
+#include "edgetree/node_fit.h"
+#include "edgetree/rejection_test.h"
+#include "qsil/scene.h"
+
+#include <gtest/gtest.h>
+#include <tbb/parallel_for.h>
+
+#include <atomic>
+#include <cmath>
+#include <random>
+#include <string>
+
+namespace qsil::edgetree {
+namespace {
+
+// ---- test meshes
+
+// A cube [-1,1]^3 with each face subdivided into n x n quads (flat diagonals and flat interior
+// edges are culled; 12 n convex edges remain).
+TriangleMesh make_cube(int n) {
+  TriangleMesh m;
+  auto face = [&](const Vec3& o, const Vec3& u, const Vec3& v) {  // u x v is outward
+    const int base = m.num_vertices();
+    for (int j = 0; j <= n; ++j)
+      for (int i = 0; i <= n; ++i) m.positions.push_back(o + (2.0 * i / n) * u + (2.0 * j / n) * v);
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        const int a = base + j * (n + 1) + i, b = a + 1, c = a + n + 2, d = a + n + 1;
+        m.triangles.push_back(Eigen::Vector3i(a, b, c));
+        m.triangles.push_back(Eigen::Vector3i(a, c, d));
+      }
+  };
+  face(Vec3(-1, -1, 1), Vec3(1, 0, 0), Vec3(0, 1, 0));    // +z
+  face(Vec3(-1, 1, -1), Vec3(1, 0, 0), Vec3(0, -1, 0));   // -z
+  face(Vec3(1, -1, -1), Vec3(0, 1, 0), Vec3(0, 0, 1));    // +x
+  face(Vec3(-1, 1, -1), Vec3(0, -1, 0), Vec3(0, 0, 1));   // -x
+  face(Vec3(1, 1, -1), Vec3(-1, 0, 0), Vec3(0, 0, 1));    // +y
+  face(Vec3(-1, -1, -1), Vec3(1, 0, 0), Vec3(0, 0, 1));   // -y
+  // Weld duplicated border vertices (exact coordinates).
+  std::vector<int> remap(m.positions.size());
+  std::vector<Vec3> uniq;
+  for (size_t i = 0; i < m.positions.size(); ++i) {
+    int found = -1;
+    for (size_t k = 0; k < uniq.size() && found < 0; ++k)
+      if (uniq[k] == m.positions[i]) found = int(k);
+    if (found < 0) {
+      found = int(uniq.size());
+      uniq.push_back(m.positions[i]);
+    }
+    remap[i] = found;
+  }
+  for (auto& t : m.triangles)
+    for (int k = 0; k < 3; ++k) t[k] = remap[t[k]];
+  m.positions = uniq;
+  return m;
+}
+
+// An open, gently curved sheet z = c (x^2 + y^2) (a dome for c < 0: convex edges) over [-1,1]^2 (n x n quads): bend angles
+// ~ 4c/n, above the flat threshold; boundary edges go to the always list.
+TriangleMesh make_sheet(int n, double c) {
+  TriangleMesh m;
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) {
+      const double x = -1 + 2.0 * i / n, y = -1 + 2.0 * j / n;
+      m.positions.emplace_back(x, y, c * (x * x + y * y));
+    }
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const int a = j * (n + 1) + i, b = a + 1, cc = a + n + 2, d = a + n + 1;
+      m.triangles.push_back(Eigen::Vector3i(a, b, cc));
+      m.triangles.push_back(Eigen::Vector3i(a, cc, d));
+    }
+  return m;
+}
+
+TriangleMesh transformed(TriangleMesh m, double scale, const Vec3& offset) {
+  for (auto& p : m.positions) p = p * scale + offset;
+  return m;
+}
+
+// ---- shading points
+
+// 40% uniform in a box 3x the mesh's size, 30% near the surface (normal offsets 10^-1 .. 10^-12
+// of the diagonal, both sides), 30% on triangle planes (in-plane barycentric coordinates in
+// [-3, 3], so also far outside the triangle).
+std::vector<Vec3> shading_points(const TriangleMesh& m, int count, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u01(0.0, 1.0);
+  const Box3 b = m.bounds();
+  const Vec3 c = b.center(), e = b.extent();
+  const double diag = b.diagonal();
+  std::vector<Vec3> pts;
+  pts.reserve(count);
+  for (int i = 0; i < count; ++i) {
+    const double kind = u01(rng);
+    if (kind < 0.4) {
+      pts.push_back(c + 1.5 * Vec3((2 * u01(rng) - 1) * e.x(), (2 * u01(rng) - 1) * e.y(),
+                                   (2 * u01(rng) - 1) * e.z()));
+      continue;
+    }
+    const int f = int(u01(rng) * m.num_triangles()) % m.num_triangles();
+    const auto& t = m.triangles[f];
+    const Vec3 a = m.positions[t[0]], bb = m.positions[t[1]], cc = m.positions[t[2]];
+    if (kind < 0.7) {
+      double s = u01(rng), r = u01(rng);
+      if (s + r > 1) { s = 1 - s; r = 1 - r; }
+      const Vec3 p = a + s * (bb - a) + r * (cc - a);
+      const Vec3 n = m.face_cross(f).normalized();
+      const double off = std::pow(10.0, -1.0 - 11.0 * u01(rng)) * diag * (u01(rng) < 0.5 ? -1 : 1);
+      pts.push_back(p + off * n);
+    } else {
+      const double s = 6 * u01(rng) - 3, r = 6 * u01(rng) - 3;
+      pts.push_back(a + s * (bb - a) + r * (cc - a));
+    }
+  }
+  return pts;
+}
+
+struct SoundnessResult {
+  long long tests = 0;          // (inner node, point) pairs with a silhouette
+  long long false_rejects_quadric = 0;
+  long long false_rejects_box = 0;
+  long long accepts_no_sil_quadric = 0, accepts_no_sil_box = 0, no_sil = 0;
+};
+
+// For every point: ground truth per node bottom-up, then the rejection test of every inner node.
+SoundnessResult check_forest(const EdgeForest& f, const std::vector<Vec3>& pts) {
+  std::atomic<long long> tests{0}, frq{0}, frb{0}, aq{0}, ab{0}, ns{0};
+  const int N = int(f.nodes().size());
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, pts.size(), 64), [&](const auto& r) {
+    std::vector<char> has(N);
+    long long lt = 0, lq = 0, lb = 0, laq = 0, lab = 0, lns = 0;
+    for (size_t k = r.begin(); k != r.end(); ++k) {
+      const Vec3& p = pts[k];
+      for (int i = N - 1; i >= 0; --i) {  // children have larger indices than their parents
+        const ForestNode& n = f.node(i);
+        if (n.is_leaf()) {
+          has[i] = leaf_has_silhouette(f, i, p);
+        } else {
+          bool h = false;
+          for (int c = n.first; c < n.first + n.count; ++c) h = h || has[c];
+          has[i] = h;
+          const bool q = may_have_silhouette(f, i, p, RejectionMode::Quadric);
+          const bool b = may_have_silhouette(f, i, p, RejectionMode::Box);
+          if (h) {
+            ++lt;
+            lq += !q;
+            lb += !b;
+          } else {
+            ++lns;
+            laq += q;
+            lab += b;
+          }
+        }
+      }
+    }
+    tests += lt; frq += lq; frb += lb; aq += laq; ab += lab; ns += lns;
+  });
+  return {tests.load(), frq.load(), frb.load(), aq.load(), ab.load(), ns.load()};
+}
+
+void expect_sound(const TriangleMesh& mesh, int npoints, unsigned seed, const std::string& name,
+                  bool keep_concave = false) {
+  ForestShapeInput in{&mesh, 0};
+  ForestOptions opt;
+  opt.edges.keep_concave = keep_concave;
+  const EdgeForest f = EdgeForest::build(std::span(&in, 1), opt);
+  ASSERT_GT(f.stats()[0].inner_nodes, 0) << name;
+  const SoundnessResult r = check_forest(f, shading_points(mesh, npoints, seed));
+  EXPECT_GT(r.tests, 0) << name;
+  EXPECT_EQ(r.false_rejects_quadric, 0) << name << " quadric, of " << r.tests;
+  EXPECT_EQ(r.false_rejects_box, 0) << name << " box, of " << r.tests;
+  // Not a soundness property, but a smoke check that the test rejects something at all.
+  EXPECT_LT(r.accepts_no_sil_quadric, r.no_sil) << name;
+  std::printf("[%s] %lld (node, point) pairs with a silhouette, false rejects quadric %lld box "
+              "%lld; false-accept rate quadric %.3f box %.3f\n",
+              name.c_str(), r.tests, r.false_rejects_quadric, r.false_rejects_box,
+              r.no_sil ? double(r.accepts_no_sil_quadric) / r.no_sil : 0.0,
+              r.no_sil ? double(r.accepts_no_sil_box) / r.no_sil : 0.0);
+}
+
+TriangleMesh mesh_file(const char* name) {
+  return load_obj(std::string("../shared/meshes/") + name);
+}
+
+// ---- quick suite (1e4 points per mesh)
+
+TEST(ForestSoundness, Spot) { expect_sound(mesh_file("spot.obj"), 10000, 1, "spot"); }
+TEST(ForestSoundness, TorusKeepConcave) {
+  expect_sound(mesh_file("torus.obj"), 10000, 2, "torus+concave", true);
+}
+TEST(ForestSoundness, Cube) { expect_sound(make_cube(8), 10000, 3, "cube"); }
+TEST(ForestSoundness, SpotTranslated1e4) {
+  expect_sound(transformed(mesh_file("spot.obj"), 1.0, Vec3(1e4, -1e4, 1e4)), 10000, 4,
+               "spot+1e4");
+}
+TEST(ForestSoundness, SpotScaled1em4) {
+  expect_sound(transformed(mesh_file("spot.obj"), 1e-4, Vec3(0.3e-4, 0, 0)), 10000, 5,
+               "spot*1e-4");
+}
+TEST(ForestSoundness, NearPlanarSheet) { expect_sound(make_sheet(24, -0.01), 10000, 6, "sheet"); }
+
+// ---- slow suite (1e5 points per mesh)
+
+TEST(SlowForestSoundness, Spot) { expect_sound(mesh_file("spot.obj"), 100000, 11, "spot"); }
+TEST(SlowForestSoundness, Torus) { expect_sound(mesh_file("torus.obj"), 100000, 12, "torus"); }
+TEST(SlowForestSoundness, Bunny) { expect_sound(mesh_file("bunny.obj"), 100000, 13, "bunny"); }
+TEST(SlowForestSoundness, Cube) { expect_sound(make_cube(8), 100000, 14, "cube"); }
+TEST(SlowForestSoundness, Degenerate) {
+  expect_sound(transformed(mesh_file("torus.obj"), 1.0, Vec3(1e4, 1e4, -1e4)), 100000, 15,
+               "torus+1e4");
+  expect_sound(transformed(mesh_file("bunny.obj"), 1e-4, Vec3::Zero()), 100000, 16,
+               "bunny*1e-4");
+  expect_sound(make_sheet(40, -0.003), 100000, 17, "sheet");
+}
+
+// ---- degenerate patches fitted directly
+
+Vec4 plane_of(const Vec3& n, const Vec3& x0) {
+  const Vec3 u = n.normalized();
+  return Vec4(u.x(), u.y(), u.z(), -u.dot(x0));
+}
+
+// Checks bound_may_have_silhouette against the wedge predicate for points near the wedges.
+void expect_bound_sound(const NodeFit& fit, const std::vector<Wedge>& wedges, double size,
+                        const Vec3& center, unsigned seed, const std::string& name) {
+  if (fit.flags & kNodeUnrejectable) return;  // always accepts
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  int with = 0, bad = 0;
+  for (int i = 0; i < 20000; ++i) {
+    Vec3 p = center + 3 * size * Vec3(u(rng), u(rng), u(rng));
+    if (i % 2) {  // project onto one of the planes (exactly-on-plane points up to rounding)
+      const Wedge& w = wedges[size_t(i / 2) % wedges.size()];
+      const Vec4 q = (i / 2) % 2 ? w.q0 : w.q1;
+      p -= (q.head<3>().dot(p) + q[3]) * q.head<3>();
+    }
+    bool sil = false;
+    for (const Wedge& w : wedges) {
+      const double g0 = w.q0.head<3>().dot(p) + w.q0[3], g1 = w.q1.head<3>().dot(p) + w.q1[3];
+      sil = sil || g0 * g1 <= 0.0;
+    }
+    if (!sil) continue;
+    ++with;
+    if (!bound_may_have_silhouette(fit.bound, fit.flags & kNodeBoxOnly, p)) ++bad;
+    if (!bound_may_have_silhouette(fit.bound, true, p)) ++bad;
+  }
+  EXPECT_GT(with, 0) << name;
+  EXPECT_EQ(bad, 0) << name;
+}
+
+std::vector<Vec4> planes_of(const std::vector<Wedge>& w) {
+  std::vector<Vec4> p;
+  for (const auto& x : w) {
+    p.push_back(x.q0);
+    p.push_back(x.q1);
+  }
+  return p;
+}
+
+Box3 box_of(const Vec3& c, double s) {
+  Box3 b;
+  b.expand(c - Vec3::Constant(s));
+  b.expand(c + Vec3::Constant(s));
+  return b;
+}
+
+// A parent with a real quadric (planes tangent to a sphere) so that small children inherit it.
+NodeFit sphere_parent(const Vec3& c, double r) {
+  std::vector<Wedge> w;
+  std::mt19937_64 rng(99);
+  std::normal_distribution<double> g;
+  for (int i = 0; i < 40; ++i) {
+    Vec3 n0(g(rng), g(rng), std::abs(g(rng)) + 2), n1 = n0 + 0.2 * Vec3(g(rng), g(rng), g(rng));
+    w.push_back({plane_of(n0, c + r * n0.normalized()), plane_of(n1, c + r * n1.normalized())});
+  }
+  return fit_node(planes_of(w), w, box_of(c, r), nullptr);
+}
+
+TEST(ForestDegeneratePatch, SingleWedgeBoxAndInherited) {
+  for (double scale : {1.0, 1e-4, 1e4}) {
+    for (const Vec3& off : {Vec3(0, 0, 0), Vec3(1e4, 2e4, -1e4)}) {
+      const Vec3 c = off + Vec3(0.1, 0.2, 0.3) * scale;
+      const std::vector<Wedge> w = {
+          {plane_of(Vec3(0, 0.3, 1), c), plane_of(Vec3(0, -0.3, 1), c)}};
+      const NodeFit alone = fit_node(planes_of(w), w, box_of(c, 0.01 * scale), nullptr);
+      EXPECT_TRUE(alone.flags & kNodeBoxOnly);
+      expect_bound_sound(alone, w, 0.01 * scale, c, 1, "single wedge");
+      const NodeFit parent = sphere_parent(c - Vec3(0, 0, scale), scale);
+      const NodeFit child = fit_node(planes_of(w), w, box_of(c, 0.01 * scale), &parent);
+      EXPECT_TRUE(child.flags & kNodeInherited);
+      EXPECT_FALSE(child.flags & kNodeBoxOnly);
+      expect_bound_sound(child, w, 0.01 * scale, c, 2, "single wedge inherited");
+    }
+  }
+}
+
+TEST(ForestDegeneratePatch, PlanarAndNearlyParallel) {
+  const Vec3 c(0.5, -0.2, 0.1);
+  const NodeFit parent = sphere_parent(c - Vec3(0, 0, 1), 1.0);
+  for (double angle : {0.0, 1e-12, 1e-7, 1e-3}) {
+    std::vector<Wedge> w;
+    for (int i = 0; i < 20; ++i) {
+      const Vec3 x = c + 0.05 * Vec3(i % 5, i / 5, 0);
+      w.push_back({plane_of(Vec3(0, std::sin(angle), std::cos(angle)), x),
+                   plane_of(Vec3(0, -std::sin(angle), std::cos(angle)), x)});
+    }
+    for (const NodeFit* par : {static_cast<const NodeFit*>(nullptr), &parent}) {
+      const NodeFit fit = fit_node(planes_of(w), w, box_of(c, 0.2), par);
+      expect_bound_sound(fit, w, 0.2, c, 3, "planar angle " + std::to_string(angle));
+    }
+  }
+}
+
+}  // namespace
+}  // namespace qsil::edgetree
