@@ -33,26 +33,25 @@ std::vector<std::pair<int, int>> split4(std::vector<ForestEdge>& edges, int b, i
   return out;
 }
 
-// Fits one inner node from its edge range.
-NodeFit fit_range(const std::vector<ForestEdge>& edges, const ForestNode& n, const NodeFit* parent,
-                  const NodeFitOptions& opt) {
+// Fits one inner node from its edge range; `face_planes` are the shape's face planes.
+NodeFit fit_range(const std::vector<ForestEdge>& edges, const std::vector<Vec4>& face_planes,
+                  const ForestNode& n, const NodeFit* parent, const NodeFitOptions& opt) {
   // Unique face planes of the patch (faces identified by index within the shape).
-  std::vector<std::pair<int, const Vec4*>> faces;
+  std::vector<int> faces;
   faces.reserve(size_t(2) * (n.edge_end - n.edge_begin));
   std::vector<Wedge> wedges;
   wedges.reserve(size_t(n.edge_end - n.edge_begin));
   for (int i = n.edge_begin; i < n.edge_end; ++i) {
     const ForestEdge& e = edges[i];
-    faces.push_back({e.f0, &e.q0});
-    faces.push_back({e.f1, &e.q1});
+    faces.push_back(e.f0);
+    faces.push_back(e.f1);
     wedges.push_back({e.q0, e.q1});
   }
-  std::sort(faces.begin(), faces.end(),
-            [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::sort(faces.begin(), faces.end());
+  faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
   std::vector<Vec4> planes;
   planes.reserve(faces.size());
-  for (size_t i = 0; i < faces.size(); ++i)
-    if (i == 0 || faces[i].first != faces[i - 1].first) planes.push_back(*faces[i].second);
+  for (int fi : faces) planes.push_back(face_planes[fi]);
   return fit_node(planes, wedges, n.bp, parent, opt);
 }
 
@@ -152,7 +151,7 @@ EdgeForest EdgeForest::build(std::span<const ForestShapeInput> shapes, const For
         if (n.is_leaf()) return;
         const NodeFit* parent =
             n.parent >= 0 ? &fits[f.nodes_[n.parent].bound - bbase] : nullptr;
-        NodeFit fit = fit_range(f.edges_, n, parent, opt.fit);
+        NodeFit fit = fit_range(f.edges_, set.face_planes, n, parent, opt.fit);
         n.flags |= fit.flags;
         f.bounds_[n.bound] = fit.bound;
         fits[n.bound - bbase] = std::move(fit);

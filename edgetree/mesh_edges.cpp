@@ -3,6 +3,8 @@
 
 #include "edgetree/mesh_edges.h"
 
+#include <tbb/parallel_sort.h>
+
 #include <algorithm>
 #include <cmath>
 
@@ -57,7 +59,7 @@ MeshEdgeSet build_mesh_edges(const TriangleMesh& mesh, int shape, const EdgeOpti
       half.push_back({std::min(u, v), std::max(u, v), f, u < v});
     }
   }
-  std::sort(half.begin(), half.end());
+  tbb::parallel_sort(half.begin(), half.end());
 
   for (size_t i = 0; i < half.size();) {
     size_t j = i;

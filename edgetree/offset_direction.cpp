@@ -47,11 +47,10 @@ OffsetDirection choose_offset_direction(std::span<const Vec4> planes) {
   normals.reserve(planes.size());
   for (const Vec4& q : planes) normals.push_back(q.head<3>());
 
-  // 1. Approximate smallest enclosing sphere [QSS 4.4]; 2. exact sphere if that failed.
+  // 1. Approximate smallest enclosing sphere [QSS 4.4].
   if (from_sphere(approx_enclosing_sphere(normals), planes, &out)) return out;
-  if (from_sphere(min_enclosing_sphere(normals), planes, &out)) return out;
 
-  // 3. The LP [QSS Eq. 6]: a point in front of every plane.
+  // 2. The LP [QSS Eq. 6]: a point in front of every plane.
   out.used_lp = true;
   const OffsetLpResult lp = solve_offset_lp(planes);
   if (lp.status == OffsetLpResult::Status::Optimal && lp.rho > 0.0 && lp.point.allFinite()) {
@@ -65,8 +64,13 @@ OffsetDirection choose_offset_direction(std::span<const Vec4> planes) {
       return out;
     }
   }
-  // Unbounded LP while both spheres said no direction (only at the edge of feasibility, where
-  // min cos would be ~0 anyway), infeasible, failed, or rho <= 0: never reject [QSS App. B].
+  // 3. Unbounded (a direction exists that the approximate sphere missed) or a failed solve:
+  // the exact smallest enclosing sphere over every normal (DESIGN.md §5).
+  if (lp.status != OffsetLpResult::Status::Optimal &&
+      from_sphere(min_enclosing_sphere(normals), planes, &out))
+    return out;
+  // Infeasible, rho <= 0, or unbounded while even the exact sphere found no direction (only at
+  // the edge of feasibility, where min cos would be ~0 anyway): never reject [QSS App. B].
   out.kind = OffsetDirection::Kind::Unrejectable;
   return out;
 }

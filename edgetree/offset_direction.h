@@ -30,8 +30,9 @@ struct OffsetDirection {
 /// Chooses the offset vector D for the planes P of a patch (unit normals, expressed in the node's
 /// local frame: centred, unit size) following [QSS 4.4]: approximate smallest enclosing sphere of
 /// the normals (extremal points along 16 directions, Welzl with move-to-front, grown to cover
-/// all); if its radius is >= 1, the exact sphere over all normals; if still >= 1, the LP of
-/// [QSS Eq. 6]. The guard Z.q > kMinZq |q| for every plane (Z = D/|D|) is checked for every
+/// all); if its radius is >= 1, the LP of [QSS Eq. 6]; if the LP is unbounded (a direction
+/// exists that the approximate sphere missed) or fails, the exact smallest sphere over every
+/// normal. The guard Z.q > kMinZq |q| for every plane (Z = D/|D|) is checked for every
 /// outcome; failing it gives Unrejectable.
 OffsetDirection choose_offset_direction(std::span<const Vec4> planes);
 

@@ -5,11 +5,13 @@
 
 #include <coin/ClpSimplex.hpp>
 
+#include <algorithm>
 #include <vector>
 
 namespace qsil::edgetree {
 
-OffsetLpResult solve_offset_lp(std::span<const Vec4> planes) {
+namespace {
+OffsetLpResult solve_direct(std::span<const Vec4> planes) {
   OffsetLpResult out;
   const int m = int(planes.size());
   if (m == 0) {
@@ -60,6 +62,67 @@ OffsetLpResult solve_offset_lp(std::span<const Vec4> planes) {
     out.status = OffsetLpResult::Status::Failed;
   }
   return out;
+}
+}  // namespace
+
+OffsetLpResult solve_offset_lp(std::span<const Vec4> planes) {
+  // Constraint generation: solve on a subset of planes, add the most violated planes, repeat.
+  // A subset's optimum rho_sub bounds the full optimum from above (fewer constraints), so
+  // rho_sub <= 0 already proves rho <= 0; a subset optimum that violates no plane is the full
+  // optimum. The subset starts with the planes of extremal normals along 16 directions.
+  const int m = int(planes.size());
+  if (m <= 64) return solve_direct(planes);
+  std::vector<char> in(m, 0);
+  std::vector<Vec4> sub;
+  auto add = [&](int i) {
+    if (!in[i]) {
+      in[i] = 1;
+      sub.push_back(planes[i]);
+    }
+  };
+  static const Vec3 dirs[13] = {Vec3(1, 0, 0),  Vec3(0, 1, 0),   Vec3(0, 0, 1),  Vec3(1, 1, 1),
+                                Vec3(1, 1, -1), Vec3(1, -1, 1),  Vec3(-1, 1, 1), Vec3(1, 1, 0),
+                                Vec3(1, -1, 0), Vec3(1, 0, 1),   Vec3(1, 0, -1), Vec3(0, 1, 1),
+                                Vec3(0, 1, -1)};
+  for (const Vec3& d : dirs) {
+    int imin = 0, imax = 0;
+    double vmin = kInf, vmax = -kInf;
+    for (int i = 0; i < m; ++i) {
+      const double v = d.dot(planes[i].head<3>());
+      if (v < vmin) { vmin = v; imin = i; }
+      if (v > vmax) { vmax = v; imax = i; }
+    }
+    add(imin);
+    add(imax);
+  }
+  for (int iter = 0; iter < 50; ++iter) {
+    OffsetLpResult r = solve_direct(sub);
+    if (r.status != OffsetLpResult::Status::Optimal) {
+      if (int(sub.size()) == m) return r;
+      // Unbounded (or failed) on the subset: add a stride of planes and retry.
+      const int step = std::max(1, m / 64);
+      for (int i = iter % step; i < m; i += step) add(i);
+      continue;
+    }
+    if (r.rho <= 0.0) return r;  // rho_full <= rho_sub <= 0
+    // Most violated planes at the subset's optimum.
+    std::vector<std::pair<double, int>> viol;
+    for (int i = 0; i < m; ++i) {
+      if (in[i]) continue;
+      const double v = planes[i].head<3>().dot(r.point) + planes[i][3];
+      if (v < r.rho * (1.0 - 1e-12)) viol.push_back({v, i});
+    }
+    if (viol.empty()) {
+      double rho = kInf;
+      for (const Vec4& q : planes) rho = std::min(rho, q.head<3>().dot(r.point) + q[3]);
+      r.rho = rho;
+      return r;
+    }
+    const size_t k = std::min<size_t>(viol.size(), 32);
+    std::partial_sort(viol.begin(), viol.begin() + k, viol.end());
+    for (size_t j = 0; j < k; ++j) add(viol[j].second);
+  }
+  return solve_direct(planes);
 }
 
 }  // namespace qsil::edgetree

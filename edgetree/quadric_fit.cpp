@@ -28,19 +28,25 @@ Mat4 unpack(const Vec10& v) {
 
 bool fit_dual_quadric(std::span<const Vec4> planes, Mat4* Q) {
   if (planes.empty()) return false;
+  // Accumulate the upper triangles of M = sum s s^T and N = sum g g^T by hand (55 + 10
+  // products per plane; g has only 4 non-zero entries, at 3, 6, 8, 9).
   Mat10 M = Mat10::Zero(), N = Mat10::Zero();
   for (const Vec4& q : planes) {
-    Vec10 s, g;
+    double s[10];
     // q^T Q q = v . s(q)
-    s << q[0] * q[0], q[1] * q[1], q[2] * q[2], q[3] * q[3], 2 * q[0] * q[1], 2 * q[0] * q[2],
-        2 * q[0] * q[3], 2 * q[1] * q[2], 2 * q[1] * q[3], 2 * q[2] * q[3];
+    s[0] = q[0] * q[0]; s[1] = q[1] * q[1]; s[2] = q[2] * q[2]; s[3] = q[3] * q[3];
+    s[4] = 2 * q[0] * q[1]; s[5] = 2 * q[0] * q[2]; s[6] = 2 * q[0] * q[3];
+    s[7] = 2 * q[1] * q[2]; s[8] = 2 * q[1] * q[3]; s[9] = 2 * q[2] * q[3];
+    for (int j = 0; j < 10; ++j)
+      for (int i = 0; i <= j; ++i) M(i, j) += s[i] * s[j];
     // (Q q)_3 = Q30 q0 + Q31 q1 + Q32 q2 + Q33 q3 = v . g(q)
-    g << 0, 0, 0, q[3], 0, 0, q[0], 0, q[1], q[2];
-    M.selfadjointView<Eigen::Lower>().rankUpdate(s);
-    N.selfadjointView<Eigen::Lower>().rankUpdate(g);
+    const int gi[4] = {3, 6, 8, 9};
+    const double gv[4] = {q[3], q[0], q[1], q[2]};
+    for (int b = 0; b < 4; ++b)
+      for (int a = 0; a <= b; ++a) N(gi[a], gi[b]) += gv[a] * gv[b];
   }
-  M = M.selfadjointView<Eigen::Lower>();
-  N = N.selfadjointView<Eigen::Lower>();
+  M = M.selfadjointView<Eigen::Upper>();
+  N = N.selfadjointView<Eigen::Upper>();
   const double tr = M.trace();
   if (!(tr > 0.0) || !std::isfinite(tr)) return false;
   M.diagonal().array() += 1e-12 * tr / 10.0;
