@@ -136,7 +136,6 @@ Distribution1D::Sample Distribution1D::sample_discrete(double u) const {
   Sample s = sample(u);
   // Position of u inside the chosen bin, reusable as a fresh uniform number.
   s.x = std::clamp(s.x * size() - s.index, 0.0, kOneMinusEpsilon);
-  s.pdf = 0;
   return s;
 }
 

@@ -83,8 +83,9 @@ class Distribution1D {
   };
   /// Inverts the CDF at u in [0,1) (values outside are clamped), linearly inside the bin.
   Sample sample(double u) const;
-  /// Discrete sample: the bin index chosen by sample(u), with pmf in .pmf (and the reuse value
-  /// u' = the position inside the bin in [0,1) in .x, so one number can drive two decisions).
+  /// Discrete sample: the bin index chosen by sample(u) with its probability in .pmf (pmf = 0
+  /// marks an invalid sample), and in .x the position of u inside the bin's CDF interval, a fresh
+  /// uniform number in [0,1) (so one number can drive two decisions); .pdf is as for sample().
   Sample sample_discrete(double u) const;
 
   /// Density at x in [0,1) (x outside [0,1) gives 0).
