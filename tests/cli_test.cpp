@@ -1,0 +1,126 @@
+// The `qsil` program as a user meets it: exit codes and one-line errors for bad input, no partial
+// output files, deterministic images across thread counts. Runs the built binary.
+#include "qsil/image.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <cstring>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+#include <unistd.h>
+
+namespace {
+
+struct CliRun {
+  int code = -1;
+  std::string err;  ///< stderr
+  std::string out;  ///< stdout
+};
+
+/// Runs `qsil ARGS` from the repository root, capturing stdout and stderr.
+CliRun run_qsil(const std::string& args) {
+  const auto dir = std::filesystem::temp_directory_path();
+  // Per-process names: ctest runs tests of this file in parallel processes.
+  const std::string id = std::to_string(::getpid());
+  const auto err = dir / ("qsil_cli_test" + id + ".err"), out = dir / ("qsil_cli_test" + id + ".out");
+  const std::string cmd = std::string(QSIL_CLI_PATH) + " " + args + " >" + out.string() + " 2>" + err.string();
+  const int status = std::system(cmd.c_str());
+  CliRun r;
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  auto slurp = [](const std::filesystem::path& p) {
+    std::string s;
+    if (FILE* f = std::fopen(p.c_str(), "r")) {
+      std::array<char, 4096> buf;
+      size_t n;
+      while ((n = std::fread(buf.data(), 1, buf.size(), f)) > 0) s.append(buf.data(), n);
+      std::fclose(f);
+    }
+    return s;
+  };
+  r.err = slurp(err);
+  r.out = slurp(out);
+  return r;
+}
+
+std::string tmp(const std::string& name) {
+  return (std::filesystem::temp_directory_path() / (std::to_string(::getpid()) + "_" + name)).string();
+}
+
+/// A bad invocation exits 2 with exactly one line on stderr containing `needle`, and writes no output.
+void expect_error(const std::string& args, const std::string& needle) {
+  const std::string out = tmp("qsil_cli_should_not_exist.exr");
+  std::filesystem::remove(out);
+  const CliRun r = run_qsil(args + " -q -o " + out);
+  EXPECT_EQ(r.code, 2) << args << "\n" << r.err;
+  EXPECT_NE(r.err.find(needle), std::string::npos) << args << "\nstderr: " << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << args << "\nstderr: " << r.err;
+  EXPECT_FALSE(std::filesystem::exists(out)) << args;
+}
+
+}  // namespace
+
+TEST(CLI, SceneErrorsExitWithCode2AndOneLineNamingFileAndLine) {
+  expect_error("render tests/data/scenes/bad_plugin.xml", "bad_plugin.xml:");
+  expect_error("render tests/data/scenes/bad_plugin.xml", "unsupported plugin");
+  expect_error("render tests/data/scenes/bad_malformed.xml", "bad_malformed.xml:");
+  expect_error("render tests/data/scenes/bad_missing_obj.xml", "not found");
+  expect_error("render tests/data/scenes/bad_noface_obj.xml", "no faces");
+  expect_error("render tests/data/scenes/bad_nan_obj.xml", "non-finite");
+  expect_error("render tests/data/scenes/bad_conductor_preset.xml", "preset");
+  expect_error("render tests/data/scenes/does_not_exist.xml", "does_not_exist.xml");
+  expect_error("render scenes/shadow-quad.xml -D spp", "-D 'spp'");
+}
+
+TEST(CLI, ParameterErrorsExitWithCode2) {
+  expect_error("grad scenes/shadow-quad.xml --spp 1 --param nosuch:translate:0,1,0", "no shape with id 'nosuch'");
+  expect_error("grad scenes/shadow-quad.xml --spp 1 --param object:translate:0,0,0", "zero direction");
+  expect_error("grad scenes/shadow-quad.xml --spp 1 --param object:vertex:99999999:0,1,0", "out of range");
+  expect_error("grad scenes/shadow-quad.xml --spp 1 --param object:translate:0,1", "X,Y,Z");
+  expect_error("grad scenes/shadow-quad.xml --spp 1 --param object:wobble:1", "unknown kind");
+  expect_error("fd scenes/shadow-quad.xml --spp 1 --param object:rotate:0,1,0 --h -1", "step");
+}
+
+TEST(CLI, HelpExplainsEveryCommandAndExitsZero) {
+  for (const char* cmd : {"render", "grad", "fd"}) {
+    const CliRun r = run_qsil(std::string(cmd) + " --help");
+    EXPECT_EQ(r.code, 0) << cmd;
+    EXPECT_NE(r.out.find("--spp"), std::string::npos) << cmd;
+    EXPECT_NE(r.out.find("--seed"), std::string::npos) << cmd;
+  }
+}
+
+// Same seed, 1 vs 2 threads: identical pixel bytes (the EXR header differs only in its timing).
+TEST(CLI, RenderIsBitIdenticalForAnyThreadCount) {
+  const std::string a = tmp("qsil_det_1.exr"), b = tmp("qsil_det_2.exr");
+  const std::string common = "render scenes/shadow-quad.xml -q -D res=24 --spp 4 --seed 9 ";
+  ASSERT_EQ(run_qsil(common + "--threads 1 -o " + a).code, 0);
+  const CliRun r = run_qsil(common + "--threads 2 -o " + b);
+  ASSERT_EQ(r.code, 0);
+  EXPECT_NE(r.out.find("Mrays/s"), std::string::npos);  // the final summary line
+  const qsil::Image ia = qsil::read_exr(a), ib = qsil::read_exr(b);
+  ASSERT_EQ(ia.planes.size(), ib.planes.size());
+  for (size_t c = 0; c < ia.planes.size(); ++c)
+    EXPECT_EQ(0, std::memcmp(ia.planes[c].data(), ib.planes[c].data(), ia.planes[c].size() * sizeof(float)));
+}
+
+// grad writes R,G,B and dtheta<k>.R/G/B per parameter, with the specs as header attributes, and
+// one diverging preview per parameter.
+TEST(CLI, GradWritesTheDocumentedChannelsAttributesAndPreviews) {
+  const std::string out = tmp("qsil_grad_layout.exr"), dir = tmp("qsil_grad_previews");
+  std::filesystem::remove_all(dir);
+  const CliRun r = run_qsil("grad scenes/shadow-quad.xml -q -D res=16 --spp 2 --param object:translate:0,1,0 "
+                     "--param light:rotate:1,0,0 -o " + out + " --preview-dir " + dir);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const qsil::Image img = qsil::read_exr(out);
+  for (const char* ch : {"R", "G", "B", "dtheta0.R", "dtheta0.G", "dtheta0.B", "dtheta1.R", "dtheta1.G", "dtheta1.B"})
+    EXPECT_GE(img.channel_index(ch), 0) << ch;
+  EXPECT_EQ(img.channel_names.size(), 9u);
+  EXPECT_EQ(img.attributes.at("qsil:param0"), "object:translate:0,1,0");
+  EXPECT_EQ(img.attributes.at("qsil:param1"), "light:rotate:1,0,0");
+  EXPECT_TRUE(std::filesystem::exists(dir + "/dtheta0.png"));
+  EXPECT_TRUE(std::filesystem::exists(dir + "/dtheta1.png"));
+  EXPECT_NE(r.out.find("image sum"), std::string::npos);
+}
