@@ -83,6 +83,15 @@ TEST(CLI, ParameterErrorsExitWithCode2) {
   expect_error("fd scenes/shadow-quad.xml --spp 1 --param object:rotate:0,1,0 --h -1", "step");
 }
 
+// Repeatable options take one value each, wherever they stand relative to the scene argument.
+TEST(CLI, RepeatedOptionsBeforeTheSceneDoNotSwallowIt) {
+  const std::string out = tmp("qsil_order.exr");
+  const CliRun r = run_qsil("fd --param object:translate:0,1,0 --param light:translate:1,0,0 -D res=8 "
+                            "scenes/shadow-quad.xml -q --spp 1 -o " + out);
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(qsil::read_exr(out).channel_names.size(), 9u);
+}
+
 TEST(CLI, HelpExplainsEveryCommandAndExitsZero) {
   for (const char* cmd : {"render", "grad", "fd"}) {
     const CliRun r = run_qsil(std::string(cmd) + " --help");

@@ -16,7 +16,7 @@ namespace qsil::cli {
 void add_common_flags(CLI::App& app, CommonFlags& flags, const std::string& default_output) {
   flags.output = default_output;
   app.add_option("scene", flags.scene, "Scene file (Mitsuba 3 XML subset)")->required();
-  app.add_option("-D", flags.defines, "Override a scene <default>: -D name=value (repeatable)");
+  app.add_option("-D", flags.defines, "Override a scene <default>: -D name=value (repeatable)")->allow_extra_args(false);
   app.add_option("--spp", flags.render.spp, "Samples per pixel (default: the scene's sampler sample_count)");
   app.add_option("--seed", flags.render.seed, "Random seed; a seed gives bit-identical output for any --threads");
   app.add_option("--threads", flags.render.threads, "Worker threads (0 = all cores)")->check(CLI::NonNegativeNumber);

@@ -20,11 +20,12 @@ const CommandRegistrar registrar{{"fd", "Finite-difference derivatives (central,
     };
     auto flags = std::make_shared<Flags>();
     add_common_flags(app, *flags, "fd.exr");
-    app.add_option("--param", flags->params, "Parameter (repeatable, 1-8), as for `qsil grad`")->required();
+    app.add_option("--param", flags->params, "Parameter (repeatable, 1-8), as for `qsil grad`")->required()->allow_extra_args(false);
     app.add_option("--h", flags->h,
                    "Step per parameter (one value for all, or one per --param). Default: translate/vertex "
                    "1e-3 x scene bounding-box diagonal / |direction| (scene units of theta); rotate 1e-3 rad; "
-                   "scale 1e-3 (relative)");
+                   "scale 1e-3 (relative)")
+        ->allow_extra_args(false);
     app.add_option("--preview-dir", flags->preview_dir, "Write primal.png and one diverging PNG per parameter here");
     return [flags]() {
       const Scene scene = load_scene_with_flags(*flags);

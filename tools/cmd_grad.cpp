@@ -24,7 +24,8 @@ const CommandRegistrar registrar{{"grad", "Render an image and its derivatives w
     app.add_option("--param", flags->params,
                    "Parameter (repeatable, 1-8): ID:translate:X,Y,Z | ID:rotate:X,Y,Z[@CX,CY,CZ] (radians) | "
                    "ID:scale[@CX,CY,CZ] (relative) | ID:vertex:INDEX:X,Y,Z; ID is the shape's XML id")
-        ->required();
+        ->required()
+        ->allow_extra_args(false);
     app.add_option("--boundary", flags->boundary,
                    "Boundary-term estimator: none (interior term only; misses silhouettes and outlines)")
         ->capture_default_str();
