@@ -1,8 +1,8 @@
 /// @file tool_fit_ltc.cpp
-/// `qsil-fit-ltc`: fits the table of linearly transformed cosines (LTC) to qsil's own GGX
+/// `qsil-fit_ltc` (CMake names tools/tool_X.cpp qsil-X): fits the table of linearly transformed cosines (LTC) to qsil's own GGX
 /// (ggx_eval_cos in include/qsil/bsdf.h: separable Smith G, Fresnel 1) and prints it as the C++
 /// initializer of edgetree/ltc_ggx_table.inc (layout in edgetree/ltc.h). Regenerate with
-///   build/qsil-fit-ltc > edgetree/ltc_ggx_table.inc
+///   build/qsil-fit_ltc > edgetree/ltc_ggx_table.inc
 /// (about two minutes on one core). A fit summary goes to stderr.
 ///
 /// Method (Heitz, Dupuy, Hill, Neubelt 2016, "Real-Time Polygonal-Light Shading with Linearly
@@ -282,7 +282,7 @@ int main() {
 
   std::printf("// edgetree/ltc_ggx_table.inc -- GENERATED, do not edit.\n");
   std::printf("// LTC fit of qsil's GGX (ggx_eval_cos: separable Smith G, Fresnel 1); layout in edgetree/ltc.h.\n");
-  std::printf("// Regenerate: build/qsil-fit-ltc > edgetree/ltc_ggx_table.inc  (tools/tool_fit_ltc.cpp)\n");
+  std::printf("// Regenerate: build/qsil-fit_ltc > edgetree/ltc_ggx_table.inc  (tools/tool_fit_ltc.cpp)\n");
   std::printf("// [alpha node %d][cos node %d] = {M_inv(0,0), M_inv(0,2), M_inv(2,0), M_inv(2,2), albedo}\n", NA, NC);
   std::printf("// Fit: mean relative L1 error %.4f, worst %.4f.\n", mean / (NA * NC), worst);
   for (int i = 0; i < NA; ++i) {

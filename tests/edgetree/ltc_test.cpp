@@ -161,9 +161,9 @@ TEST(LTCTest, LambertFormFactor) {
   // A huge square at height 1, and the same square much lower down: nearly 1.
   std::vector<Vec3> big = {{1e4, 1e4, 1}, {-1e4, 1e4, 1}, {-1e4, -1e4, 1}, {1e4, -1e4, 1}};
   EXPECT_NEAR(cosine_polygon_integral(big), 1.0, 1e-3);
-  // Analytic form factor of a unit square centred above at height 1 (Howell's catalogue C-11:
-  // parallel square of side 2a at distance c, a = 0.5, c = 1, evaluated through the edge formula
-  // per quadrant: F = (2/pi)(x/sqrt(1+x^2) atan(y/sqrt(1+x^2)) + y/.. ) with x = y = a/c.
+  // Square of side 2a = 1 centred above at height 1, by hand: each edge subtends
+  // angle 2 atan(a / sqrt(1 + a^2)) and its plane's normal has z = a / sqrt(1 + a^2), so
+  // F = 4 * (1/2pi) * 2 (a/s) atan(a/s), s = sqrt(1 + a^2).
   const double x = 0.5;
   const double s = std::sqrt(1 + x * x);
   const double f_quadrant = (1 / (2 * kPi)) * (2 * x / s * std::atan(x / s));
