@@ -7,6 +7,8 @@
 
 #include <Eigen/Eigenvalues>
 
+#include <vector>
+
 #include <cmath>
 
 namespace qsil::edgetree {
@@ -45,17 +47,58 @@ bool fit_dual_quadric(std::span<const Vec4> planes, Mat4* Q) {
     for (int b = 0; b < 4; ++b)
       for (int a = 0; a <= b; ++a) N(gi[a], gi[b]) += gv[a] * gv[b];
   }
-  M = M.selfadjointView<Eigen::Upper>();
-  N = N.selfadjointView<Eigen::Upper>();
-  const double tr = M.trace();
-  if (!(tr > 0.0) || !std::isfinite(tr)) return false;
-  M.diagonal().array() += 1e-12 * tr / 10.0;
-  Eigen::GeneralizedSelfAdjointEigenSolver<Mat10> solver(N, M, Eigen::ComputeEigenvectors |
-                                                                   Eigen::ABx_lx);
+  for (int j = 0; j < 10; ++j)
+    for (int i = 0; i < j; ++i) {
+      M(j, i) = M(i, j);
+      N(j, i) = N(i, j);
+    }
+  if (!M.allFinite() || !N.allFinite()) return false;
+
+  // N only involves w = v[{3,6,8,9}] (the w-row of Q). Split v = [u, w] with u the other six
+  // entries. For a fixed w the numerator v^T M v is minimised by u = -M_uu^+ M_uw w, leaving
+  // the 4x4 Schur complement S = M_ww - M_wu M_uu^+ M_uw: minimise w^T S w / w^T N_ww w, the
+  // smallest eigenvalue of S w = mu N_ww w with N_ww positive definite for >= 4 general planes.
+  // This is Eq. 5 exactly, without the ill-conditioned 10x10 pencil (M is singular whenever an
+  // exact fit exists, e.g. planes tangent to one quadric).
+  static const int wi[4] = {3, 6, 8, 9}, ui[6] = {0, 1, 2, 4, 5, 7};
+  Eigen::Matrix<double, 6, 6> Muu;
+  Eigen::Matrix<double, 6, 4> Muw;
+  Eigen::Matrix4d Mww, Nww;
+  for (int a = 0; a < 6; ++a) {
+    for (int b = 0; b < 6; ++b) Muu(a, b) = M(ui[a], ui[b]);
+    for (int b = 0; b < 4; ++b) Muw(a, b) = M(ui[a], wi[b]);
+  }
+  for (int a = 0; a < 4; ++a)
+    for (int b = 0; b < 4; ++b) {
+      Mww(a, b) = M(wi[a], wi[b]);
+      Nww(a, b) = N(wi[a], wi[b]);
+    }
+  // Pseudo-inverse of M_uu (normals' monomials; rank-deficient for planar or cylindrical
+  // patches), eigenvalues below 1e-12 of the largest dropped.
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eu(Muu);
+  if (eu.info() != Eigen::Success) return false;
+  const double emax = eu.eigenvalues().cwiseAbs().maxCoeff();
+  Eigen::Matrix<double, 6, 1> inv;
+  for (int i = 0; i < 6; ++i) {
+    const double e = eu.eigenvalues()[i];
+    inv[i] = e > 1e-12 * emax ? 1.0 / e : 0.0;
+  }
+  const Eigen::Matrix<double, 6, 6> Muu_pinv =
+      eu.eigenvectors() * inv.asDiagonal() * eu.eigenvectors().transpose();
+  Eigen::Matrix4d S = Mww - Muw.transpose() * Muu_pinv * Muw;
+  S = 0.5 * (S + S.transpose()).eval();
+  const double ntr = Nww.trace();
+  if (!(ntr > 0.0)) return false;
+  Nww.diagonal().array() += 1e-12 * ntr;  // positive definite even for degenerate plane sets
+  Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::Matrix4d> solver(
+      S, Nww, Eigen::ComputeEigenvectors | Eigen::Ax_lBx);  // S w = mu N w
   if (solver.info() != Eigen::Success) return false;
-  const double sigma = solver.eigenvalues()[9];  // ascending order
-  if (!(sigma > 0.0) || !std::isfinite(sigma)) return false;
-  Mat4 R = unpack(solver.eigenvectors().col(9));
+  const Eigen::Vector4d w = solver.eigenvectors().col(0);  // smallest mu, ascending order
+  const Eigen::Matrix<double, 6, 1> u = -Muu_pinv * (Muw * w);
+  Vec10 v;
+  for (int a = 0; a < 4; ++a) v[wi[a]] = w[a];
+  for (int a = 0; a < 6; ++a) v[ui[a]] = u[a];
+  Mat4 R = unpack(v);
   const double mx = R.cwiseAbs().maxCoeff();
   if (!(mx > 0.0) || !R.allFinite()) return false;
   *Q = R / mx;
