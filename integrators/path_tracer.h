@@ -44,6 +44,9 @@ struct PathContext {
 /// Counters of one thread's work (summed for the final report).
 struct PathStats {
   uint64_t rays = 0;
+  uint64_t boundary_traversals = 0;   ///< edge-forest traversals (boundary-term samples)
+  uint64_t boundary_zero = 0;         ///< ...that contributed nothing (no edge, not a silhouette, occluded, f = 0)
+  double boundary_seconds = 0;        ///< thread time spent in the boundary term
 };
 
 /// Power heuristic weight of a strategy with pdf a against one with pdf b (Veach 1997). Detached.
@@ -75,16 +78,23 @@ template <class T> ShadingPoint<T> make_shading_point(const PathContext& ctx, co
   return sp;
 }
 
+/// The hook of a path vertex for estimators that add a term there (the boundary term); the primal
+/// path tracer has none.
+struct NoVertexHook {
+  template <class... Args> void operator()(Args&&...) const {}
+};
+
 /// Radiance arriving at `origin` from fixed direction `dir` along a path, plus its forward-mode
-/// derivative when T is a dual. `first_hit` is the already-traced hit of that ray (so the caller
+/// derivative when T is a dual. At every vertex that may still scatter (segments < max_depth),
+/// `hook(si, sp, wo_local_value, beta, segments_so_far, sampler, stats, L)` may add to L. `first_hit` is the already-traced hit of that ray (so the caller
 /// can reuse it); `segments` is the number of segments already used before this one (0 for a
 /// camera ray); `prev_bsdf_pdf` is the detached solid-angle pdf with which `dir` was chosen by
 /// BSDF sampling (0: the direction was not BSDF-sampled, so emission found along it is counted
 /// with weight 1).
-template <class View>
+template <class View, class Hook = NoVertexHook>
 ColorT<typename View::Real> trace_path(const PathContext& ctx, const View& view, const Vec3T<typename View::Real>& origin,
                                        const Vec3& dir, const Hit& first_hit, int segments, double prev_bsdf_pdf,
-                                       Sampler& sampler, PathStats& stats) {
+                                       Sampler& sampler, PathStats& stats, const Hook& hook = {}) {
   using T = typename View::Real;
   ColorT<T> L = lift<T>(Color::Zero().eval());
   ColorT<T> beta = lift<T>(Color::Ones().eval());
@@ -120,6 +130,7 @@ ColorT<typename View::Real> trace_path(const PathContext& ctx, const View& view,
     const ShadingPoint<T> sp = make_shading_point(ctx, si);
     const Vec3T<T> wo = sp.frame.to_local(lift<T>(wo_world));
     const Vec3 wo_value = value(wo);
+    hook(si, sp, wo_value, beta, seg, sampler, stats, L);
 
     // ---- Next-event estimation: keep only the sampled direction; re-evaluate along it.
     {

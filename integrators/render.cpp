@@ -3,12 +3,16 @@
 
 #include "integrators/render.h"
 
+#include "edgetree/edge_forest.h"
+#include "integrators/boundary_term.h"
 #include "integrators/geometry_view.h"
 #include "integrators/path_tracer.h"
 #include "integrators/pixel_loop.h"
+#include "integrators/primary_boundary.h"
 #include "qsil/error.h"
 
 #include <tbb/enumerable_thread_specific.h>
+#include <tbb/task_arena.h>
 
 #include <atomic>
 #include <memory>
@@ -42,10 +46,11 @@ struct LightSetup {
   }
 };
 
-/// One estimator pass over all pixels: `sample(x, y, s, sampler, stats, out)` fills out[0..C).
+/// One estimator pass over all pixels: `sample(x, y, s, sampler, stats, out)` fills out[0..C)
+/// for sample s of pixel (x, y).
 template <class SampleFn>
 RenderResult run_pixels(const Scene& scene, const RenderOptions& options, int channels, const std::string& label,
-                        SampleFn&& sample) {
+                        SampleFn&& sample, PathStats* total = nullptr) {
   RenderResult result;
   result.spp = resolve_spp(scene, options);
   const int W = scene.camera.width, H = scene.camera.height;
@@ -59,7 +64,7 @@ RenderResult run_pixels(const Scene& scene, const RenderOptions& options, int ch
     const uint64_t pixel = uint64_t(y) * W + x;
     for (int s = 0; s < result.spp; ++s) {
       Sampler sampler(options.seed, pixel, uint64_t(s));
-      sample(x, y, sampler, st, out.data());
+      sample(x, y, s, sampler, st, out.data());
       bool finite = true;
       for (double v : out) finite = finite && std::isfinite(v);
       if (!finite) {
@@ -70,13 +75,22 @@ RenderResult run_pixels(const Scene& scene, const RenderOptions& options, int ch
     }
   });
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  for (const auto& st : stats) result.rays += st.rays;
+  for (const auto& st : stats) {
+    result.rays += st.rays;
+    if (total) {
+      total->rays += st.rays;
+      total->boundary_traversals += st.boundary_traversals;
+      total->boundary_zero += st.boundary_zero;
+      total->boundary_seconds += st.boundary_seconds;
+    }
+  }
   result.nonfinite = nonfinite.load();
   return result;
 }
 
 template <int N>
-RenderResult render_gradient_n(const Scene& scene, const std::vector<ParameterSpec>& params, const RenderOptions& options) {
+RenderResult render_gradient_n(const Scene& scene, const std::vector<ParameterSpec>& params, const RenderOptions& options,
+                               const GradientOptions& gopt, GradientReport* report) {
   const SceneVelocities vel = compute_velocities(scene, params);
   const RayTracer tracer(scene);
   const LightSetup lights(scene);
@@ -85,19 +99,67 @@ RenderResult render_gradient_n(const Scene& scene, const std::vector<ParameterSp
   const int K = int(params.size());
   const Camera& cam = scene.camera;
   const Vec3 origin = cam.origin();
-  return run_pixels(scene, options, gradient_film_channels(K), "grad",
-                    [&](int x, int y, Sampler& sampler, PathStats& st, double* out) {
+  // ---- The edge forest over every shape (a moving shading point sees static edges move too).
+  edgetree::EdgeForest forest;
+  BoundaryContext bctx;
+  const bool boundary = gopt.boundary != BoundaryMethod::None && vel.any_moving();
+  if (boundary) {
+    const auto t0 = std::chrono::steady_clock::now();
+    std::vector<edgetree::ForestShapeInput> inputs;
+    for (size_t s = 0; s < scene.shapes.size(); ++s) inputs.push_back({&scene.shapes[s].mesh, int(s)});
+    forest = edgetree::EdgeForest::build(inputs);
+    if (report) report->forest_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    bctx.forest = &forest;
+    bctx.mode = gopt.boundary == BoundaryMethod::QuadricBox ? edgetree::RejectionMode::Box : edgetree::RejectionMode::Quadric;
+    bctx.velocities = &vel;
+    bctx.moving = vel.moving;
+    bctx.all.assign(scene.shapes.size(), true);
+    bctx.samples_per_vertex = std::max(1, gopt.boundary_spp);
+  }
+  PathStats total;
+  RenderResult r = run_pixels(scene, options, gradient_film_channels(K), "grad",
+                    [&](int x, int y, int s, Sampler& sampler, PathStats& st, double* out) {
     const Vec2 u = sampler.next2();
     const Vec3 d = cam.direction(x + u.x(), y + u.y());
     ++st.rays;
     const Hit hit = tracer.intersect(origin, d);
-    const ColorT<Dual<N>> L = trace_path(ctx, view, lift<Dual<N>>(origin), d, hit, 0, 0.0, sampler, st);
+    ColorT<Dual<N>> L;
+    if (boundary) {
+      // The boundary term draws from a stream of its own, so the path itself is the primal's.
+      Sampler bsampler(options.seed, uint64_t(y) * cam.width + x, uint64_t(s), 1);
+      const BoundaryHook<N> hook{&ctx, &bctx, &bsampler};
+      L = trace_path(ctx, view, lift<Dual<N>>(origin), d, hit, 0, 0.0, sampler, st, hook);
+    } else {
+      L = trace_path(ctx, view, lift<Dual<N>>(origin), d, hit, 0, 0.0, sampler, st);
+    }
     for (int c = 0; c < 3; ++c) out[c] = L[c].value();
     for (int k = 0; k < K; ++k) {
       for (int c = 0; c < 3; ++c) out[3 * (1 + k) + c] = L[c].derivatives()[k];
       out[3 * (1 + K) + k] = (out[3 * (1 + k)] + out[3 * (1 + k) + 1] + out[3 * (1 + k) + 2]) / 3.0;
     }
-  });
+  }, &total);
+  // ---- Primary silhouettes: one edge sample per pixel sample, splatted where it lands.
+  if (boundary) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const std::vector<PrimaryEdge> edges = find_primary_edges(scene, forest, vel.moving);
+    PathStats primary;
+    add_primary_boundary(r.film, ctx, vel, edges, (long long)cam.width * cam.height * r.spp, r.spp, options.seed,
+                         options.threads, primary);
+    const double dt = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    r.seconds += dt;
+    r.rays += primary.rays;
+    total.boundary_traversals += primary.boundary_traversals;
+    total.boundary_zero += primary.boundary_zero;
+    total.boundary_seconds += dt * double(options.threads > 0 ? options.threads : tbb::this_task_arena::max_concurrency());
+  }
+  if (report) {
+    report->traversals = total.boundary_traversals;
+    report->zero_traversals = total.boundary_zero;
+    // Thread time in the boundary term, as a share of the pixel loop's wall time.
+    const double threads = double(options.threads > 0 ? options.threads : tbb::this_task_arena::max_concurrency());
+    report->boundary_seconds = std::min(r.seconds, total.boundary_seconds / threads);
+  }
+  return r;
 }
 
 }  // namespace
@@ -109,7 +171,7 @@ RenderResult render_primal(const Scene& scene, const RenderOptions& options) {
   const PrimalView view{&scene};
   const Camera& cam = scene.camera;
   const Vec3 origin = cam.origin();
-  return run_pixels(scene, options, 3, "render", [&](int x, int y, Sampler& sampler, PathStats& st, double* out) {
+  return run_pixels(scene, options, 3, "render", [&](int x, int y, int s, Sampler& sampler, PathStats& st, double* out) {
     const Vec2 u = sampler.next2();
     const Vec3 d = cam.direction(x + u.x(), y + u.y());
     ++st.rays;
@@ -190,7 +252,7 @@ RenderResult render_finite_differences(const Scene& scene, const std::vector<Par
     return trace_path(side.ctx, PrimalView{&side.scene}, origin, d, hit, 0, 0.0, sampler, st);
   };
   return run_pixels(scene, options, gradient_film_channels(K), "fd",
-                    [&](int x, int y, Sampler& sampler, PathStats& st, double* out) {
+                    [&](int x, int y, int s, Sampler& sampler, PathStats& st, double* out) {
     const Vec2 u = sampler.next2();
     // Common random numbers: every side continues from a copy of the same sampler state.
     const Color L0 = radiance(*sides[0], sampler, st, u, x, y);
@@ -205,13 +267,21 @@ RenderResult render_finite_differences(const Scene& scene, const std::vector<Par
   });
 }
 
-RenderResult render_gradient(const Scene& scene, const std::vector<ParameterSpec>& params, const RenderOptions& options) {
+BoundaryMethod parse_boundary_method(const std::string& name) {
+  if (name == "none") return BoundaryMethod::None;
+  if (name == "quadric") return BoundaryMethod::Quadric;
+  if (name == "quadric-box") return BoundaryMethod::QuadricBox;
+  throw Error("--boundary '" + name + "': unsupported (supported: quadric, quadric-box, none)");
+}
+
+RenderResult render_gradient(const Scene& scene, const std::vector<ParameterSpec>& params, const RenderOptions& options,
+                             const GradientOptions& gopt, GradientReport* report) {
   const size_t K = params.size();
   if (K == 0) throw Error("grad needs at least one --param");
-  if (K == 1) return render_gradient_n<1>(scene, params, options);
-  if (K == 2) return render_gradient_n<2>(scene, params, options);
-  if (K <= 4) return render_gradient_n<4>(scene, params, options);
-  if (K <= 8) return render_gradient_n<8>(scene, params, options);
+  if (K == 1) return render_gradient_n<1>(scene, params, options, gopt, report);
+  if (K == 2) return render_gradient_n<2>(scene, params, options, gopt, report);
+  if (K <= 4) return render_gradient_n<4>(scene, params, options, gopt, report);
+  if (K <= 8) return render_gradient_n<8>(scene, params, options, gopt, report);
   throw Error("at most 8 parameters per run (got " + std::to_string(K) + ")");
 }
 

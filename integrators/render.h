@@ -49,9 +49,34 @@ struct ImageSum {
 };
 ImageSum derivative_image_sum(const Film& film, int num_params, int k);
 
+/// The boundary-term estimator of `qsil grad` (DESIGN.md §7).
+enum class BoundaryMethod {
+  None,        ///< interior term only
+  Quadric,     ///< edge forest with the dual box + bounding quadric pair test [QSS] (default)
+  QuadricBox,  ///< edge forest with the dual box test only (ablation)
+};
+/// Parses "none" | "quadric" | "quadric-box"; throws qsil::Error naming the value otherwise.
+BoundaryMethod parse_boundary_method(const std::string& name);
+
+/// Options of the gradient estimator.
+struct GradientOptions {
+  BoundaryMethod boundary = BoundaryMethod::Quadric;
+  int boundary_spp = 1;  ///< discontinuity samples per shading point
+};
+
+/// Cost report of a gradient render (in addition to RenderResult).
+struct GradientReport {
+  double forest_seconds = 0;      ///< edge-forest build
+  double boundary_seconds = 0;    ///< wall time attributed to the boundary term (thread-time share)
+  uint64_t traversals = 0;        ///< boundary-term samples drawn
+  uint64_t zero_traversals = 0;   ///< ...that contributed nothing
+};
+
 /// Renders the primal image and its derivative with respect to each parameter (1 to 8) from the
-/// same paths. Film channels: gradient_film_channels(params.size()). Interior term only for now.
-RenderResult render_gradient(const Scene& scene, const std::vector<ParameterSpec>& params, const RenderOptions& options);
+/// same paths: interior term in forward mode plus the boundary term of `gopt.boundary`.
+/// Film channels: gradient_film_channels(params.size()).
+RenderResult render_gradient(const Scene& scene, const std::vector<ParameterSpec>& params, const RenderOptions& options,
+                             const GradientOptions& gopt = {}, GradientReport* report = nullptr);
 
 /// Default finite-difference step of a parameter: 1e-3 of the scene's bounding-box diagonal
 /// divided by |direction| for translate and vertex (so the displacement is 1e-3 diagonal),

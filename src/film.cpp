@@ -10,6 +10,7 @@ namespace qsil {
 Film::Film(int width, int height, int channels)
     : width_(width), height_(height), channels_(channels),
       sum_(size_t(width) * height * channels, 0.0), sum_sq_(size_t(width) * height * channels, 0.0),
+      splat_sum_(size_t(width) * height * channels, 0.0), splat_sq_(size_t(width) * height * channels, 0.0),
       count_(size_t(width) * height, 0) {}
 
 void Film::add_sample(int x, int y, const double* values) {
@@ -25,13 +26,14 @@ void Film::add_sample(int x, int y, const double* values) {
 
 void Film::splat(int x, int y, int channel, double value) {
   const size_t i = (size_t(y) * width_ + x) * channels_ + channel;
-  sum_[i] += value;
-  sum_sq_[i] += value * value;
+  splat_sum_[i] += value;
+  splat_sq_[i] += value * value;
 }
 
 double Film::mean(int c, int x, int y) const {
   const size_t p = size_t(y) * width_ + x;
-  return count_[p] > 0 ? sum_[p * channels_ + c] / double(count_[p]) : 0.0;
+  const size_t i = p * channels_ + c;
+  return count_[p] > 0 ? (sum_[i] + splat_sum_[i]) / double(count_[p]) : 0.0;
 }
 
 double Film::standard_error(int c, int x, int y) const {
@@ -40,13 +42,15 @@ double Film::standard_error(int c, int x, int y) const {
   if (n < 2) return 0.0;
   const double m = sum_[p * channels_ + c] / n;
   const double var = std::max(0.0, (sum_sq_[p * channels_ + c] / n - m * m)) * n / (n - 1);
-  return std::sqrt(var / n);
+  return std::sqrt(var / n + splat_sq_[p * channels_ + c] / (n * n));
 }
 
 void Film::merge(const Film& other) {
   for (size_t i = 0; i < sum_.size(); ++i) {
     sum_[i] += other.sum_[i];
     sum_sq_[i] += other.sum_sq_[i];
+    splat_sum_[i] += other.splat_sum_[i];
+    splat_sq_[i] += other.splat_sq_[i];
   }
   for (size_t i = 0; i < count_.size(); ++i) count_[i] += other.count_[i];
 }

@@ -6,6 +6,8 @@
 #include "qsil/scene.h"
 #include "qsil/vertex_normals.h"
 
+// Coordinates in double (DESIGN.md §3): float parsing flips near-flat edges on bob and teapot.
+#define TINYOBJLOADER_USE_DOUBLE
 #define TINYOBJLOADER_IMPLEMENTATION
 #include <tiny_obj_loader.h>
 

@@ -21,9 +21,12 @@ class Film {
   /// Adds one sample (C values) to pixel (x, y). Not thread-safe for the same pixel; the renderer
   /// gives each pixel to one thread.
   void add_sample(int x, int y, const double* values);
-  /// Adds `values` to pixel (x, y)'s sums without counting a sample (splatting: primary-edge
-  /// boundary samples land in pixels other than the one being sampled). Thread-safe only when the
-  /// caller serialises splats.
+  /// Adds a splatted estimate to pixel (x, y) without counting a sample (primary-edge boundary
+  /// samples land in pixels other than the one being sampled). `value` is in the units of one
+  /// pixel sample; the pixel's mean becomes (sum of samples + sum of splats) / samples, and its
+  /// standard error adds sum(value^2) / samples^2 (the splats are independent; this bound drops
+  /// the negligible mean-square correction). Not thread-safe: merge per-thread buffers in a
+  /// fixed order (determinism).
   void splat(int x, int y, int channel, double value);
   /// Number of samples per pixel (the same for all pixels after a full pass).
   long long samples(int x, int y) const { return count_[size_t(y) * width_ + x]; }
@@ -42,6 +45,7 @@ class Film {
  private:
   int width_, height_, channels_;
   std::vector<double> sum_, sum_sq_;
+  std::vector<double> splat_sum_, splat_sq_;
   std::vector<long long> count_;
 };
 

@@ -1,0 +1,199 @@
+/// @file silhouette_sampler.cpp
+/// See silhouette_sampler.h.
+
+#include "edgetree/silhouette_sampler.h"
+
+#include "edgetree/edge_point_sampler.h"
+
+#include <array>
+
+namespace qsil::edgetree {
+
+namespace {
+
+/// One candidate of a choice: a node (index >= 0) or an edge, with its weights.
+struct Candidate {
+  int node = -1;
+  const ForestEdge* edge = nullptr;
+  NodeWeight w;
+};
+
+/// Probabilities of a choice among candidates (see the file comment of the header).
+template <class Range> void choice_probabilities(const Range& c, int n, double* prob) {
+  double si = 0, sg = 0;
+  for (int i = 0; i < n; ++i) {
+    si += c[i].w.importance;
+    sg += c[i].w.defensive;
+  }
+  const double eps = si > 0 ? kNodeDefensiveShare : 1.0;
+  for (int i = 0; i < n; ++i) {
+    const double pi = si > 0 ? c[i].w.importance / si : 0.0;
+    const double pg = sg > 0 ? c[i].w.defensive / sg : 1.0 / n;
+    prob[i] = (1.0 - eps) * pi + eps * pg;
+  }
+}
+
+/// Index drawn with probabilities prob[0..n) (which sum to 1 up to rounding) from u in [0,1);
+/// never an index of zero probability, even when rounding leaves u beyond the last sum.
+int choose(const double* prob, int n, double u) {
+  double acc = 0;
+  int last = -1;
+  for (int i = 0; i < n; ++i) {
+    if (!(prob[i] > 0)) continue;
+    acc += prob[i];
+    last = i;
+    if (u < acc) return i;
+  }
+  return last;
+}
+
+double edge_defensive(const ForestEdge& e, const Vec3& p) {
+  const double d2 = (0.5 * (e.p0 + e.p1) - p).squaredNorm();
+  return d2 > 0 ? e.length / d2 : e.length;
+}
+
+NodeWeight edge_weight(const ForestEdge& e, const SilhouetteQuery& q) {
+  const EdgePointSampler s(q.frame.to_local(e.p0 - q.p), q.frame.to_local(e.p1 - q.p), q.ltc);
+  return {q.ltc.norm * s.target_integral(), edge_defensive(e, q.p)};
+}
+
+bool eligible(const SilhouetteQuery& q, int shape) {
+  return !q.eligible || (shape < int(q.eligible->size()) && (*q.eligible)[shape]);
+}
+
+/// The candidates at the top level: accepted, eligible forest roots and always-candidate edges.
+int top_candidates(const EdgeForest& f, const SilhouetteQuery& q, std::vector<Candidate>& out, int& tests) {
+  out.clear();
+  for (int r : f.roots()) {
+    if (!eligible(q, f.node(r).shape)) continue;
+    ++tests;
+    if (!may_have_silhouette(f, r, q.p, q.mode)) continue;
+    out.push_back({r, nullptr, node_weight(f.node(r), q)});
+  }
+  for (const ForestEdge& e : f.always_edges()) {
+    if (!eligible(q, e.shape)) continue;
+    out.push_back({-1, &e, edge_weight(e, q)});
+  }
+  return int(out.size());
+}
+
+/// The accepted children of inner node `n` (up to 4).
+int child_candidates(const EdgeForest& f, int n, const SilhouetteQuery& q, std::array<Candidate, 4>& out, int& tests) {
+  int k = 0;
+  const ForestNode& node = f.node(n);
+  for (int c = node.first; c < node.first + node.count; ++c) {
+    ++tests;
+    if (!may_have_silhouette(f, c, q.p, q.mode)) continue;
+    out[k++] = {c, nullptr, node_weight(f.node(c), q)};
+  }
+  return k;
+}
+
+/// The silhouette edges of leaf `n` (exact per-edge test; up to 4).
+int leaf_candidates(const EdgeForest& f, int n, const SilhouetteQuery& q, std::array<Candidate, 4>& out) {
+  int k = 0;
+  for (const ForestEdge& e : f.leaf_edges(n))
+    if (edge_is_silhouette(e, q.p)) out[k++] = {-1, &e, edge_weight(e, q)};
+  return k;
+}
+
+}  // namespace
+
+NodeWeight node_weight(const ForestNode& node, const SilhouetteQuery& q) {
+  const Vec3 c = node.bp.center();
+  const double half_diag = 0.5 * node.bp.diagonal();
+  const double h2 = std::max((c - q.p).squaredNorm(), half_diag * half_diag);
+  NodeWeight w;
+  w.defensive = h2 > 0 ? node.lw / h2 : node.lw;
+  const BoxSilhouette sil = box_silhouette_polygon(node.bp, q.p);
+  double fbar = 0;
+  if (sil.inside) {
+    fbar = q.ltc.norm / (4.0 * kPi);  // the box surrounds p: average over the whole sphere
+  } else if (sil.polygon.count >= 3) {
+    SmallPolygon local;
+    for (int i = 0; i < sil.polygon.count; ++i) local.push(q.frame.to_local(sil.polygon.v[size_t(i)]));
+    const double omega = polygon_solid_angle(local.span());
+    if (omega > 0) fbar = q.ltc.norm * ltc_polygon_integral(q.ltc, local.span()) / omega;
+  }
+  w.importance = w.defensive * fbar;
+  return w;
+}
+
+SilhouetteSample sample_silhouette(const EdgeForest& forest, const SilhouetteQuery& query,
+                                   const std::function<double()>& next) {
+  SilhouetteSample s;
+  thread_local std::vector<Candidate> top;
+  const int n_top = top_candidates(forest, query, top, s.rejection_tests);
+  if (n_top == 0) return s;
+  thread_local std::vector<double> prob;
+  prob.resize(size_t(n_top));
+  choice_probabilities(top, n_top, prob.data());
+  int i = choose(prob.data(), n_top, next());
+  double pmf = prob[size_t(i)];
+  Candidate cur = top[size_t(i)];
+  std::array<Candidate, 4> cand;
+  std::array<double, 4> p4;
+  // ---- Descend: inner nodes choose among accepted children, leaves among silhouette edges.
+  while (!cur.edge) {
+    const ForestNode& node = forest.node(cur.node);
+    const int k = node.is_leaf() ? leaf_candidates(forest, cur.node, query, cand)
+                                 : child_candidates(forest, cur.node, query, cand, s.rejection_tests);
+    if (k == 0) return s;  // a false accept: no silhouette below (a zero-contribution traversal)
+    choice_probabilities(cand, k, p4.data());
+    i = choose(p4.data(), k, next());
+    pmf *= p4[size_t(i)];
+    cur = cand[size_t(i)];
+  }
+  // ---- The point on the edge.
+  const ForestEdge& e = *cur.edge;
+  const EdgePointSampler ps(query.frame.to_local(e.p0 - query.p), query.frame.to_local(e.p1 - query.p), query.ltc);
+  const EdgePointSample ts = ps.sample(next());
+  s.edge = &e;
+  s.t = ts.t;
+  s.pdf = pmf * ts.pdf;
+  return s;
+}
+
+double silhouette_edge_probability(const EdgeForest& forest, const SilhouetteQuery& query, const ForestEdge* edge) {
+  int tests = 0;
+  std::vector<Candidate> top;
+  const int n_top = top_candidates(forest, query, top, tests);
+  std::vector<double> prob(size_t(std::max(n_top, 1)));
+  choice_probabilities(top, n_top, prob.data());
+  const bool is_always = edge >= forest.always_edges().data() &&
+                         edge < forest.always_edges().data() + forest.always_edges().size();
+  const int index = is_always ? -1 : int(edge - forest.edges().data());
+  double pmf = 0;
+  Candidate cur;
+  for (int i = 0; i < n_top; ++i) {
+    const Candidate& c = top[size_t(i)];
+    if (c.edge == edge || (!is_always && c.node >= 0 && index >= forest.node(c.node).edge_begin &&
+                           index < forest.node(c.node).edge_end)) {
+      pmf = prob[size_t(i)];
+      cur = c;
+    }
+  }
+  if (pmf == 0) return 0;
+  std::array<Candidate, 4> cand;
+  std::array<double, 4> p4;
+  while (!cur.edge) {
+    const ForestNode& node = forest.node(cur.node);
+    const int k = node.is_leaf() ? leaf_candidates(forest, cur.node, query, cand)
+                                 : child_candidates(forest, cur.node, query, cand, tests);
+    choice_probabilities(cand, k, p4.data());
+    bool found = false;
+    for (int i = 0; i < k && !found; ++i) {
+      const Candidate& c = cand[size_t(i)];
+      if (c.edge == edge || (c.node >= 0 && !node.is_leaf() && index >= forest.node(c.node).edge_begin &&
+                             index < forest.node(c.node).edge_end)) {
+        pmf *= p4[size_t(i)];
+        cur = c;
+        found = true;
+      }
+    }
+    if (!found) return 0;
+  }
+  return pmf;
+}
+
+}  // namespace qsil::edgetree

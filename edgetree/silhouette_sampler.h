@@ -1,0 +1,69 @@
+#pragma once
+/// @file silhouette_sampler.h
+/// Stochastic top-down traversal of the edge forest for one shading point [QSS 3.4-3.5, 4.1;
+/// DESIGN.md §5 "Importance", "Point on the edge"]: sample one discontinuity edge and a point on
+/// it, with the exact probability of having done so.
+///
+/// At every level (the forest roots included) children that the rejection test rejects get
+/// probability 0; the others are chosen with probability
+///   P(i) = (1 - eps) I_i / sum I + eps * G_i / sum G,
+///   I_i = L_w / H^2 * fbar (importance [QSS 3.5]),  G_i = L_w / H^2 (defensive share),
+/// where H is the distance from p to the centre of the node's primal box B_p (clamped below by
+/// half the box diagonal) and fbar the average cosine-weighted BSDF over the solid angle of B_p
+/// (the LTC integral over the box outline divided by its solid angle; exact for diffuse). The
+/// defensive share keeps P(i) > 0 for every accepted child even where fbar = 0 (a box below the
+/// LTC horizon), because the true integrand need not vanish there. A leaf chooses among its
+/// silhouette edges (exact per-edge test) the same way with I_e = the LTC line integral of the
+/// edge's [QSS Eq. 4] integrand and G_e = length / |midpoint - p|^2; the point on the edge comes
+/// from EdgePointSampler (itself defensive). Always-candidate edges (boundary edges: the outlines
+/// of rectangles, area lights, open meshes) compete with the forest roots at the top level.
+
+#include "edgetree/edge_forest.h"
+#include "edgetree/ltc.h"
+#include "edgetree/rejection_test.h"
+#include "qsil/math.h"
+
+#include <functional>
+#include <vector>
+
+namespace qsil::edgetree {
+
+/// Defensive share eps of node and leaf-edge choices.
+inline constexpr double kNodeDefensiveShare = 0.1;
+
+/// Everything the traversal needs to know about the shading point.
+struct SilhouetteQuery {
+  Vec3 p = Vec3::Zero();       ///< shading point (world)
+  Frame frame;                 ///< local shading frame (z = shading normal), world -> local
+  LTC ltc;                     ///< the BSDF's LTC in that frame (norm = albedo weight)
+  /// eligible[s]: edges of shape s may contribute (their velocity relative to p is non-zero).
+  const std::vector<bool>* eligible = nullptr;
+  RejectionMode mode = RejectionMode::Quadric;
+};
+
+/// A sampled edge point and its probability.
+struct SilhouetteSample {
+  const ForestEdge* edge = nullptr;  ///< nullptr: no edge (every candidate was rejected)
+  double t = 0;                      ///< point x0 + t (x1 - x0) on the edge
+  double pdf = 0;                    ///< discrete probability of the edge times the density of t
+  int rejection_tests = 0;           ///< number of node tests performed
+};
+
+/// Samples one discontinuity edge and a point on it for the query. `next` returns a fresh
+/// uniform number in [0,1) each call.
+SilhouetteSample sample_silhouette(const EdgeForest& forest, const SilhouetteQuery& query,
+                                   const std::function<double()>& next);
+
+/// Importance I and defensive weight G of a node for the query (see the file comment).
+struct NodeWeight {
+  double importance = 0;
+  double defensive = 0;
+};
+NodeWeight node_weight(const ForestNode& node, const SilhouetteQuery& query);
+
+/// Probability with which sample_silhouette picks `edge` (an element of forest.edges() or
+/// forest.always_edges()) for the query, by walking the same choices (for tests: the sampling
+/// probabilities of all edges sum to at most 1, and match the histogram).
+double silhouette_edge_probability(const EdgeForest& forest, const SilhouetteQuery& query, const ForestEdge* edge);
+
+}  // namespace qsil::edgetree

@@ -1,0 +1,160 @@
+#pragma once
+/// @file boundary_term.h
+/// The boundary term at a path vertex [QSS Eq. 3, Appendix A; DESIGN.md §4-§5 "Evaluation"]:
+///   sum over discontinuity edges of  integral_0^1 dL_i(w(t)) f_s(w(t), wo) J(t) dt,
+///   J(t) = det(w0, w1, v_t) / |w_t|^3,  v_t = d(edge point)/dtheta - dp/dtheta,
+/// estimated with one sampled edge point per vertex (sample_silhouette). The velocity is
+/// relative to the shading point p, which moves when it lies on a moving shape or an earlier
+/// vertex of its path moved (p carries that derivative as a dual): then the edges of static
+/// shapes (occluders, a mirror's outline, a light's outline) contribute too, so every shape's
+/// edges are eligible; at a static p only moving shapes' edges are.
+///
+/// Evaluation of a sampled point x_e = p + w_t with direction w = w_t/|w_t|:
+/// - sign s = sign((w0 x w1).(x_opp - p)), x_opp the third vertex of a face of the edge: the side
+///   of the plane through p and the edge on which the occluding faces lie;
+/// - visibility: p -> x_e must be unoccluded (ignoring the edge's own faces), else 0;
+/// - foreground L_fg: radiance leaving the edge's face that faces p, at x_e, toward p (a path
+///   started exactly there, with the remaining depth);
+/// - background L_bg: radiance arriving at x_e along w from beyond the edge (a ray from x_e that
+///   ignores the edge's two faces; an escaping ray sees the environment, never a dropped sample);
+/// - contribution = T f_s(w, wo) s (L_bg - L_fg) J / pdf, for every parameter at once, added to
+///   the derivative part of the path's radiance. T is the (detached) throughput to p: the
+///   boundary term is already a first derivative.
+
+#include "edgetree/edge_forest.h"
+#include "edgetree/silhouette_sampler.h"
+#include "integrators/geometry_view.h"
+#include "integrators/path_tracer.h"
+
+#include <chrono>
+
+namespace qsil {
+
+/// What the boundary term needs besides the path context.
+struct BoundaryContext {
+  const edgetree::EdgeForest* forest = nullptr;
+  edgetree::RejectionMode mode = edgetree::RejectionMode::Quadric;
+  const SceneVelocities* velocities = nullptr;
+  std::vector<bool> moving;  ///< shapes with non-zero velocity (eligible at a static p)
+  std::vector<bool> all;     ///< every shape (eligible at a moving p)
+  int samples_per_vertex = 1;
+};
+
+/// The LTC of a shading point's BSDF toward wo (local frame), with the albedo weight in norm.
+inline edgetree::LTC bsdf_ltc(const BSDFDesc& b, Vec3 wo_local) {
+  if (b.twosided && wo_local.z() < 0) wo_local.z() = -wo_local.z();
+  edgetree::LTC ltc;
+  if (b.type == BSDFDesc::Type::Diffuse) {
+    ltc = edgetree::ltc_diffuse();
+    ltc.norm = b.reflectance.mean();
+  } else {
+    ltc = edgetree::ltc_ggx(b.alpha, wo_local);
+    ltc.norm *= b.specular_reflectance.mean();
+  }
+  if (!(wo_local.z() > 0)) ltc.norm = 0;  // a one-sided BSDF seen from behind reflects nothing
+  return ltc;
+}
+
+/// The radiance jump and the Jacobian at a point of a discontinuity edge seen from p (shared by
+/// the secondary and the primary boundary terms). On success (returns true):
+/// - jump = s (L_bg - L_fg): the occluder-side sign times background minus foreground radiance;
+/// - J[k] = det(w0, w1, v_t) / |w_t|^3 for parameter k (per unit t), v_t relative to p.
+/// Returns false for a zero contribution: p on the edge's line, no relative velocity, or the edge
+/// point hidden from p. `vis_origin` starts the visibility ray (p, offset off its surface).
+template <int N>
+bool edge_jump(const PathContext& ctx, const SceneVelocities& vel, const edgetree::ForestEdge& e, double t,
+               const Vec3& p, const Vec3& vis_origin, const Eigen::Matrix<double, 3, N>& dp, int seg,
+               Sampler& sampler, PathStats& stats, Color& jump, Eigen::Matrix<double, 1, N>& J) {
+  const Scene& scene = *ctx.scene;
+  const Vec3 w0 = e.p0 - p, w1 = e.p1 - p;
+  const Vec3 wt = w0 + t * (w1 - w0);
+  const double dist = wt.norm();
+  if (!(dist > 0)) return false;
+  const Vec3 w = wt / dist;
+  // ---- J for every parameter: velocity of the edge point relative to p.
+  const auto& V = vel.position[e.shape];
+  const Eigen::Matrix<double, 3, N> ve =
+      (1 - t) * V[e.v0].template leftCols<N>() + t * V[e.v1].template leftCols<N>() - dp;
+  const Vec3 n01 = w0.cross(w1);
+  J = n01.transpose() * ve / (dist * dist * dist);
+  if (J.isZero(0.0)) return false;
+  // ---- Sign: the side of the plane (p, edge) on which the edge's faces (the occluder) lie.
+  const TriangleMesh& mesh = scene.shapes[e.shape].mesh;
+  const Eigen::Vector3i& tri0 = mesh.triangles[e.f0];
+  int opp = tri0[0];
+  for (int k = 0; k < 3; ++k)
+    if (tri0[k] != e.v0 && tri0[k] != e.v1) opp = tri0[k];
+  const double side = n01.dot(mesh.positions[opp] - p);
+  if (side == 0) return false;
+  const double s = side > 0 ? 1.0 : -1.0;
+  // ---- Visibility of the edge point from p (ignoring the edge's own faces).
+  IgnoreSet ignore;
+  ignore.prims[0] = {e.shape, e.f0};
+  ignore.prims[1] = {e.f1 >= 0 ? e.shape : -1, e.f1};
+  const double vis_dist = (e.p0 + t * (e.p1 - e.p0) - vis_origin).norm();
+  ++stats.rays;
+  if (ctx.tracer->occluded(vis_origin, w, vis_dist * (1.0 - 1.0 / 4096.0), ignore)) return false;
+  // ---- Foreground: the face that faces p, exactly at x_e, continued with the remaining depth.
+  const Vec4 x(p.x(), p.y(), p.z(), 1.0);
+  const int face = (e.f1 < 0 || e.q0.dot(x) > 0) ? e.f0 : e.f1;
+  Hit fg;
+  fg.shape = e.shape;
+  fg.triangle = face;
+  const PrimalView pv{&scene};
+  const Color L_fg = trace_path(ctx, pv, p, w, fg, seg, 0.0, sampler, stats);
+  // ---- Background: beyond the edge along the same direction (escaping rays see the environment).
+  const Vec3 xe = p + wt;
+  ++stats.rays;
+  const Hit bg = ctx.tracer->intersect(xe, w, kInf, ignore);
+  const Color L_bg = trace_path(ctx, pv, xe, w, bg, seg, 0.0, sampler, stats);
+  jump = s * (L_bg - L_fg);
+  return true;
+}
+
+/// The vertex hook of trace_path that adds the secondary boundary term (DualView<N> paths only).
+template <int N> struct BoundaryHook {
+  const PathContext* ctx;
+  const BoundaryContext* bctx;
+  Sampler* sampler;  ///< a stream of its own, so the path's own decisions equal the primal's
+
+  void operator()(const SurfaceInteraction<Dual<N>>& si, const ShadingPoint<Dual<N>>& sp, const Vec3& wo_local,
+                  const ColorT<Dual<N>>& beta, int seg, Sampler&, PathStats& stats, ColorT<Dual<N>>& L) const {
+    const auto t0 = std::chrono::steady_clock::now();
+    // ---- dp/dtheta: does the shading point move?
+    Eigen::Matrix<double, 3, N> dp;
+    for (int i = 0; i < 3; ++i) dp.row(i) = si.p[i].derivatives().transpose();
+    const bool p_moving = !dp.isZero(0.0);
+    edgetree::SilhouetteQuery q;
+    q.p = value(si.p);
+    q.frame = sp.frame_value;
+    q.ltc = bsdf_ltc(*sp.bsdf, wo_local);
+    q.eligible = p_moving ? &bctx->all : &bctx->moving;
+    q.mode = bctx->mode;
+    const Color T = value(beta);
+    const Vec3 ng = value(si.ng);
+    for (int sample = 0; sample < bctx->samples_per_vertex; ++sample) {
+      ++stats.boundary_traversals;
+      const edgetree::SilhouetteSample s =
+          edgetree::sample_silhouette(*bctx->forest, q, [this] { return sampler->next(); });
+      if (!s.edge || !(s.pdf > 0)) {
+        ++stats.boundary_zero;
+        continue;
+      }
+      const Vec3 w = (s.edge->p0 + s.t * (s.edge->p1 - s.edge->p0) - q.p).normalized();
+      const Color f = bsdf_eval<double>(*sp.bsdf, q.frame.to_local(w), wo_local);
+      Color jump;
+      Eigen::Matrix<double, 1, N> J;
+      if ((f == 0).all() || !edge_jump<N>(*ctx, *bctx->velocities, *s.edge, s.t, q.p,
+                                          offset_ray_origin(q.p, ng, w, si.scale), dp, seg, *sampler, stats, jump, J) ||
+          (jump == 0).all()) {
+        ++stats.boundary_zero;
+        continue;
+      }
+      const Color weight = T * f * jump / (s.pdf * bctx->samples_per_vertex);
+      for (int c = 0; c < 3; ++c) L[c] += Dual<N>(0.0, (weight[c] * J).transpose());
+    }
+    stats.boundary_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  }
+};
+
+}  // namespace qsil
