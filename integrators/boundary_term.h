@@ -22,7 +22,7 @@
 ///   boundary term is already a first derivative.
 
 #include "edgetree/edge_forest.h"
-#include "edgetree/silhouette_sampler.h"
+#include "edgetree/edge_sampler.h"
 #include "integrators/geometry_view.h"
 #include "integrators/path_tracer.h"
 
@@ -32,8 +32,7 @@ namespace qsil {
 
 /// What the boundary term needs besides the path context.
 struct BoundaryContext {
-  const edgetree::EdgeForest* forest = nullptr;
-  edgetree::RejectionMode mode = edgetree::RejectionMode::Quadric;
+  const edgetree::EdgeSampler* sampler = nullptr;  ///< the --boundary method's secondary edge sampler
   const SceneVelocities* velocities = nullptr;
   std::vector<bool> moving;  ///< shapes with non-zero velocity (eligible at a static p)
   std::vector<bool> all;     ///< every shape (eligible at a moving p)
@@ -129,13 +128,12 @@ template <int N> struct BoundaryHook {
     q.frame = sp.frame_value;
     q.ltc = bsdf_ltc(*sp.bsdf, wo_local);
     q.eligible = p_moving ? &bctx->all : &bctx->moving;
-    q.mode = bctx->mode;
     const Color T = value(beta);
     const Vec3 ng = value(si.ng);
     for (int sample = 0; sample < bctx->samples_per_vertex; ++sample) {
       ++stats.boundary_traversals;
       const edgetree::SilhouetteSample s =
-          edgetree::sample_silhouette(*bctx->forest, q, [this] { return sampler->next(); });
+          bctx->sampler->sample(q, [this] { return sampler->next(); });
       if (!s.edge || !(s.pdf > 0)) {
         ++stats.boundary_zero;
         continue;

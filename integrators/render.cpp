@@ -5,6 +5,7 @@
 
 #include "edgetree/edge_forest.h"
 #include "integrators/boundary_term.h"
+#include "integrators/edge_sampler_factory.h"
 #include "integrators/geometry_view.h"
 #include "integrators/path_tracer.h"
 #include "integrators/pixel_loop.h"
@@ -101,6 +102,7 @@ RenderResult render_gradient_n(const Scene& scene, const std::vector<ParameterSp
   const Vec3 origin = cam.origin();
   // ---- The edge forest over every shape (a moving shading point sees static edges move too).
   edgetree::EdgeForest forest;
+  std::unique_ptr<edgetree::EdgeSampler> edge_sampler;
   BoundaryContext bctx;
   const bool boundary = gopt.boundary != BoundaryMethod::None && vel.any_moving();
   if (boundary) {
@@ -108,9 +110,9 @@ RenderResult render_gradient_n(const Scene& scene, const std::vector<ParameterSp
     std::vector<edgetree::ForestShapeInput> inputs;
     for (size_t s = 0; s < scene.shapes.size(); ++s) inputs.push_back({&scene.shapes[s].mesh, int(s)});
     forest = edgetree::EdgeForest::build(inputs);
+    edge_sampler = make_edge_sampler(gopt.boundary, scene, forest);
     if (report) report->forest_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    bctx.forest = &forest;
-    bctx.mode = gopt.boundary == BoundaryMethod::QuadricBox ? edgetree::RejectionMode::Box : edgetree::RejectionMode::Quadric;
+    bctx.sampler = edge_sampler.get();
     bctx.velocities = &vel;
     bctx.moving = vel.moving;
     bctx.all.assign(scene.shapes.size(), true);

@@ -36,7 +36,7 @@ void check_finite_vertices(const std::filesystem::path& path) {
       char* end = nullptr;
       const double x = std::strtod(token.c_str(), &end);
       if (!std::isfinite(x))
-        throw Error(path.string() + ":" + std::to_string(number) + ": non-finite vertex coordinate '" + token + "'");
+        throw Error(path.string() + ":" + std::to_string(number) + ": non-finite coordinate '" + token + "' in a vertex");
     }
   }
 }
