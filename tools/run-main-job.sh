@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Sets up (Debian packages), builds (Release) and runs qsil's main job on the bundled default
-# scene: the image of scenes/spot-mirror.xml, written to out/spot-mirror.exr with a PNG preview.
+# scene: the gradient image of scenes/spot-mirror.xml with respect to Spot's vertical translation
+# (interior term + quadric boundary term), written to out/spot-mirror-grad.exr with PNG previews
+# (out/spot-mirror-grad/primal.png and dtheta0.png).
 # Usage: bash tools/run-main-job.sh [BUILD_DIR]   (default: build)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -9,4 +11,5 @@ bash tools/install-deps.sh
 cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release
 cmake --build "$build" -j"$(nproc)" --target qsil_cli
 mkdir -p out
-"$build/qsil" render scenes/spot-mirror.xml -o out/spot-mirror.exr --preview out/spot-mirror.png
+"$build/qsil" grad scenes/spot-mirror.xml --param spot:translate:0,1,0 --boundary quadric \
+  -o out/spot-mirror-grad.exr --preview-dir out/spot-mirror-grad
