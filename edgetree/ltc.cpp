@@ -15,24 +15,39 @@ constexpr double kTable[kLTCAlphaCount][kLTCCosCount][5] = {
 #include "edgetree/ltc_ggx_table.inc"
 };
 
+/// atan2(y, x) by a degree-11 odd minimax polynomial on [0, 1] with octant reduction: absolute
+/// error < 1e-5 rad and relative error < 3e-5 near 0, about 5x faster than libm. Used only where
+/// the value steers sampling (node importance), never where it is an estimate: an importance
+/// needs no accuracy, only consistency between the choice and its probability.
+double fast_atan2(double y, double x) {
+  const double ax = std::abs(x), ay = std::abs(y);
+  const double mx = std::max(ax, ay), mn = std::min(ax, ay);
+  if (!(mx > 0)) return 0.0;
+  const double a = mn / mx, s = a * a;
+  double r = a * (0.99997726 + s * (-0.33262347 + s * (0.19354346 + s * (-0.11643287 + s * (0.05265332 + s * -0.01172120)))));
+  if (ay > ax) r = 0.5 * kPi - r;
+  if (x < 0) r = kPi - r;
+  return y < 0 ? -r : r;
+}
+
 /// (1/2pi) * angle(a, b) * normalize(a x b).z: the contribution of the great arc a -> b to the
 /// Lambert form factor ([LTC] Eq. 11). atan2 of |a x b| and a.b keeps the angle accurate for
 /// nearly parallel and nearly antiparallel a, b and is independent of |a|, |b|. A zero-length
 /// arc contributes 0.
-double edge_form_factor(const Vec3& a, const Vec3& b) {
+template <bool Fast> double edge_form_factor(const Vec3& a, const Vec3& b) {
   const Vec3 c = a.cross(b);
   const double cn = c.norm();
   if (!(cn > 0.0)) return 0.0;
-  const double angle = std::atan2(cn, a.dot(b));
+  const double angle = Fast ? fast_atan2(cn, a.dot(b)) : std::atan2(cn, a.dot(b));
   return angle * (c.z() / cn);
 }
 
 /// Form factor of a polygon already inside z >= 0 (signed sum, absolute value).
-double form_factor(std::span<const Vec3> poly) {
+template <bool Fast> double form_factor(std::span<const Vec3> poly) {
   const size_t n = poly.size();
   if (n < 3) return 0.0;
   double sum = 0.0;
-  for (size_t i = 0; i < n; ++i) sum += edge_form_factor(poly[i], poly[(i + 1) % n]);
+  for (size_t i = 0; i < n; ++i) sum += edge_form_factor<Fast>(poly[i], poly[(i + 1) % n]);
   return std::min(1.0, std::abs(sum) * (0.5 * kInvPi));
 }
 
@@ -124,20 +139,20 @@ SmallPolygon clip_polygon_to_halfspace(std::span<const Vec3> poly, const Vec3& n
 double cosine_polygon_integral(std::span<const Vec3> poly) {
   if (poly.size() < 3) return 0.0;
   const SmallPolygon c = clip_polygon_to_halfspace(poly, Vec3::UnitZ());
-  return form_factor(c.span());
+  return form_factor<false>(c.span());
 }
 
-double ltc_polygon_integral(const LTC& ltc, std::span<const Vec3> poly) {
+double ltc_polygon_integral(const LTC& ltc, std::span<const Vec3> poly, bool fast) {
   if (poly.size() < 3) return 0.0;
   const SmallPolygon up = clip_polygon_to_halfspace(poly, Vec3::UnitZ());
   if (up.count < 3) return 0.0;
   SmallPolygon t;
   for (int i = 0; i < up.count; ++i) t.push(ltc.M_inv * up.v[size_t(i)]);
   const SmallPolygon c = clip_polygon_to_halfspace(t.span(), Vec3::UnitZ());
-  return form_factor(c.span());
+  return fast ? form_factor<true>(c.span()) : form_factor<false>(c.span());
 }
 
-double polygon_solid_angle(std::span<const Vec3> poly) {
+double polygon_solid_angle(std::span<const Vec3> poly, bool fast) {
   const size_t n = poly.size();
   if (n < 3) return 0.0;
   const Vec3& a = poly[0];
@@ -149,7 +164,7 @@ double polygon_solid_angle(std::span<const Vec3> poly) {
     const double lb = b.norm(), lc = c.norm();
     const double num = a.dot(b.cross(c));
     const double den = la * lb * lc + a.dot(b) * lc + a.dot(c) * lb + b.dot(c) * la;
-    sum += 2.0 * std::atan2(num, den);
+    sum += 2.0 * (fast ? fast_atan2(num, den) : std::atan2(num, den));
   }
   return std::abs(sum);
 }

@@ -75,7 +75,8 @@ double ltc_eval(const LTC& ltc, const Vec3& w);
 /// Dimensionless (a probability, in [0, 1]); multiply by norm for the f_s cos integral.
 /// Requires a simple polygon contained in an open hemisphere (true for the outline of a convex
 /// body not containing p, e.g. box_silhouette_polygon). Fewer than 3 vertices: 0.
-double ltc_polygon_integral(const LTC& ltc, std::span<const Vec3> poly);
+/// `fast`: angles by a polynomial atan2 (relative error < 3e-5): for importance only.
+double ltc_polygon_integral(const LTC& ltc, std::span<const Vec3> poly, bool fast = false);
 
 /// Exact Lambert form factor of a spherical polygon: (1/pi) * integral of max(0, cos theta) over
 /// the polygon (local frame, z = normal) = the polygon clipped to z >= 0 and the edge formula
@@ -87,7 +88,8 @@ double cosine_polygon_integral(std::span<const Vec3> poly);
 /// first vertex into triangles, each by Van Oosterom & Strackee 1983 ("The solid angle of a plane
 /// triangle", IEEE TBME 30(2)): tan(Omega/2) = a.(b x c) / (|a||b||c| + (a.b)|c| + (a.c)|b| +
 /// (b.c)|a|). Signed fan sum, absolute value at the end, so either winding. An octant gives pi/2.
-double polygon_solid_angle(std::span<const Vec3> poly);
+/// `fast`: as for ltc_polygon_integral.
+double polygon_solid_angle(std::span<const Vec3> poly, bool fast = false);
 
 /// Largest polygon the routines above accept (the clipping adds up to two vertices).
 inline constexpr int kMaxPolygonVertices = 30;

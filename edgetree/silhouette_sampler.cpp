@@ -112,8 +112,9 @@ NodeWeight node_weight(const ForestNode& node, const SilhouetteQuery& q) {
   } else if (sil.polygon.count >= 3) {
     SmallPolygon local;
     for (int i = 0; i < sil.polygon.count; ++i) local.push(q.frame.to_local(sil.polygon.v[size_t(i)]));
-    const double omega = polygon_solid_angle(local.span());
-    if (omega > 0) fbar = q.ltc.norm * ltc_polygon_integral(q.ltc, local.span()) / omega;
+    // Fast (approximate) angles: an importance needs consistency, not accuracy.
+    const double omega = polygon_solid_angle(local.span(), true);
+    if (omega > 0) fbar = q.ltc.norm * ltc_polygon_integral(q.ltc, local.span(), true) / omega;
   }
   w.importance = w.defensive * fbar;
   return w;
