@@ -54,8 +54,12 @@ enum class BoundaryMethod {
   None,        ///< interior term only
   Quadric,     ///< edge forest with the dual box + bounding quadric pair test [QSS] (default)
   QuadricBox,  ///< edge forest with the dual box test only (ablation)
+  VSphere,     ///< Li 2019's Hough-space tree with the hollow v-sphere test (edgetree/vsphere_sampler.h)
+  VSphereSolid,///< the same with redner's original solid v-sphere test ([QSS] App. F)
+  Uniform,     ///< no rejection, edges in proportion to length x dihedral angle (edgetree/uniform_sampler.h)
 };
-/// Parses "none" | "quadric" | "quadric-box"; throws qsil::Error naming the value otherwise.
+/// Parses "none" | "quadric" | "quadric-box" | "vsphere" | "vsphere-solid" | "uniform"; throws
+/// qsil::Error naming the value otherwise.
 BoundaryMethod parse_boundary_method(const std::string& name);
 
 /// Options of the gradient estimator.

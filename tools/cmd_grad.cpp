@@ -29,7 +29,9 @@ const CommandRegistrar registrar{{"grad", "Render an image and its derivatives w
         ->allow_extra_args(false);
     app.add_option("--boundary", flags->boundary,
                    "Boundary-term estimator: quadric (edge forest, dual box + bounding quadrics [QSS]), "
-                   "quadric-box (dual box only), none (interior term only: misses silhouettes, shadows, outlines)")
+                   "quadric-box (dual box only), vsphere (Li 2019's Hough-space tree, hollow v-sphere test), "
+                   "vsphere-solid (redner's original solid v-sphere test), uniform (no rejection, length x "
+                   "dihedral angle), none (interior term only: misses silhouettes, shadows, outlines)")
         ->capture_default_str();
     app.add_option("--boundary-spp", flags->boundary_spp, "Discontinuity samples per shading point")
         ->capture_default_str()

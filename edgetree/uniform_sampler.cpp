@@ -1,0 +1,80 @@
+/// @file uniform_sampler.cpp
+/// See uniform_sampler.h.
+
+#include "edgetree/uniform_sampler.h"
+
+#include "edgetree/edge_point_sampler.h"
+
+#include <algorithm>
+
+namespace qsil::edgetree {
+
+namespace {
+bool eligible(const SilhouetteQuery& q, int shape) {
+  return !q.eligible || (shape < int(q.eligible->size()) && (*q.eligible)[shape]);
+}
+}  // namespace
+
+double UniformEdgeSampler::weight(const ForestEdge& e) {
+  const bool always = e.f1 < 0 || e.cls == EdgeClass::Boundary || e.cls == EdgeClass::NonManifold ||
+                      e.cls == EdgeClass::Inconsistent;
+  return e.length * (always ? kPi : e.angle);
+}
+
+UniformEdgeSampler::UniformEdgeSampler(const EdgeForest& forest) {
+  auto add = [&](const ForestEdge& e) {
+    const double w = weight(e);
+    if (!(w > 0)) return;  // a zero-length edge contributes nothing
+    if (e.shape >= int(shapes_.size())) shapes_.resize(size_t(e.shape) + 1);
+    ShapeTable& t = shapes_[size_t(e.shape)];
+    t.edges.push_back(&e);
+    t.total += w;
+    t.cdf.push_back(t.total);
+  };
+  for (const ForestEdge& e : forest.edges()) add(e);
+  for (const ForestEdge& e : forest.always_edges()) add(e);
+}
+
+SilhouetteSample UniformEdgeSampler::sample(const SilhouetteQuery& query, const std::function<double()>& next) const {
+  SilhouetteSample s;
+  double sum = 0;
+  for (size_t k = 0; k < shapes_.size(); ++k)
+    if (eligible(query, int(k))) sum += shapes_[k].total;
+  if (!(sum > 0)) return s;
+  // ---- The shape, then the edge within it (one uniform number, rescaled).
+  double u = next() * sum;
+  const ShapeTable* t = nullptr;
+  for (size_t k = 0; k < shapes_.size(); ++k) {
+    if (!eligible(query, int(k)) || !(shapes_[k].total > 0)) continue;
+    t = &shapes_[k];
+    if (u < shapes_[k].total) break;
+    u -= shapes_[k].total;
+  }
+  u = std::min(u, t->total);
+  size_t i = size_t(std::upper_bound(t->cdf.begin(), t->cdf.end(), u) - t->cdf.begin());
+  i = std::min(i, t->edges.size() - 1);
+  const ForestEdge& e = *t->edges[i];
+  const double pmf = weight(e) / sum;
+  if (!edge_is_silhouette(e, query.p)) return s;  // a zero-contribution sample
+  const EdgePointSampler ps(query.frame.to_local(e.p0 - query.p), query.frame.to_local(e.p1 - query.p), query.ltc);
+  const EdgePointSample ts = ps.sample(next());
+  s.edge = &e;
+  s.t = ts.t;
+  s.pdf = pmf * ts.pdf;
+  return s;
+}
+
+std::vector<EdgeProbability> UniformEdgeSampler::edge_probabilities(const SilhouetteQuery& query) const {
+  std::vector<EdgeProbability> out;
+  double sum = 0;
+  for (size_t k = 0; k < shapes_.size(); ++k)
+    if (eligible(query, int(k))) sum += shapes_[k].total;
+  if (!(sum > 0)) return out;
+  for (size_t k = 0; k < shapes_.size(); ++k) {
+    if (!eligible(query, int(k))) continue;
+    for (const ForestEdge* e : shapes_[k].edges) out.push_back({e, weight(*e) / sum});
+  }
+  return out;
+}
+
+}  // namespace qsil::edgetree
