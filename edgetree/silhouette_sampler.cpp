@@ -108,13 +108,37 @@ NodeWeight node_weight(const ForestNode& node, const SilhouetteQuery& q) {
   const BoxSilhouette sil = box_silhouette_polygon(node.bp, q.p);
   double fbar = 0;
   if (sil.inside) {
-    fbar = q.ltc.norm / (4.0 * kPi);  // the box surrounds p: average over the whole sphere
+    // The box surrounds p: the average over the whole sphere, with every light's weight (each may
+    // lie anywhere in the box's solid angle).
+    double weight = q.env_weight;
+    if (q.lights)
+      for (const LightPolygon& light : *q.lights) weight += light.weight;
+    fbar = weight * q.ltc.norm / (4.0 * kPi);
   } else if (sil.polygon.count >= 3) {
     SmallPolygon local;
     for (int i = 0; i < sil.polygon.count; ++i) local.push(q.frame.to_local(sil.polygon.v[size_t(i)]));
     // Fast (approximate) angles: an importance needs consistency, not accuracy.
     const double omega = polygon_solid_angle(local.span(), true);
-    if (omega > 0) fbar = q.ltc.norm * ltc_polygon_integral(q.ltc, local.span(), true) / omega;
+    if (omega > 0) {
+      double integral = q.env_weight > 0 ? q.env_weight * ltc_polygon_integral(q.ltc, local.span(), true) : 0.0;
+      if (q.lights) {
+        for (const LightPolygon& light : *q.lights) {
+          // Only the emitting side of a light is bright; clip the box's cone by the light's.
+          if (!(light.weight > 0) || light.normal.dot(q.p - light.corners[0]) <= 0) continue;
+          std::array<Vec3, 4> c;
+          for (int i = 0; i < 4; ++i) c[size_t(i)] = q.frame.to_local(light.corners[size_t(i)] - q.p);
+          const Vec3 inside = c[0] + c[1] + c[2] + c[3];
+          SmallPolygon clipped = local;
+          for (int i = 0; i < 4 && clipped.count >= 3; ++i) {
+            Vec3 n = c[size_t(i)].cross(c[size_t((i + 1) % 4)]);
+            if (n.dot(inside) < 0) n = -n;
+            clipped = clip_polygon_to_halfspace(clipped.span(), n);
+          }
+          if (clipped.count >= 3) integral += light.weight * ltc_polygon_integral(q.ltc, clipped.span(), true);
+        }
+      }
+      fbar = q.ltc.norm * integral / omega;
+    }
   }
   w.importance = w.defensive * fbar;
   return w;

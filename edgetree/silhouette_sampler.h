@@ -10,7 +10,9 @@
 ///   I_i = L_w / H^2 * fbar (importance [QSS 3.5]),  G_i = L_w / H^2 (defensive share),
 /// where H is the distance from p to the centre of the node's primal box B_p (clamped below by
 /// half the box diagonal) and fbar the average cosine-weighted BSDF over the solid angle of B_p
-/// (the LTC integral over the box outline divided by its solid angle; exact for diffuse). The
+/// (the LTC integral over the box outline divided by its solid angle; exact for diffuse),
+/// weighted by the environment's intensity, plus the light-aware terms of every quad light
+/// (I_light, [QSS 3.6]: the same integral over the box's solid angle clipped to the light's). The
 /// defensive share keeps P(i) > 0 for every accepted child even where fbar = 0 (a box below the
 /// LTC horizon), because the true integrand need not vanish there. A leaf chooses among its
 /// silhouette edges (exact per-edge test) the same way with I_e = the LTC line integral of the
@@ -23,6 +25,7 @@
 #include "edgetree/rejection_test.h"
 #include "qsil/math.h"
 
+#include <array>
 #include <functional>
 #include <vector>
 
@@ -30,6 +33,13 @@ namespace qsil::edgetree {
 
 /// Defensive share eps of node and leaf-edge choices.
 inline constexpr double kNodeDefensiveShare = 0.1;
+
+/// A polygonal (quad) area light for the light-aware importance I_light [QSS 3.6].
+struct LightPolygon {
+  std::array<Vec3, 4> corners;  ///< world positions, in order around the quad
+  Vec3 normal = Vec3::Zero();   ///< emitting side (unit, world)
+  double weight = 0;            ///< its radiance (luminance)
+};
 
 /// Everything the traversal needs to know about the shading point.
 struct SilhouetteQuery {
@@ -39,6 +49,12 @@ struct SilhouetteQuery {
   /// eligible[s]: edges of shape s may contribute (their velocity relative to p is non-zero).
   const std::vector<bool>* eligible = nullptr;
   RejectionMode mode = RejectionMode::Quadric;
+  /// Light-aware importance [QSS 3.6]: fbar = env_weight * fbar(Omega(B_p)) + sum over lights of
+  /// weight * (integral of f_s cos over Omega(B_p) ∩ Omega(light)) / |Omega(B_p)|, summed over
+  /// ALL lights (the paper supports one). Without lights: env_weight * fbar (env_weight 1 by
+  /// default, so plain [QSS 3.5] importance).
+  const std::vector<LightPolygon>* lights = nullptr;
+  double env_weight = 1.0;
 };
 
 /// A sampled edge point and its probability.

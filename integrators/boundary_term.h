@@ -37,6 +37,8 @@ struct BoundaryContext {
   std::vector<bool> moving;  ///< shapes with non-zero velocity (eligible at a static p)
   std::vector<bool> all;     ///< every shape (eligible at a moving p)
   int samples_per_vertex = 1;
+  std::vector<edgetree::LightPolygon> lights;  ///< quad area lights for I_light [QSS 3.6]
+  double env_weight = 1.0;                     ///< environment intensity (luminance of its mean)
 };
 
 /// The LTC of a shading point's BSDF toward wo (local frame), with the albedo weight in norm.
@@ -128,6 +130,8 @@ template <int N> struct BoundaryHook {
     q.frame = sp.frame_value;
     q.ltc = bsdf_ltc(*sp.bsdf, wo_local);
     q.eligible = p_moving ? &bctx->all : &bctx->moving;
+    q.lights = &bctx->lights;
+    q.env_weight = bctx->env_weight;
     const Color T = value(beta);
     const Vec3 ng = value(si.ng);
     for (int sample = 0; sample < bctx->samples_per_vertex; ++sample) {

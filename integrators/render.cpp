@@ -117,6 +117,19 @@ RenderResult render_gradient_n(const Scene& scene, const std::vector<ParameterSp
     bctx.moving = vel.moving;
     bctx.all.assign(scene.shapes.size(), true);
     bctx.samples_per_vertex = std::max(1, gopt.boundary_spp);
+    // Light-aware importance [QSS 3.6]: every rectangle emitter, weighted by its radiance, and the
+    // environment by its mean radiance.
+    auto luminance = [](const Color& c) { return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]; };
+    for (const Shape& s : scene.shapes) {
+      if (!s.is_emitter || s.type != "rectangle" || s.mesh.positions.size() != 4) continue;
+      edgetree::LightPolygon light;
+      for (int i = 0; i < 4; ++i) light.corners[size_t(i)] = s.mesh.positions[size_t(i)];
+      light.normal = s.mesh.face_cross(0).normalized();
+      light.weight = luminance(s.radiance);
+      bctx.lights.push_back(light);
+    }
+    bctx.env_weight = lights.environment.present() ? luminance(lights.environment.average_radiance()) : 0.0;
+    if (bctx.lights.empty() && bctx.env_weight == 0) bctx.env_weight = 1.0;  // plain [QSS 3.5] importance
   }
   PathStats total;
   RenderResult r = run_pixels(scene, options, gradient_film_channels(K), "grad",

@@ -240,7 +240,8 @@ TEST(LTCTest, BoxSilhouettePolygon) {
     ASSERT_FALSE(s.inside);
     ASSERT_LE(s.polygon.count, 6);
     const double omega = polygon_solid_angle(s.polygon.span());
-    const double by_faces = box_solid_angle_by_faces(b, p, polygon_solid_angle);
+    const double by_faces =
+        box_solid_angle_by_faces(b, p, [](std::span<const Vec3> poly) { return polygon_solid_angle(poly); });
     EXPECT_NEAR(omega, by_faces, 1e-10 * std::max(by_faces, 1e-12)) << "trial " << trial;
     // Lambert form factor with the horizon clip (z = normal at p) equals the sum over faces too.
     const double ff = cosine_polygon_integral(s.polygon.span());

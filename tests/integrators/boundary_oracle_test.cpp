@@ -16,6 +16,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 namespace qsil {
 namespace {
 
@@ -92,6 +94,56 @@ double radiance(const Vec3& p, double dx) {
   return kRho * kL * (form_factor(light, p) - form_factor(blocked, p));
 }
 
+/// A closed cube (12 outward triangles) centred at c with half-size r: its silhouette edges are
+/// two-face edges sampled through the edge forest's trees.
+Shape cube(const std::string& id, const Vec3& c, double r, int bsdf) {
+  Shape s;
+  s.id = id;
+  s.type = "obj";
+  for (int i = 0; i < 8; ++i) s.mesh.positions.push_back(c + r * Vec3(i & 1 ? 1 : -1, i & 2 ? 1 : -1, i & 4 ? 1 : -1));
+  s.mesh.triangles = {{0, 2, 3}, {0, 3, 1}, {4, 5, 7}, {4, 7, 6}, {0, 1, 5}, {0, 5, 4},
+                      {2, 6, 7}, {2, 7, 3}, {0, 4, 6}, {0, 6, 2}, {1, 3, 7}, {1, 7, 5}};
+  s.mesh.normals = vertex_normals(s.mesh);
+  s.bsdf = bsdf;
+  return s;
+}
+
+constexpr double kCubeR = 0.15;
+const Vec3 kCubeC(0.23, 0.06, 1.0);  // no face plane passes through the receiver point
+
+/// 2D convex hull (monotone chain), counter-clockwise.
+std::vector<Vec2> hull(std::vector<Vec2> p) {
+  std::sort(p.begin(), p.end(), [](const Vec2& a, const Vec2& b) { return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y()); });
+  std::vector<Vec2> h(2 * p.size());
+  int k = 0;
+  auto cross = [](const Vec2& o, const Vec2& a, const Vec2& b) {
+    return (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
+  };
+  for (size_t i = 0; i < p.size(); ++i) {
+    while (k >= 2 && cross(h[k - 2], h[k - 1], p[i]) <= 0) --k;
+    h[k++] = p[i];
+  }
+  for (int i = int(p.size()) - 2, t = k + 1; i >= 0; --i) {
+    while (k >= t && cross(h[k - 2], h[k - 1], p[size_t(i)]) <= 0) --k;
+    h[k++] = p[size_t(i)];
+  }
+  h.resize(size_t(k - 1));
+  return h;
+}
+
+/// L_o at p with the cube occluder (instead of the square) shifted by dx along x.
+double radiance_cube(const Vec3& p, double dx) {
+  const std::vector<Vec2> light = {{-0.5, -0.5}, {0.5, -0.5}, {0.5, 0.5}, {-0.5, 0.5}};
+  std::vector<Vec2> shadow;
+  for (int i = 0; i < 8; ++i) {
+    const Vec3 x = kCubeC + Vec3(dx, 0, 0) + kCubeR * Vec3(i & 1 ? 1 : -1, i & 2 ? 1 : -1, i & 4 ? 1 : -1);
+    const double k = (kLightZ - p.z()) / (x.z() - p.z());
+    shadow.push_back(p.head<2>() + k * (x.head<2>() - p.head<2>()));
+  }
+  const auto blocked = clip_box(hull(shadow), -0.5, 0.5, -0.5, 0.5);
+  return kRho * kL * (form_factor(light, p) - form_factor(blocked, p));
+}
+
 struct Estimate {
   double mean = 0, se = 0;
 };
@@ -145,6 +197,20 @@ Estimate boundary_estimate(const Scene& scene, const std::string& param, const V
 }
 
 }  // namespace
+
+// A closed occluder: its silhouette edges (two faces each) come from the forest's trees, with the
+// rejection test, the node importance and the leaf's exact test on the way.
+TEST(BoundaryOracle, MovingClosedOccluderSilhouetteMatchesLambertsFormulaDerivative) {
+  Scene scene = oracle_scene();
+  scene.shapes[2] = cube("occluder", kCubeC, kCubeR, 1);
+  const Vec3 p(0.05, 0.02, 0);
+  const double h = 1e-5;
+  const double exact = (radiance_cube(p, h) - radiance_cube(p, -h)) / (2 * h);
+  const Estimate e = boundary_estimate(scene, "occluder:translate:1,0,0", p, Vec3::Zero(), 1000000);
+  ASSERT_GT(std::abs(exact), 0.05);
+  EXPECT_NEAR(e.mean, exact, 3 * e.se) << "exact " << exact << " estimate " << e.mean << " +- " << e.se;
+  EXPECT_LT(e.se, 0.05 * std::abs(exact));
+}
 
 // The occluder moves (+x) and the receiver point is static: only the occluder's edges move.
 TEST(BoundaryOracle, MovingOccluderMatchesLambertsFormulaDerivative) {

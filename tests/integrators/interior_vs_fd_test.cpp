@@ -66,7 +66,7 @@ void expect_agreement(Scene scene, const std::string& spec, int spp) {
   RenderOptions o;
   o.progress = false;
   o.seed = 21;
-  const RenderResult g = render_gradient(scene, params, o);
+  const RenderResult g = render_gradient(scene, params, o, GradientOptions{BoundaryMethod::None});
   o.seed = 22;  // independent of the gradient's samples
   const RenderResult f = render_finite_differences(scene, params, {default_fd_step(scene, params[0])}, o);
   const Agreement a = compare(g, f, 1, 0);
@@ -95,7 +95,7 @@ TEST(InteriorVsFD, PlaneTranslatedAlongItsNormalHasZeroDerivativeOnBothSides) {
     const std::vector<ParameterSpec> params{parse_parameter("plane:translate:0,1,0", scene)};
     RenderOptions o;
     o.progress = false;
-    const RenderResult g = render_gradient(scene, params, o);
+    const RenderResult g = render_gradient(scene, params, o, GradientOptions{BoundaryMethod::None});
     const RenderResult f = render_finite_differences(scene, params, {default_fd_step(scene, params[0])}, o);
     for (int y = 0; y < 24; ++y)
       for (int x = 0; x < 24; ++x)
