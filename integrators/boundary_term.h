@@ -101,6 +101,13 @@ bool edge_jump(const PathContext& ctx, const SceneVelocities& vel, const edgetre
   Hit fg;
   fg.shape = e.shape;
   fg.triangle = face;
+  // The point is known exactly: barycentrics (1-t at v0, t at v1) in the face's vertex order.
+  // (The face may be seen edge-on from p, where a ray-plane intersection degenerates.)
+  const Eigen::Vector3i& tri = mesh.triangles[face];
+  auto weight = [&](int k) { return tri[k] == e.v0 ? 1.0 - t : (tri[k] == e.v1 ? t : 0.0); };
+  fg.u = weight(1);
+  fg.v = weight(2);
+  fg.exact = true;
   const PrimalView pv{&scene};
   const Color L_fg = trace_path(ctx, pv, p, w, fg, seg, 0.0, sampler, stats);
   // ---- Background: beyond the edge along the same direction (escaping rays see the environment).

@@ -114,6 +114,9 @@ ColorT<typename View::Real> trace_path(const PathContext& ctx, const View& view,
       break;
     }
     const SurfaceInteraction<T> si = make_interaction(view, hit, o, d);
+    // A ray grazing a triangle's plane has no well-defined intersection: end the path rather than
+    // propagate a NaN (never reached with Embree's own hits in practice).
+    if (!value(si.p).allFinite() || !value(si.ns).allFinite()) break;
     const Shape& shape = ctx.scene->shapes[si.shape];
     const Vec3 p = value(si.p);
     const Vec3 ng = value(si.ng);

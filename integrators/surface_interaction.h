@@ -24,7 +24,8 @@ template <class T> struct SurfaceInteraction {
 
 /// Ray-triangle intersection (Moller-Trumbore 1997) over scalar T with origin o (T) and fixed unit
 /// direction d, for the triangle Embree reported in `hit`. Works outside the triangle too (the
-/// barycentrics are then extrapolated): Embree decided which triangle is hit.
+/// barycentrics are then extrapolated): Embree decided which triangle is hit. With hit.exact the
+/// point is interpolated from hit.u, hit.v instead (a known point; no ray-plane intersection).
 template <class View>
 SurfaceInteraction<typename View::Real> make_interaction(const View& view, const Hit& hit,
                                                          const Vec3T<typename View::Real>& o, const Vec3& d) {
@@ -44,10 +45,18 @@ SurfaceInteraction<typename View::Real> make_interaction(const View& view, const
   const T inv_det = T(1.0) / det;
   const Vec3T<T> tvec = o - v0;
   const Vec3T<T> qvec = tvec.cross(e1);
-  si.b1 = tvec.dot(pvec) * inv_det;
-  si.b2 = dT.dot(qvec) * inv_det;
-  si.t = e2.dot(qvec) * inv_det;
-  si.p = o + dT * si.t;
+  if (hit.exact) {
+    // A point known on the triangle: interpolate, and measure t along the ray.
+    si.b1 = T(hit.u);
+    si.b2 = T(hit.v);
+    si.p = v0 + e1 * si.b1 + e2 * si.b2;
+    si.t = (si.p - o).dot(dT);
+  } else {
+    si.b1 = tvec.dot(pvec) * inv_det;
+    si.b2 = dT.dot(qvec) * inv_det;
+    si.t = e2.dot(qvec) * inv_det;
+    si.p = o + dT * si.t;
+  }
   const Vec3T<T> c = e1.cross(e2);
   using std::sqrt;
   si.ng = c / sqrt(c.squaredNorm());

@@ -82,6 +82,7 @@ RayTracer::~RayTracer() {
 }
 
 Hit RayTracer::intersect(const Vec3& origin, const Vec3& dir, double tmax, const IgnoreSet& ignore) const {
+  if (!origin.allFinite() || !dir.allFinite()) return Hit{};
   FilterContext ctx;
   rtcInitIntersectContext(&ctx.context);
   ctx.context.filter = ignore.empty() ? nullptr : ignore_filter;
@@ -112,6 +113,7 @@ Hit RayTracer::intersect(const Vec3& origin, const Vec3& dir, double tmax, const
 }
 
 bool RayTracer::occluded(const Vec3& origin, const Vec3& dir, double tmax, const IgnoreSet& ignore) const {
+  if (!origin.allFinite() || !dir.allFinite()) return false;
   FilterContext ctx;
   rtcInitIntersectContext(&ctx.context);
   ctx.context.filter = ignore.empty() ? nullptr : ignore_filter;

@@ -115,6 +115,20 @@ TEST(CLI, RenderIsBitIdenticalForAnyThreadCount) {
     EXPECT_EQ(0, std::memcmp(ia.planes[c].data(), ib.planes[c].data(), ia.planes[c].size() * sizeof(float)));
 }
 
+// The gradient too, boundary term included (its primary splats are merged in a fixed order).
+TEST(CLI, GradIsBitIdenticalForAnyThreadCount) {
+  const std::string a = tmp("qsil_gdet_1.exr"), b = tmp("qsil_gdet_2.exr");
+  const std::string common =
+      "grad scenes/shadow-quad.xml -q -D res=16 --spp 2 --seed 5 --param object:translate:1,0,0 --boundary quadric ";
+  ASSERT_EQ(run_qsil(common + "--threads 1 -o " + a).code, 0);
+  ASSERT_EQ(run_qsil(common + "--threads 2 -o " + b).code, 0);
+  const qsil::Image ia = qsil::read_exr(a), ib = qsil::read_exr(b);
+  ASSERT_EQ(ia.planes.size(), ib.planes.size());
+  for (size_t c = 0; c < ia.planes.size(); ++c)
+    EXPECT_EQ(0, std::memcmp(ia.planes[c].data(), ib.planes[c].data(), ia.planes[c].size() * sizeof(float)))
+        << ia.channel_names[c];
+}
+
 // grad writes R,G,B and dtheta<k>.R/G/B per parameter, with the specs as header attributes, and
 // one diverging preview per parameter.
 TEST(CLI, GradWritesTheDocumentedChannelsAttributesAndPreviews) {

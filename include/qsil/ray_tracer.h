@@ -19,6 +19,10 @@ struct Hit {
   int triangle = -1;  ///< triangle index within the shape
   double t = kInf;    ///< distance along the (unit) ray direction, scene units
   double u = 0, v = 0;///< barycentrics of vertices 1 and 2
+  /// u, v are exact (a point known on the triangle, e.g. a sampled edge point), so the surface
+  /// point is interpolated from them instead of intersecting a ray with the triangle's plane
+  /// (which degenerates when the ray grazes the plane).
+  bool exact = false;
   bool valid() const { return shape >= 0; }
 };
 
@@ -47,6 +51,7 @@ class RayTracer {
   RayTracer& operator=(const RayTracer&) = delete;
 
   /// Closest hit of the ray origin + t*dir, t in [0, tmax), dir unit length (world space).
+  /// A ray with a non-finite origin or direction hits nothing (Embree must never see one).
   Hit intersect(const Vec3& origin, const Vec3& dir, double tmax = kInf, const IgnoreSet& ignore = {}) const;
   /// True if anything is hit for t in [0, tmax).
   bool occluded(const Vec3& origin, const Vec3& dir, double tmax, const IgnoreSet& ignore = {}) const;
