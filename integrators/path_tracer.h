@@ -72,10 +72,41 @@ template <class T> struct ShadingPoint {
   Frame frame_value;   ///< its detached value (sampling happens here)
 };
 
-template <class T> ShadingPoint<T> make_shading_point(const PathContext& ctx, const SurfaceInteraction<T>& si) {
+/// Smallest cosine between wo and the adapted shading normal, relative to its cosine with the
+/// geometric normal (see make_shading_point).
+inline constexpr double kShadingNormalMinCos = 1e-3;
+
+/// The shading frame of a surface interaction seen from direction `wo_world` (toward the viewer).
+/// Shading-normal adaptation: where wo lies above the geometric surface but below the
+/// interpolated shading normal's horizon (near silhouettes of smooth meshes), a one-sided BSDF
+/// would render black, and the border of that black fringe is a discontinuity that moves with
+/// the geometry but lies on no mesh edge: no edge sampler can find it, and the boundary term
+/// would see the fringe's black instead of the lit surface at a silhouette. The shading normal
+/// is therefore bent toward the geometric normal just enough that wo stays above its horizon:
+///   ns' = normalize(ns + k ng),  k = max(0, eps - (ns.wo)/(ng.wo)),
+/// which is continuous in the geometry (k = 0 wherever ns already faces wo), so the image and
+/// its derivative stay continuous there. A twosided BSDF seen from the back flips both normals.
+template <class T>
+ShadingPoint<T> make_shading_point(const PathContext& ctx, const SurfaceInteraction<T>& si, const Vec3& wo_world) {
   const Shape& shape = ctx.scene->shapes[si.shape];
-  ShadingPoint<T> sp{&ctx.scene->bsdfs[shape.bsdf], FrameT<T>(si.ns), Frame(value(si.ns))};
-  return sp;
+  const BSDFDesc* bsdf = &ctx.scene->bsdfs[shape.bsdf];
+  Vec3T<T> ns = si.ns, ng = si.ng;
+  const Vec3T<T> wo = lift<T>(wo_world);
+  T gw = ng.dot(wo);
+  if (value(gw) < 0 && bsdf->twosided) {
+    ns = -ns;
+    ng = -ng;
+    gw = -gw;
+  }
+  if (value(gw) > 0) {
+    const T k = T(kShadingNormalMinCos) - ns.dot(wo) / gw;
+    if (value(k) > 0) {
+      using std::sqrt;
+      const Vec3T<T> n = ns + ng * k;
+      ns = n / sqrt(n.squaredNorm());
+    }
+  }
+  return ShadingPoint<T>{bsdf, FrameT<T>(ns), Frame(value(ns))};
 }
 
 /// The hook of a path vertex for estimators that add a term there (the boundary term); the primal
@@ -130,7 +161,7 @@ ColorT<typename View::Real> trace_path(const PathContext& ctx, const View& view,
     }
     if (seg >= ctx.max_depth) break;
 
-    const ShadingPoint<T> sp = make_shading_point(ctx, si);
+    const ShadingPoint<T> sp = make_shading_point(ctx, si, wo_world);
     const Vec3T<T> wo = sp.frame.to_local(lift<T>(wo_world));
     const Vec3 wo_value = value(wo);
     hook(si, sp, wo_value, beta, seg, sampler, stats, L);
@@ -142,7 +173,8 @@ ColorT<typename View::Real> trace_path(const PathContext& ctx, const View& view,
       const double u_tri = sampler.next();
       Vec3 wi;
       Color Le = Color::Zero();
-      double pdf_light = 0, tmax = kInf;
+      double pdf_light = 0;
+      Vec3 light_point = Vec3::Constant(kInf);  // finite for area lights: where the shadow ray ends
       if (use_env) {
         const auto s = ctx.environment->sample(u);
         if (s.pdf > 0) {
@@ -159,7 +191,7 @@ ColorT<typename View::Real> trace_path(const PathContext& ctx, const View& view,
           pdf_light = nee_area_pdf(ctx, dist, wi, s.normal);
           if (pdf_light > 0) {
             Le = ctx.area_lights->radiance(s.shape, s.normal, -wi);
-            tmax = dist * (1.0 - 1.0 / 4096.0);  // stop short of the light's own triangle (relative)
+            light_point = s.point;
           }
         }
       }
@@ -168,7 +200,12 @@ ColorT<typename View::Real> trace_path(const PathContext& ctx, const View& view,
         const ColorT<T> f = bsdf_eval<T>(*sp.bsdf, wi_local, wo);
         if ((value(f) != 0).any()) {
           ++stats.rays;
-          if (!ctx.tracer->occluded(offset_ray_origin(p, ng, wi, si.scale), wi, tmax)) {
+          // The shadow ray starts at the offset origin and stops short of the light's own
+          // triangle by a relative margin, measured from that origin (measured from p, an
+          // offset toward the light could reach the light itself).
+          const Vec3 origin = offset_ray_origin(p, ng, wi, si.scale);
+          const double tmax = light_point.allFinite() ? (light_point - origin).norm() * (1.0 - 1.0 / 4096.0) : kInf;
+          if (!ctx.tracer->occluded(origin, wi, tmax)) {
             const double w = power_heuristic(pdf_light, bsdf_pdf(*sp.bsdf, value(wi_local), wo_value));
             L += beta * f * lift<T>(Color(Le * (w / pdf_light)));
           }

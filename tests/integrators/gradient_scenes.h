@@ -86,6 +86,12 @@ struct Agreement {
   double sum_se = 0;             ///< combined standard error of the sums
   double pixel_fraction_within_4se = 0;
   int pixel_channels = 0, pixel_channels_outside = 0;
+  /// The same fraction over the pixel-channels FD resolved (its estimate or its standard error is
+  /// non-zero): where every FD sample pair saw the same path, 0 +- 0 is no oracle.
+  double resolved_fraction_within_4se = 0;
+  int resolved_pixel_channels = 0;
+  /// Fraction of pixel-channels where FD is clearly non-zero (|fd| > 4 se): the test has signal.
+  double fd_signal_fraction = 0;
   std::vector<Outlier> worst;    ///< the largest |z| first (up to 8)
   double grad_seconds = 0, fd_seconds = 0, interior_seconds = 0;
   GradientReport report;
@@ -117,9 +123,17 @@ inline Agreement compare(const RenderResult& g, const RenderResult& f, const Ren
         const bool within = std::abs(o.grad - o.fd) <= 4 * se + 1e-12;
         a.pixel_channels_outside += !within;
         ++a.pixel_channels;
+        a.fd_signal_fraction += std::abs(o.fd) > 4 * o.fd_se;
+        if (o.fd != 0 || o.fd_se > 0) {
+          ++a.resolved_pixel_channels;
+          a.resolved_fraction_within_4se += within;
+        }
         all.push_back(o);
       }
   a.pixel_fraction_within_4se = 1.0 - double(a.pixel_channels_outside) / a.pixel_channels;
+  a.resolved_fraction_within_4se =
+      a.resolved_pixel_channels > 0 ? a.resolved_fraction_within_4se / a.resolved_pixel_channels : 1.0;
+  a.fd_signal_fraction /= a.pixel_channels;
   std::sort(all.begin(), all.end(), [](const Outlier& p, const Outlier& q) { return std::abs(p.z()) > std::abs(q.z()); });
   all.resize(std::min<size_t>(all.size(), 8));
   a.worst = all;

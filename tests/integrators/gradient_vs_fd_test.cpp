@@ -17,15 +17,21 @@ namespace {
 
 using gradcheck::Agreement;
 
+/// Which criteria a case checks: both (image sum and per pixel), or the image sum alone.
+enum class Pixels { Checked, SumOnly };
+
 /// Runs a case and checks the criteria, printing the statistics.
-void expect_agreement(const std::string& name, int res, int grad_spp, int fd_spp, double h = 0) {
+void expect_agreement(const std::string& name, int res, int grad_spp, int fd_spp, double h = 0,
+                      Pixels pixels = Pixels::Checked) {
   const gradcheck::Case& c = gradcheck::find_case(name);
   const Agreement a = gradcheck::run(c, res, grad_spp, fd_spp, h > 0 ? h : c.h, /*with_interior=*/false);
   const std::string text = gradcheck::describe(name, a);
   std::printf("%s", text.c_str());
   EXPECT_NEAR(a.grad.sum, a.fd.sum, 3 * a.sum_se) << text;
-  EXPECT_GE(a.pixel_fraction_within_4se, 0.98) << text;
-  EXPECT_GT(std::abs(a.fd.sum), 3 * a.fd.standard_error) << text << "the derivative must be clearly non-zero";
+  if (pixels == Pixels::Checked) EXPECT_GE(a.pixel_fraction_within_4se, 0.98) << text;
+  // Not vacuous: the image sum, or at least 5% of the pixel-channels, clearly non-zero in FD.
+  EXPECT_TRUE(std::abs(a.fd.sum) > 3 * a.fd.standard_error || a.fd_signal_fraction >= 0.05)
+      << text << "the derivative must be clearly non-zero (signal fraction " << a.fd_signal_fraction << ")";
   EXPECT_EQ(a.nonfinite, 0u);
 }
 
@@ -72,10 +78,27 @@ RegionSum floor_region_sum(const Scene& scene, const Film& film, double x0, doub
 // At 256 spp the image sum's SE is ~3% of the sum; about 3 s on 2 cores.
 TEST(GradientVsFD, FloorMovingTowardASmallAreaLight) { expect_agreement("plane-light", 32, 256, 1024); }
 
-// Not yet here (see docs/gradient-checks.md for the numbers and their localisation): spot-mirror,
-// shadow-quad, direct and spot-selfshadow disagree with FD beyond the criteria at 1024 spp
-// (qsil-check_gradients --res 32 --spp 1024 --fd-spp 4096); they pass at CI spp only because
-// they are noisy there, so they are not tests until the boundary term agrees at high spp.
+// Primary silhouettes: Spot seen directly in front of a backdrop, moving sideways. 16x16 at
+// 2048 spp (grad) / 4096 spp (FD): ~12 s on 2 cores.
+TEST(GradientVsFD, DirectPrimarySilhouettes) { expect_agreement("direct", 16, 2048, 4096); }
+
+// A moving object that shadows itself under a small area light: shading points on the moving
+// shape, whose own silhouettes and the light's outline move relative to them.
+TEST(GradientVsFD, MovingObjectShadowsItself) { expect_agreement("spot-selfshadow", 16, 2048, 4096); }
+
+// Reflection only: Spot is outside the view and seen in a GGX alpha 0.01 mirror. Image sum only
+// at CI size: some mirror pixels see Spot only through the lobe's tail, where almost no FD
+// sample pair changes path (FD 0 +- 0 or one sample, while the gradient is ~1e-4 +- 1e-5), so
+// FD is no per-pixel oracle there at 4096 spp; qsil-check_gradients reports the per-pixel
+// statistics (docs/gradient-checks.md). Before the shading-normal adaptation this failed at
+// -50.5 +- 2.5 (grad) vs -24.4 +- 1.2 (FD), 32x32.
+TEST(GradientVsFD, SpotMirrorReflectionOnly) { expect_agreement("spot-mirror", 16, 2048, 4096, 0, Pixels::SumOnly); }
+
+// A penumbra on a static floor (static shading points; the bunny's edges move). Image sum only,
+// for the same reason: far floor pixels see penumbrae FD does not resolve at this spp.
+TEST(GradientVsFD, ShadowQuadPenumbraOnAStaticFloor) {
+  expect_agreement("shadow-quad", 16, 2048, 4096, 0, Pixels::SumOnly);
+}
 
 // ---- Sign test.
 
