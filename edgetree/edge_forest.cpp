@@ -82,7 +82,19 @@ EdgeForest EdgeForest::build(std::span<const ForestShapeInput> shapes, const For
     };
     for (int idx : set.always) f.always_.push_back(make(idx));
     const int ebase = int(f.edges_.size());
-    for (int idx : set.kept) f.edges_.push_back(make(idx));
+    if (in.face_normals) {
+      // Creases: every edge between two faces that are not coplanar (convex and concave alike).
+      for (size_t idx = 0; idx < set.edges.size(); ++idx) {
+        const EdgeClass cls = set.edges[idx].cls;
+        if (cls == EdgeClass::Convex || cls == EdgeClass::Concave) {
+          f.always_.push_back(make(int(idx)));
+          ++st.edges_always;
+        }
+      }
+      st.edges_kept = 0;
+    } else {
+      for (int idx : set.kept) f.edges_.push_back(make(idx));
+    }
     const int eend = int(f.edges_.size());
 
     // ---- topology: breadth-first, so every level is a contiguous node range

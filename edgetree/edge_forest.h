@@ -50,6 +50,9 @@ struct ForestNode {
 struct ForestShapeInput {
   const TriangleMesh* mesh = nullptr;  ///< welded mesh, world frame
   int shape = 0;                       ///< the shape's index (kept in every edge and node)
+  /// Flat shading (Mitsuba's face_normals): the radiance jumps across every non-flat edge, so
+  /// every convex and concave edge is an always-candidate (a crease) and the shape has no tree.
+  bool face_normals = false;
 };
 
 /// Options of the forest build.

@@ -23,6 +23,7 @@
 
 #include "edgetree/edge_forest.h"
 #include "edgetree/edge_sampler.h"
+#include "edgetree/mesh_edges.h"
 #include "integrators/geometry_view.h"
 #include "integrators/path_tracer.h"
 
@@ -58,7 +59,10 @@ inline edgetree::LTC bsdf_ltc(const BSDFDesc& b, Vec3 wo_local) {
 
 /// The radiance jump and the Jacobian at a point of a discontinuity edge seen from p (shared by
 /// the secondary and the primary boundary terms). On success (returns true):
-/// - jump = s (L_bg - L_fg): the occluder-side sign times background minus foreground radiance;
+/// - jump = s (L_bg - L_fg): the occluder-side sign times background minus foreground radiance
+///   for a silhouette or boundary edge; for a crease of a flat-shaded shape (an edge whose two
+///   faces both face p), the radiance on the minus side minus that on the plus side of the plane
+///   (p, edge), the plus side being where w0 x w1 points;
 /// - J[k] = det(w0, w1, v_t) / |w_t|^3 for parameter k (per unit t), v_t relative to p.
 /// Returns false for a zero contribution: p on the edge's line, no relative velocity, or the edge
 /// point hidden from p. `vis_origin` starts the visibility ray (p, offset off its surface).
@@ -79,38 +83,57 @@ bool edge_jump(const PathContext& ctx, const SceneVelocities& vel, const edgetre
   const Vec3 n01 = w0.cross(w1);
   J = n01.transpose() * ve / (dist * dist * dist);
   if (J.isZero(0.0)) return false;
-  // ---- Sign: the side of the plane (p, edge) on which the edge's faces (the occluder) lie.
-  const TriangleMesh& mesh = scene.shapes[e.shape].mesh;
-  const Eigen::Vector3i& tri0 = mesh.triangles[e.f0];
-  int opp = tri0[0];
-  for (int k = 0; k < 3; ++k)
-    if (tri0[k] != e.v0 && tri0[k] != e.v1) opp = tri0[k];
-  const double side = n01.dot(mesh.positions[opp] - p);
-  if (side == 0) return false;
-  const double s = side > 0 ? 1.0 : -1.0;
   // ---- Visibility of the edge point from p (ignoring the edge's own faces).
+  const TriangleMesh& mesh = scene.shapes[e.shape].mesh;
   IgnoreSet ignore;
   ignore.prims[0] = {e.shape, e.f0};
   ignore.prims[1] = {e.f1 >= 0 ? e.shape : -1, e.f1};
   const double vis_dist = (e.p0 + t * (e.p1 - e.p0) - vis_origin).norm();
   ++stats.rays;
   if (ctx.tracer->occluded(vis_origin, w, vis_dist * (1.0 - 1.0 / 4096.0), ignore)) return false;
-  // ---- Foreground: the face that faces p, exactly at x_e, continued with the remaining depth.
+  // The side of the plane (p, edge) on which a face lies: the sign of (w0 x w1).(x_opp - p) for
+  // the face's third vertex.
+  auto side_of = [&](int face) {
+    const Eigen::Vector3i& tri = mesh.triangles[face];
+    int opp = tri[0];
+    for (int k = 0; k < 3; ++k)
+      if (tri[k] != e.v0 && tri[k] != e.v1) opp = tri[k];
+    return n01.dot(mesh.positions[opp] - p);
+  };
+  // Radiance leaving face `face` exactly at x_e toward p, continued with the remaining depth.
+  // The point is known: barycentrics (1-t at v0, t at v1) in the face's vertex order (the face
+  // may be seen edge-on from p, where a ray-plane intersection degenerates).
+  const PrimalView pv{&scene};
+  auto face_radiance = [&](int face) {
+    Hit h;
+    h.shape = e.shape;
+    h.triangle = face;
+    const Eigen::Vector3i& tri = mesh.triangles[face];
+    auto weight = [&](int k) { return tri[k] == e.v0 ? 1.0 - t : (tri[k] == e.v1 ? t : 0.0); };
+    h.u = weight(1);
+    h.v = weight(2);
+    h.exact = true;
+    return Color(trace_path(ctx, pv, p, w, h, seg, 0.0, sampler, stats));
+  };
+  if (e.f1 >= 0 && !edgetree::edge_is_silhouette(e, p)) {
+    // ---- A crease of a flat-shaded shape, both faces facing p: the two faces lie on opposite
+    // sides of the plane (p, edge); the radiance jumps from one face's to the other's.
+    // Reynolds transport: jump = L(side -) - L(side +), + the side (w0 x w1) points to.
+    const double s0 = side_of(e.f0);
+    if (s0 == 0) return false;
+    const Color L0 = face_radiance(e.f0), L1 = face_radiance(e.f1);
+    jump = s0 > 0 ? Color(L1 - L0) : Color(L0 - L1);
+    return true;
+  }
+  // ---- A silhouette or boundary edge: both faces on the occluder's side s.
+  const double side = side_of(e.f0);
+  if (side == 0) return false;
+  const double s = side > 0 ? 1.0 : -1.0;
+  // Foreground: the face that faces p. Background: beyond the edge along the same direction
+  // (escaping rays see the environment).
   const Vec4 x(p.x(), p.y(), p.z(), 1.0);
   const int face = (e.f1 < 0 || e.q0.dot(x) > 0) ? e.f0 : e.f1;
-  Hit fg;
-  fg.shape = e.shape;
-  fg.triangle = face;
-  // The point is known exactly: barycentrics (1-t at v0, t at v1) in the face's vertex order.
-  // (The face may be seen edge-on from p, where a ray-plane intersection degenerates.)
-  const Eigen::Vector3i& tri = mesh.triangles[face];
-  auto weight = [&](int k) { return tri[k] == e.v0 ? 1.0 - t : (tri[k] == e.v1 ? t : 0.0); };
-  fg.u = weight(1);
-  fg.v = weight(2);
-  fg.exact = true;
-  const PrimalView pv{&scene};
-  const Color L_fg = trace_path(ctx, pv, p, w, fg, seg, 0.0, sampler, stats);
-  // ---- Background: beyond the edge along the same direction (escaping rays see the environment).
+  const Color L_fg = face_radiance(face);
   const Vec3 xe = p + wt;
   ++stats.rays;
   const Hit bg = ctx.tracer->intersect(xe, w, kInf, ignore);

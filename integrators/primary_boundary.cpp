@@ -99,8 +99,11 @@ std::vector<PrimaryEdge> find_primary_edges(const Scene& scene, const edgetree::
   const Vec3 o = cam.origin();
   const Vec2 tf = cam.tan_half_fov();
   std::vector<PrimaryEdge> out;
+  // Silhouettes and boundary edges from o, and every crease of a flat-shaded shape (its two
+  // faces both seen: the shading jumps across it).
   auto consider = [&](const edgetree::ForestEdge& e) {
-    if (e.shape >= int(moving.size()) || !moving[e.shape] || !edgetree::edge_is_silhouette(e, o)) return;
+    if (e.shape >= int(moving.size()) || !moving[e.shape]) return;
+    if (!edgetree::edge_is_silhouette(e, o) && !scene.shapes[e.shape].face_normals) return;
     const Vec3 c0 = to_camera(cam, e.p0), c1 = to_camera(cam, e.p1);
     PrimaryEdge pe;
     pe.edge = &e;

@@ -108,7 +108,8 @@ RenderResult render_gradient_n(const Scene& scene, const std::vector<ParameterSp
   if (boundary) {
     const auto t0 = std::chrono::steady_clock::now();
     std::vector<edgetree::ForestShapeInput> inputs;
-    for (size_t s = 0; s < scene.shapes.size(); ++s) inputs.push_back({&scene.shapes[s].mesh, int(s)});
+    for (size_t s = 0; s < scene.shapes.size(); ++s)
+      inputs.push_back({&scene.shapes[s].mesh, int(s), scene.shapes[s].face_normals});
     forest = edgetree::EdgeForest::build(inputs);
     edge_sampler = make_edge_sampler(gopt.boundary, scene, forest);
     if (report) report->forest_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

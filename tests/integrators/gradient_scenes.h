@@ -40,7 +40,7 @@ struct Case {
   double h = 0;                                  ///< FD step (scene units of theta)
 };
 
-/// The five scenes of the issue, in the order it lists them.
+/// The five scenes of the issue, in the order it lists them, and a flat-shaded (face_normals) case.
 inline std::vector<Case> cases() {
   return {
       // Spot seen only in a GGX 0.01 mirror: secondary silhouettes at the mirror's vertices.
@@ -53,6 +53,8 @@ inline std::vector<Case> cases() {
       {"plane-light", "tests/data/gradient/plane-light.xml", {}, "floor:translate:0,1,0", 1e-2},
       // Spot translating under a small light: shadows on itself, shading points on the moving shape.
       {"spot-selfshadow", "tests/data/gradient/spot-selfshadow.xml", {}, "spot:translate:1,0,0", 1e-2},
+      // A flat-shaded cube rotating: its creases are discontinuities (primary and secondary).
+      {"faceted-cube", "tests/data/gradient/faceted-cube.xml", {}, "cube:rotate:0,1,0", 1e-2},
   };
 }
 
