@@ -88,6 +88,7 @@ EdgeForest EdgeForest::build(std::span<const ForestShapeInput> shapes, const For
         const EdgeClass cls = set.edges[idx].cls;
         if (cls == EdgeClass::Convex || cls == EdgeClass::Concave) {
           f.always_.push_back(make(int(idx)));
+          f.always_.back().crease = true;
           ++st.edges_always;
         }
       }

@@ -24,7 +24,13 @@ namespace qsil::edgetree {
 struct ForestEdge : MeshEdge {
   Vec3 p0 = Vec3::Zero();  ///< position of v0
   Vec3 p1 = Vec3::Zero();  ///< position of v1
+  bool crease = false;     ///< a non-flat edge of a flat-shaded (face_normals) shape
 };
+
+/// True iff the radiance seen from p can jump across edge e: a silhouette or boundary edge
+/// (edge_is_silhouette), or a crease of a flat-shaded shape (its shading jumps there whether or
+/// not it is a silhouette). Edge samplers return only such edges.
+inline bool is_discontinuity(const ForestEdge& e, const Vec3& p) { return e.crease || edge_is_silhouette(e, p); }
 
 /// A node of the forest. Inner nodes: children are nodes [first, first + count) (1..4 of them).
 /// Leaves (kNodeLeaf): edges [first, first + count) of EdgeForest::edges() (1..4 of them).

@@ -3,6 +3,7 @@
 
 #include "edgetree/silhouette_sampler.h"
 
+#include "edgetree/discrete_choice.h"
 #include "edgetree/edge_point_sampler.h"
 
 #include <array>
@@ -31,20 +32,6 @@ template <class Range> void choice_probabilities(const Range& c, int n, double* 
     const double pg = sg > 0 ? c[i].w.defensive / sg : 1.0 / n;
     prob[i] = (1.0 - eps) * pi + eps * pg;
   }
-}
-
-/// Index drawn with probabilities prob[0..n) (which sum to 1 up to rounding) from u in [0,1);
-/// never an index of zero probability, even when rounding leaves u beyond the last sum.
-int choose(const double* prob, int n, double u) {
-  double acc = 0;
-  int last = -1;
-  for (int i = 0; i < n; ++i) {
-    if (!(prob[i] > 0)) continue;
-    acc += prob[i];
-    last = i;
-    if (u < acc) return i;
-  }
-  return last;
 }
 
 double edge_defensive(const ForestEdge& e, const Vec3& p) {
@@ -93,7 +80,7 @@ int child_candidates(const EdgeForest& f, int n, const SilhouetteQuery& q, std::
 int leaf_candidates(const EdgeForest& f, int n, const SilhouetteQuery& q, std::array<Candidate, 4>& out) {
   int k = 0;
   for (const ForestEdge& e : f.leaf_edges(n))
-    if (edge_is_silhouette(e, q.p)) out[k++] = {-1, &e, edge_weight(e, q)};
+    if (is_discontinuity(e, q.p)) out[k++] = {-1, &e, edge_weight(e, q)};
   return k;
 }
 
@@ -170,9 +157,17 @@ SilhouetteSample sample_silhouette(const EdgeForest& forest, const SilhouetteQue
     cur = cand[size_t(i)];
   }
   // ---- The point on the edge.
-  const ForestEdge& e = *cur.edge;
+  const int tests = s.rejection_tests;
+  s = sample_on_edge(*cur.edge, pmf, query, next());
+  s.rejection_tests = tests;
+  return s;
+}
+
+SilhouetteSample sample_on_edge(const ForestEdge& e, double pmf, const SilhouetteQuery& query, double u) {
+  SilhouetteSample s;
+  if (!is_discontinuity(e, query.p)) return s;
   const EdgePointSampler ps(query.frame.to_local(e.p0 - query.p), query.frame.to_local(e.p1 - query.p), query.ltc);
-  const EdgePointSample ts = ps.sample(next());
+  const EdgePointSample ts = ps.sample(u);
   s.edge = &e;
   s.t = ts.t;
   s.pdf = pmf * ts.pdf;

@@ -70,6 +70,12 @@ struct SilhouetteSample {
 SilhouetteSample sample_silhouette(const EdgeForest& forest, const SilhouetteQuery& query,
                                    const std::function<double()>& next);
 
+/// Completes a sample on a chosen edge e (chosen with discrete probability pmf): t from the
+/// EdgePointSampler of the query ([QSS Eq. 4] x LTC, defensive in angle) with u, pdf = pmf x
+/// pdf(t). Returns no edge when e is not a discontinuity for the query point (is_discontinuity):
+/// samplers without an exact leaf test (vsphere, uniform) land there, a zero-contribution sample.
+SilhouetteSample sample_on_edge(const ForestEdge& e, double pmf, const SilhouetteQuery& query, double u);
+
 /// Importance I and defensive weight G of a node for the query (see the file comment).
 struct NodeWeight {
   double importance = 0;

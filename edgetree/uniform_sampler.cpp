@@ -55,12 +55,9 @@ SilhouetteSample UniformEdgeSampler::sample(const SilhouetteQuery& query, const 
   i = std::min(i, t->edges.size() - 1);
   const ForestEdge& e = *t->edges[i];
   const double pmf = weight(e) / sum;
-  if (!edge_is_silhouette(e, query.p)) return s;  // a zero-contribution sample
-  const EdgePointSampler ps(query.frame.to_local(e.p0 - query.p), query.frame.to_local(e.p1 - query.p), query.ltc);
-  const EdgePointSample ts = ps.sample(next());
-  s.edge = &e;
-  s.t = ts.t;
-  s.pdf = pmf * ts.pdf;
+  const int tests = s.rejection_tests;
+  s = sample_on_edge(e, pmf, query, next());  // no edge for a non-discontinuity: a zero sample
+  s.rejection_tests = tests;
   return s;
 }
 

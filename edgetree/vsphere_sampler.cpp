@@ -3,6 +3,7 @@
 
 #include "edgetree/vsphere_sampler.h"
 
+#include "edgetree/discrete_choice.h"
 #include "edgetree/edge_point_sampler.h"
 #include "edgetree/ltc.h"
 
@@ -19,19 +20,6 @@ bool eligible(const SilhouetteQuery& q, int shape) {
 
 bool contains(const Box3& b, const Vec3& p) {
   return !b.empty() && (p.array() >= b.lo.array()).all() && (p.array() <= b.hi.array()).all();
-}
-
-/// Index drawn with probabilities prob[0..n) from u in [0,1); never one of zero probability.
-int choose(const double* prob, int n, double u) {
-  double acc = 0;
-  int last = -1;
-  for (int i = 0; i < n; ++i) {
-    if (!(prob[i] > 0)) continue;
-    acc += prob[i];
-    last = i;
-    if (u < acc) return i;
-  }
-  return last;
 }
 
 /// Largest z of the unit directions on the great arc from a to b (unit vectors).
@@ -204,12 +192,9 @@ SilhouetteSample VSphereEdgeSampler::sample(const SilhouetteQuery& query, const 
   }
   // ---- Leaves are not tested exactly (Li's method): a non-silhouette is a zero sample.
   const ForestEdge& e = *cur.edge;
-  if (!edge_is_silhouette(e, query.p)) return s;
-  const EdgePointSampler ps(query.frame.to_local(e.p0 - query.p), query.frame.to_local(e.p1 - query.p), query.ltc);
-  const EdgePointSample ts = ps.sample(next());
-  s.edge = &e;
-  s.t = ts.t;
-  s.pdf = pmf * ts.pdf;
+  const int tests = s.rejection_tests;
+  s = sample_on_edge(e, pmf, query, next());  // no edge for a non-discontinuity: a zero sample
+  s.rejection_tests = tests;
   return s;
 }
 

@@ -115,7 +115,7 @@ bool edge_jump(const PathContext& ctx, const SceneVelocities& vel, const edgetre
     h.exact = true;
     return Color(trace_path(ctx, pv, p, w, h, seg, 0.0, sampler, stats));
   };
-  if (e.f1 >= 0 && !edgetree::edge_is_silhouette(e, p)) {
+  if (e.crease && !edgetree::edge_is_silhouette(e, p)) {
     // ---- A crease of a flat-shaded shape, both faces facing p: the two faces lie on opposite
     // sides of the plane (p, edge); the radiance jumps from one face's to the other's.
     // Reynolds transport: jump = L(side -) - L(side +), + the side (w0 x w1) points to.

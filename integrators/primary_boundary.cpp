@@ -103,7 +103,7 @@ std::vector<PrimaryEdge> find_primary_edges(const Scene& scene, const edgetree::
   // faces both seen: the shading jumps across it).
   auto consider = [&](const edgetree::ForestEdge& e) {
     if (e.shape >= int(moving.size()) || !moving[e.shape]) return;
-    if (!edgetree::edge_is_silhouette(e, o) && !scene.shapes[e.shape].face_normals) return;
+    if (!edgetree::is_discontinuity(e, o)) return;
     const Vec3 c0 = to_camera(cam, e.p0), c1 = to_camera(cam, e.p1);
     PrimaryEdge pe;
     pe.edge = &e;
