@@ -39,6 +39,17 @@ Vec2 Camera::tan_half_fov() const {
   return Vec2(tan_x, tan_x / aspect);
 }
 
+Mat4 look_at(const Vec3& origin, const Vec3& target, const Vec3& up) {
+  const Vec3 dir = (target - origin).normalized();
+  const Vec3 left = up.cross(dir).normalized();
+  Mat4 m = Mat4::Identity();
+  m.block<3, 1>(0, 0) = left;
+  m.block<3, 1>(0, 1) = dir.cross(left);
+  m.block<3, 1>(0, 2) = dir;
+  m.block<3, 1>(0, 3) = origin;
+  return m;
+}
+
 Vec3 Camera::direction(double fx, double fy) const {
   const Vec2 t = tan_half_fov();
   const Vec3 local((1.0 - 2.0 * fx / width) * t.x(), (1.0 - 2.0 * fy / height) * t.y(), 1.0);

@@ -3,6 +3,7 @@
 /// Mitsuba's order (each child pre-multiplies: M = child * M, so the first child acts first).
 /// See parse_transform() in xml_source.h.
 
+#include "qsil/scene.h"
 #include "xml_source.h"
 
 namespace qsil::xml {
@@ -32,8 +33,7 @@ Vec3 named_vector(const Source& src, pugi::xml_node node, const char* name) {
   return Vec3(v[0], v[1], v[2]);
 }
 
-/// Mitsuba's Transform4f::look_at: columns [left, up', dir, origin] with
-/// dir = normalize(target - origin), left = normalize(up x dir), up' = dir x left.
+/// Mitsuba's Transform4f::look_at (qsil::look_at), with the checks that make it well defined.
 Mat4 lookat(const Source& src, pugi::xml_node node) {
   check_attributes(src, node, {"origin", "target", "up"}, {"origin", "target"});
   const Vec3 origin = named_vector(src, node, "origin");
@@ -43,17 +43,9 @@ Mat4 lookat(const Source& src, pugi::xml_node node) {
   const Vec3 dir = to.normalized();
   // Without `up`, Mitsuba picks the first vector of coordinate_system(dir).
   Vec3 up = node.attribute("up") ? named_vector(src, node, "up") : Frame(dir).s;
-  const Vec3 left_raw = up.cross(dir);
-  if (!(left_raw.norm() > 1e-12 * up.norm()))
+  if (!(up.cross(dir).norm() > 1e-12 * up.norm()))
     src.fail(node, "lookat: 'up' is zero or parallel to the viewing direction");
-  const Vec3 left = left_raw.normalized();
-  const Vec3 new_up = dir.cross(left);
-  Mat4 m = Mat4::Identity();
-  m.block<3, 1>(0, 0) = left;
-  m.block<3, 1>(0, 1) = new_up;
-  m.block<3, 1>(0, 2) = dir;
-  m.block<3, 1>(0, 3) = origin;
-  return m;
+  return look_at(origin, target, up);
 }
 
 Mat4 rotate(const Source& src, pugi::xml_node node) {

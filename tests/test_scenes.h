@@ -45,14 +45,7 @@ inline TriangleMesh icosphere(int subdiv, const Vec3& c = Vec3::Zero(), double r
 /// A camera at `origin` looking at `target` (Mitsuba lookat with up +y).
 inline Camera look_at(const Vec3& origin, const Vec3& target, double fov_deg, int w, int h, int spp) {
   Camera cam;
-  const Vec3 dir = (target - origin).normalized();
-  const Vec3 left = Vec3(0, 1, 0).cross(dir).normalized();
-  const Vec3 up = dir.cross(left);
-  cam.to_world.setIdentity();
-  cam.to_world.block<3, 1>(0, 0) = left;
-  cam.to_world.block<3, 1>(0, 1) = up;
-  cam.to_world.block<3, 1>(0, 2) = dir;
-  cam.to_world.block<3, 1>(0, 3) = origin;
+  cam.to_world = qsil::look_at(origin, target, Vec3(0, 1, 0));
   cam.fov_deg = fov_deg;
   cam.width = w;
   cam.height = h;

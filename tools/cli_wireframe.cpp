@@ -107,17 +107,8 @@ Camera overview_camera(const Scene& scene) {
   const double tmin = std::min(th.x(), th.y());
   const double dist = radius / std::sin(std::atan(tmin)) * 1.05;
   const Vec3 eye = centre + dist * dir_to_eye;
-  // Mitsuba lookat: z forward, x = up x z (left in the image), y = z x x.
-  const Vec3 z = (centre - eye).normalized();
-  Vec3 x = up.cross(z);
-  if (!(x.norm() > 0)) x = Vec3(1, 0, 0);
-  x.normalize();
-  const Vec3 y = z.cross(x);
-  c.to_world.setIdentity();
-  c.to_world.block<3, 1>(0, 0) = x;
-  c.to_world.block<3, 1>(0, 1) = y;
-  c.to_world.block<3, 1>(0, 2) = z;
-  c.to_world.block<3, 1>(0, 3) = eye;
+  // dir_to_eye is 30 degrees off the plane perpendicular to `up`, so up is never parallel to it.
+  c.to_world = look_at(eye, centre, up);
   return c;
 }
 

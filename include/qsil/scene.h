@@ -81,6 +81,12 @@ struct Environment {
   Image texels;                    ///< EnvMap: RGB texels (channels R,G,B)
 };
 
+/// Mitsuba 3's Transform4f::look_at as a camera-to-world matrix: columns [left, up', dir, origin]
+/// with dir = normalize(target - origin), left = normalize(up x dir), up' = dir x left (world
+/// frame). The caller guarantees target != origin and up not parallel to dir (the result has
+/// NaN columns otherwise).
+Mat4 look_at(const Vec3& origin, const Vec3& target, const Vec3& up);
+
 /// Perspective pinhole camera (Mitsuba 3 `perspective`): looks along +z of its to_world frame,
 /// with +x to the left and +y up in the image; box pixel filter.
 struct Camera {
