@@ -4,15 +4,15 @@
 /// --case) it renders `qsil grad` (quadric boundary term), the interior term alone and central
 /// finite differences with common random numbers, and prints the same statistics as the tests
 /// (image sums +- standard errors, the fraction of pixel-channels within 4 combined standard
-/// errors, the worst pixel-channels); docs/gradient-checks.md records its output. Run from the
-/// repository root (scene paths are relative to it):
+/// errors, the worst pixel-channels); docs/gradient-checks.md records its output. The cases'
+/// scenes are files of the repository, found under --root (default: the working directory):
 ///   build/qsil-check_gradients [--case NAME]... [--res 32] [--spp 1024] [--fd-spp 4096] [--h H]
-///                              [--threads T] [--csv DIR]
+///                              [--threads T] [--csv DIR] [--root REPOSITORY]
 ///   build/qsil-check_gradients --scene FILE.xml --param SPEC [-D k=v]... (any scene, same statistics)
 /// --csv writes DIR/NAME.csv with every pixel-channel (x,y,c,primal,grad,grad_se,fd,fd_se,interior).
 /// Exit code 1 when a criterion fails (sums within 3 SE, >= 98% of pixel-channels within 4 SE).
 
-#include "../tests/integrators/gradient_scenes.h"
+#include "integrators/gradient_check.h"
 
 #include <cstdio>
 #include <cstdlib>
@@ -27,7 +27,7 @@ int main(int argc, char** argv) {
   std::vector<std::string> names;
   int res = 32, spp = 1024, fd_spp = 4096, threads = 0;
   double h = 0;
-  std::string csv;
+  std::string csv, root = ".";
   gradcheck::Case custom;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -45,6 +45,7 @@ int main(int argc, char** argv) {
     else if (a == "--h") h = std::atof(next().c_str());
     else if (a == "--threads") threads = std::atoi(next().c_str());
     else if (a == "--csv") csv = next();
+    else if (a == "--root") root = next();
     else if (a == "--scene") custom.file = next();
     else if (a == "--param") custom.param = next();
     else if (a == "-D") {
@@ -58,7 +59,8 @@ int main(int argc, char** argv) {
     }
     else if (a == "--help" || a == "-h") {
       std::printf("usage: qsil-check_gradients [--case NAME]... [--res N] [--spp N] [--fd-spp N] [--h H] "
-                  "[--threads T] [--csv DIR] [--scene FILE --param SPEC [-D k=v]...]\ncases:");
+                  "[--threads T] [--csv DIR] [--root REPOSITORY] [--scene FILE --param SPEC [-D k=v]...]\ncases "
+                  "(scenes under --root):");
       for (const auto& c : gradcheck::cases()) std::printf(" %s", c.name.c_str());
       std::printf("\n");
       return 0;
@@ -75,7 +77,7 @@ int main(int argc, char** argv) {
   bool ok = true;
   try {
     std::vector<gradcheck::Case> run_cases;
-    for (const auto& name : names) run_cases.push_back(gradcheck::find_case(name));
+    for (const auto& name : names) run_cases.push_back(gradcheck::find_case(name).resolved(root));
     if (!custom.file.empty()) run_cases.push_back(custom);
     for (const gradcheck::Case& c : run_cases) {
       gradcheck::Films films;

@@ -6,8 +6,7 @@
 // heavy-tailed pixels whose SE is itself noisy). The scenes and the statistics are shared with
 // `qsil-check_gradients` (tools/tool_check_gradients.cpp), which runs them at higher spp and
 // resolution; its output is docs/gradient-checks.md. The whole file runs in a few seconds.
-#include "gradient_scenes.h"
-
+#include "integrators/gradient_check.h"
 #include "qsil/scene.h"
 
 #include <gtest/gtest.h>
@@ -23,7 +22,7 @@ enum class Pixels { Checked, SumOnly };
 /// Runs a case and checks the criteria, printing the statistics.
 void expect_agreement(const std::string& name, int res, int grad_spp, int fd_spp, double h = 0,
                       Pixels pixels = Pixels::Checked) {
-  const gradcheck::Case& c = gradcheck::find_case(name);
+  const gradcheck::Case c = gradcheck::find_case(name).resolved(QSIL_SOURCE_DIR);
   const Agreement a = gradcheck::run(c, res, grad_spp, fd_spp, h > 0 ? h : c.h, /*with_interior=*/false);
   const std::string text = gradcheck::describe(name, a);
   std::printf("%s", text.c_str());

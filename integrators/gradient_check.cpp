@@ -1,47 +1,25 @@
-#pragma once
-/// @file gradient_scenes.h
-/// The image-level gradient checks of issue "boundary term": `qsil grad` (interior + boundary
-/// term) against central finite differences with common random numbers, on small scenes. Shared
-/// by tests/integrators/gradient_vs_fd_test.cpp (CI sizes) and tools/tool_check_gradients.cpp
-/// (`qsil-check_gradients`: the same statistics at higher resolution and spp).
-///
-/// Statistics of one comparison (derivative channels R, G, B of every pixel, "pixel-channels"):
-/// - image sums (sum over pixels of the mean of R, G, B) of both estimators with their standard
-///   errors (pixels are independent, so variances add); agreement: |sum_grad - sum_fd| within 3
-///   combined standard errors (two-sided, 99.7% for Gaussian sums);
-/// - the fraction of pixel-channels with |grad - fd| <= 4 combined standard errors (per pixel
-///   SEs from the films; for Gaussian errors 99.994% of pixel-channels pass, the criterion asks
-///   98%: the slack is for heavy-tailed pixels whose SE is itself noisy at CI spp);
-/// - the interior term alone (--boundary none) for the same seed, to tell what the boundary term
-///   adds, and the primary term's share is visible as the difference of the two.
-/// Paths are relative to the repository root (tests run there, see tests/CMakeLists.txt).
+/// @file gradient_check.cpp
+/// Image-level gradient checks against finite differences; see gradient_check.h.
 
-#include "integrators/render.h"
-#include "qsil/parameters.h"
-#include "qsil/scene.h"
+#include "integrators/gradient_check.h"
+
+#include "qsil/error.h"
+
+#include <unistd.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <map>
-#include <stdexcept>
-#include <string>
-#include <vector>
 
 namespace qsil::gradcheck {
 
-/// One configuration {scene, parameter, FD step}, as in Mitsuba 3's test_ad_integrators.py.
-struct Case {
-  std::string name;
-  std::string file;                              ///< relative to the repository root
-  std::map<std::string, std::string> defaults;   ///< -D overrides except res/spp (set per run)
-  std::string param;
-  double h = 0;                                  ///< FD step (scene units of theta)
-};
+Case Case::resolved(const std::filesystem::path& root) const {
+  Case c = *this;
+  if (std::filesystem::path(file).is_relative()) c.file = (root / file).string();
+  return c;
+}
 
-/// The five scenes of the issue, in the order it lists them, and a flat-shaded (face_normals) case.
-inline std::vector<Case> cases() {
+std::vector<Case> cases() {
   return {
       // Spot seen only in a GGX 0.01 mirror: secondary silhouettes at the mirror's vertices.
       {"spot-mirror", "scenes/spot-mirror.xml", {{"max_depth", "3"}}, "spot:translate:0,1,0", 1e-2},
@@ -58,54 +36,27 @@ inline std::vector<Case> cases() {
   };
 }
 
-inline const Case& find_case(const std::string& name) {
+const Case& find_case(const std::string& name) {
   static const std::vector<Case> all = cases();
   for (const Case& c : all)
     if (c.name == name) return c;
-  throw std::runtime_error("no gradient case " + name);
+  throw Error("no gradient case " + name);
 }
 
-/// Loads a case's scene at a resolution and spp.
-inline Scene load_case(const Case& c, int res, int spp) {
+Scene load_case(const Case& c, int res, int spp) {
   auto defaults = c.defaults;
   defaults["res"] = std::to_string(res);
   defaults["spp"] = std::to_string(spp);
   return load_scene(c.file, defaults);
 }
 
-/// One pixel-channel that disagrees, for localisation.
-struct Outlier {
-  int x = 0, y = 0, channel = 0;
-  double grad = 0, grad_se = 0, fd = 0, fd_se = 0, interior = 0;
-  double z() const { return (grad - fd) / std::max(1e-300, std::hypot(grad_se, fd_se)); }
-};
+double Outlier::z() const { return (grad - fd) / std::max(1e-300, std::hypot(grad_se, fd_se)); }
 
-/// Statistics of one grad-vs-FD comparison (see the file comment).
-struct Agreement {
-  int res = 0, grad_spp = 0, fd_spp = 0;
-  double h = 0;
-  ImageSum grad, fd, interior;   ///< image sums (interior: --boundary none, same seed as grad)
-  double sum_se = 0;             ///< combined standard error of the sums
-  double pixel_fraction_within_4se = 0;
-  int pixel_channels = 0, pixel_channels_outside = 0;
-  /// The same fraction over the pixel-channels FD resolved (its estimate or its standard error is
-  /// non-zero): where every FD sample pair saw the same path, 0 +- 0 is no oracle.
-  double resolved_fraction_within_4se = 0;
-  int resolved_pixel_channels = 0;
-  /// Fraction of pixel-channels where FD is clearly non-zero (|fd| > 4 se): the test has signal.
-  double fd_signal_fraction = 0;
-  std::vector<Outlier> worst;    ///< the largest |z| first (up to 8)
-  double grad_seconds = 0, fd_seconds = 0, interior_seconds = 0;
-  GradientReport report;
-  uint64_t nonfinite = 0;
-  double sum_z() const { return (grad.sum - fd.sum) / std::max(1e-300, sum_se); }
-  bool sums_agree() const { return std::abs(grad.sum - fd.sum) <= 3 * sum_se; }
-  bool pixels_agree() const { return pixel_fraction_within_4se >= 0.98; }
-};
+double Agreement::sum_z() const { return (grad.sum - fd.sum) / std::max(1e-300, sum_se); }
+bool Agreement::sums_agree() const { return std::abs(grad.sum - fd.sum) <= 3 * sum_se; }
+bool Agreement::pixels_agree() const { return pixel_fraction_within_4se >= 0.98; }
 
-/// Compares films of the same layout (one parameter): grad (and optionally the interior term)
-/// against FD.
-inline Agreement compare(const RenderResult& g, const RenderResult& f, const RenderResult* interior) {
+Agreement compare(const RenderResult& g, const RenderResult& f, const RenderResult* interior) {
   Agreement a;
   std::vector<Outlier> all;
   for (int y = 0; y < g.film.height(); ++y)
@@ -147,15 +98,8 @@ inline Agreement compare(const RenderResult& g, const RenderResult& f, const Ren
   return a;
 }
 
-/// The rendered films of a comparison (kept for localisation: per-pixel dumps).
-struct Films {
-  RenderResult grad, fd, interior;
-};
-
-/// Renders grad (seed 21), FD (seed 22: independent of grad) and optionally the interior term
-/// alone (seed 21) of a case, and compares them.
-inline Agreement run(const Case& c, int res, int grad_spp, int fd_spp, double h, bool with_interior,
-                     int threads = 0, Films* keep = nullptr) {
+Agreement run(const Case& c, int res, int grad_spp, int fd_spp, double h, bool with_interior, int threads,
+              Films* keep) {
   const Scene scene = load_case(c, res, grad_spp);
   const std::vector<ParameterSpec> params{parse_parameter(c.param, scene)};
   RenderOptions o;
@@ -188,10 +132,11 @@ inline Agreement run(const Case& c, int res, int grad_spp, int fd_spp, double h,
   return a;
 }
 
-/// Per-pixel-channel values as CSV (x,y,c,primal,grad,grad_se,fd,fd_se,interior) for localisation.
-inline void write_csv(const std::string& path, const Films& films) {
-  FILE* out = std::fopen(path.c_str(), "w");
-  if (!out) throw std::runtime_error("cannot write " + path);
+void write_csv(const std::string& path, const Films& films) {
+  // Written to a temporary name beside the target and renamed: the file is whole or absent.
+  const std::string tmp = path + ".tmp" + std::to_string(::getpid());
+  FILE* out = std::fopen(tmp.c_str(), "w");
+  if (!out) throw Error(path + ": cannot write");
   std::fprintf(out, "x,y,c,primal,grad,grad_se,fd,fd_se,interior\n");
   const Film& g = films.grad.film;
   const bool has_interior = films.interior.film.width() == g.width();
@@ -201,11 +146,17 @@ inline void write_csv(const std::string& path, const Films& films) {
         std::fprintf(out, "%d,%d,%d,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g\n", x, y, c, g.mean(c, x, y), g.mean(3 + c, x, y), g.standard_error(3 + c, x, y),
                      films.fd.film.mean(3 + c, x, y), films.fd.film.standard_error(3 + c, x, y),
                      has_interior ? films.interior.film.mean(3 + c, x, y) : 0.0);
+  const bool ok = std::fflush(out) == 0 && !std::ferror(out);
   std::fclose(out);
+  std::error_code ec;
+  if (ok) std::filesystem::rename(tmp, path, ec);
+  if (!ok || ec) {
+    std::filesystem::remove(tmp, ec);
+    throw Error(path + ": cannot write");
+  }
 }
 
-/// Prints the statistics of a comparison (the same lines in the tests and the tool).
-inline std::string describe(const std::string& name, const Agreement& a) {
+std::string describe(const std::string& name, const Agreement& a) {
   char buf[512];
   std::string s;
   std::snprintf(buf, sizeof buf,
