@@ -23,7 +23,7 @@ namespace qsil::edgetree {
 /// - Concave: interior dihedral angle > pi; never a silhouette of a closed opaque mesh seen from
 ///   outside [QSS 4.1, Table 2]; culled unless EdgeOptions::keep_concave.
 /// - Flat: the exterior bend angle (angle between the two outward normals) is below
-///   kFlatAngle = 1e-4 rad (the criterion of ../shared/meshes/README.md); culled.
+///   kFlatAngle = 1e-4 rad (the criterion of tests/data/meshes/README.md); culled.
 /// - Boundary: exactly one adjacent face; a discontinuity for every shading point.
 /// - NonManifold: more than two adjacent faces; reported and treated as boundary.
 /// - Inconsistent: two faces that traverse the edge in the same direction (inconsistent winding);

@@ -20,13 +20,15 @@ struct CliRun {
   std::string out;  ///< stdout
 };
 
-/// Runs `qsil ARGS` from the repository root, capturing stdout and stderr.
+/// Runs `qsil ARGS` from the repository root (QSIL_SOURCE_DIR, whatever ctest's working
+/// directory), capturing stdout and stderr.
 CliRun run_qsil(const std::string& args) {
   const auto dir = std::filesystem::temp_directory_path();
   // Per-process names: ctest runs tests of this file in parallel processes.
   const std::string id = std::to_string(::getpid());
   const auto err = dir / ("qsil_cli_test" + id + ".err"), out = dir / ("qsil_cli_test" + id + ".out");
-  const std::string cmd = std::string(QSIL_CLI_PATH) + " " + args + " >" + out.string() + " 2>" + err.string();
+  const std::string cmd = "cd '" + std::string(QSIL_SOURCE_DIR) + "' && " + std::string(QSIL_CLI_PATH) + " " + args +
+                          " >" + out.string() + " 2>" + err.string();
   const int status = std::system(cmd.c_str());
   CliRun r;
   r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;

@@ -1,7 +1,7 @@
 /// @file environment_light_test.cpp
 /// Tests of the environment emitter (include/qsil/environment_light.h): the Mitsuba 3 `envmap`
 /// uv convention, lookup, importance sampling (chi-square, normalisation, eval/pdf consistency)
-/// on a small synthetic map and on ../shared/envmaps/sunset.exr (1024 x 512, a sun near the
+/// on a small synthetic map and on scenes/stability/envmaps/sunset.exr (1024 x 512, a sun near the
 /// horizon), and the constant / none cases.
 ///
 /// Expected counts integrate pdf(direction) in solid angle with a midpoint rule of 2 x 2 (sunset)
@@ -17,6 +17,7 @@
 #include "qsil/image.h"
 
 #include "chi2.h"
+#include "test_data.h"
 
 #include <gtest/gtest.h>
 
@@ -80,7 +81,7 @@ Environment synthetic_env() {
 Environment load_sunset() {
   Environment env;
   env.type = Environment::Type::EnvMap;
-  env.filename = "../shared/envmaps/sunset.exr";
+  env.filename = test::data_file("scenes/stability/envmaps/sunset.exr");
   env.texels = read_exr(env.filename);
   env.scale = 2.0;
   env.to_world = some_rotation();
@@ -223,8 +224,6 @@ TEST(EnvironmentLightSampling, SyntheticMap) {
 }
 
 TEST(EnvironmentLightSampling, SunsetExr) {
-  const std::filesystem::path path = "../shared/envmaps/sunset.exr";
-  ASSERT_TRUE(std::filesystem::exists(path)) << "run the tests from the repository root";
   const Environment env = load_sunset();
   ASSERT_EQ(env.texels.width, 1024);
   ASSERT_EQ(env.texels.height, 512);

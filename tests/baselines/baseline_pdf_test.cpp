@@ -38,7 +38,7 @@ struct World {
 
 std::unique_ptr<World> make_world() {
   auto w = std::make_unique<World>();
-  w->meshes.push_back(shared_mesh("spot.obj"));
+  w->meshes.push_back(test_mesh("spot.obj"));
   TriangleMesh cube = make_cube(3);
   for (auto& p : cube.positions) p = 0.3 * p + Vec3(1.2, 0.2, -0.3);
   w->meshes.push_back(cube);

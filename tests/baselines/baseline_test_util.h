@@ -6,6 +6,7 @@
 
 #include "qsil/scene.h"
 #include "soundness_set.h"
+#include "test_data.h"
 
 #include <cmath>
 #include <random>
@@ -17,7 +18,8 @@ namespace qsil::baselines_test {
 using test::make_cube;
 using test::shading_points;
 
-inline TriangleMesh shared_mesh(const std::string& name) { return load_obj("../shared/meshes/" + name); }
+/// A test mesh by file name (test_data.h: a missing file fails the test with its path).
+inline TriangleMesh test_mesh(const std::string& name) { return load_obj(test::mesh_file(name)); }
 
 /// A camera-like Hough origin: 2 diagonals from the mesh centre along a fixed oblique direction.
 inline Vec3 camera_like_origin(const TriangleMesh& m) {

@@ -65,8 +65,10 @@ void check_patch(PatchKind kind, const Vec3& centre, std::initializer_list<doubl
 TEST(Slices, SpherePatchSoundAndNested) { check_patch(PatchKind::Sphere, Vec3(0, 0, 0), {0.9, 2.0, 0.5}); }
 TEST(Slices, TorusPatchSoundAndNested) { check_patch(PatchKind::Torus, Vec3(0.7, 0.7, 0), {1.5, 2.5, 0.1}); }
 
+// Runs `qsil ARGS` from the repository root (scene paths are relative to it); returns the exit code.
 int run(const std::string& args) {
-  const std::string cmd = std::string(QSIL_CLI_PATH) + " " + args + " > /dev/null 2>&1";
+  const std::string cmd =
+      "cd '" + std::string(QSIL_SOURCE_DIR) + "' && " + std::string(QSIL_CLI_PATH) + " " + args + " > /dev/null 2>&1";
   const int rc = std::system(cmd.c_str());
   return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
 }

@@ -89,15 +89,15 @@ void expect_sound(const TriangleMesh& mesh, int npoints, unsigned seed, const st
   }
 }
 
-TEST(BaselineSoundness, VSphereSpot) { expect_sound(shared_mesh("spot.obj"), 1000, 21, "spot"); }
-TEST(BaselineSoundness, VSphereTorus) { expect_sound(shared_mesh("torus.obj"), 1000, 22, "torus"); }
-TEST(BaselineSoundness, VSphereBunny) { expect_sound(shared_mesh("bunny.obj"), 600, 23, "bunny"); }
+TEST(BaselineSoundness, VSphereSpot) { expect_sound(test_mesh("spot.obj"), 1000, 21, "spot"); }
+TEST(BaselineSoundness, VSphereTorus) { expect_sound(test_mesh("torus.obj"), 1000, 22, "torus"); }
+TEST(BaselineSoundness, VSphereBunny) { expect_sound(test_mesh("bunny.obj"), 600, 23, "bunny"); }
 TEST(BaselineSoundness, VSphereCube) { expect_sound(make_cube(8), 1000, 24, "cube", false); }
 TEST(BaselineSoundness, VSphereTranslatedAndScaled) {
-  TriangleMesh m = shared_mesh("spot.obj");
+  TriangleMesh m = test_mesh("spot.obj");
   for (auto& p : m.positions) p = p + Vec3(1e4, -1e4, 1e4);
   expect_sound(m, 400, 25, "spot+1e4");
-  TriangleMesh s = shared_mesh("torus.obj");
+  TriangleMesh s = test_mesh("torus.obj");
   for (auto& p : s.positions) p = p * 1e-4;
   expect_sound(s, 400, 26, "torus*1e-4");
 }

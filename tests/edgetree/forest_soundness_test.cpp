@@ -17,6 +17,7 @@
 #include <gtest/gtest.h>
 
 #include "soundness_set.h"
+#include "test_data.h"
 #include <tbb/parallel_for.h>
 
 #include <atomic>
@@ -120,9 +121,8 @@ void expect_sound(const TriangleMesh& mesh, int npoints, unsigned seed, const st
               r.no_sil ? double(r.accepts_no_sil_box) / r.no_sil : 0.0);
 }
 
-TriangleMesh mesh_file(const char* name) {
-  return load_obj(std::string("../shared/meshes/") + name);
-}
+// A test mesh by file name (test_data.h: a missing file fails the test with its path).
+TriangleMesh mesh_file(const char* name) { return load_obj(test::mesh_file(name)); }
 
 // ---- quick suite (1e4 points per mesh)
 

@@ -1,15 +1,17 @@
 /// @file mesh_edges_test.cpp
-/// Edge extraction and classification: counts per class must equal the table of
-/// ../shared/meshes/README.md exactly (DESIGN.md §5 "Edges").
+/// Edge extraction and classification: counts per class must equal the edge statistics table of
+/// tests/data/meshes/README.md exactly (DESIGN.md §5 "Edges").
 
 #include "edgetree/mesh_edges.h"
 #include "qsil/scene.h"
+#include "test_data.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <fstream>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 
 namespace qsil::edgetree {
@@ -25,9 +27,10 @@ struct MeshCounts {
 // near-flat edges (bend ~1e-4) flip class if the coordinates are rounded to float, which
 // load_obj() currently does (tinyobjloader without TINYOBJLOADER_USE_DOUBLE): bob and teapot then
 // differ by 2-3 edges.
+// Throws std::runtime_error naming the file when it cannot be read (a test failure, not a crash).
 TriangleMesh read_obj_double(const std::string& path) {
   std::ifstream in(path);
-  EXPECT_TRUE(in.good()) << path;
+  if (!in.good()) throw std::runtime_error("cannot read test mesh " + path);
   TriangleMesh m;
   std::string line;
   while (std::getline(in, line)) {
@@ -51,8 +54,10 @@ class EdgeClassification : public ::testing::TestWithParam<MeshCounts> {};
 
 TEST_P(EdgeClassification, MatchesMeshReadme) {
   const MeshCounts c = GetParam();
-  const TriangleMesh mesh = read_obj_double(std::string("../shared/meshes/") + c.file);
+  const TriangleMesh mesh = read_obj_double(test::mesh_file(c.file));
+  ASSERT_GT(mesh.num_triangles(), 0) << c.file << ": no faces read";
   const MeshEdgeSet set = build_mesh_edges(mesh);
+  ASSERT_FALSE(set.edges.empty()) << c.file;
   EXPECT_EQ(int(set.edges.size()), c.E);
   EXPECT_EQ(set.count(EdgeClass::Convex), c.convex);
   EXPECT_EQ(set.count(EdgeClass::Concave), c.concave);

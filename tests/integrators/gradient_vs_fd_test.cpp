@@ -8,6 +8,7 @@
 // resolution; its output is docs/gradient-checks.md. The whole file runs in a few seconds.
 #include "integrators/gradient_check.h"
 #include "qsil/scene.h"
+#include "test_data.h"
 
 #include <gtest/gtest.h>
 
@@ -116,7 +117,8 @@ TEST(GradientVsFD, ShadowQuadPenumbraOnAStaticFloor) {
 // from the boundary term alone. Each region's image sum must have the expected sign by more than
 // 5 standard errors (a sign error flips both), and at least 90% of its pixels must agree.
 TEST(GradientSign, OccluderMovedTowardTheLightsSideDarkensThePenumbraOnThatSide) {
-  const Scene scene = load_scene("tests/data/gradient/penumbra-sign.xml", {{"res", "32"}, {"spp", "64"}});
+  const Scene scene =
+      load_scene(test::data_file("tests/data/gradient/penumbra-sign.xml"), {{"res", "32"}, {"spp", "64"}});
   const std::vector<ParameterSpec> params{parse_parameter("occluder:translate:1,0,0", scene)};
   RenderOptions o;
   o.progress = false;

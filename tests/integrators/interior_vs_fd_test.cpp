@@ -4,6 +4,7 @@
 // least 99% of pixels, and the image sum within 3 combined standard errors. Fixed seeds.
 #include "integrators/render.h"
 #include "qsil/image.h"
+#include "test_data.h"
 #include "test_scenes.h"
 
 #include <gtest/gtest.h>
@@ -29,7 +30,7 @@ Scene plane_scene(BSDFDesc::Type type, double alpha) {
   plane.bsdf = 0;
   s.shapes.push_back(plane);
   s.environment.type = Environment::Type::EnvMap;
-  s.environment.filename = "../shared/envmaps/studio.exr";
+  s.environment.filename = test::data_file("tests/data/envmaps/studio.exr");
   s.environment.texels = read_exr(s.environment.filename);
   s.camera = test::look_at(Vec3(0, 2, 3), Vec3(0, 0, 0), 40, 24, 24, 32);
   s.max_depth = 3;

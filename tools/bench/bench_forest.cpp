@@ -1,6 +1,8 @@
 /// @file bench_forest.cpp
-/// Edge forest benchmark (DESIGN.md §11), a table printer: for each mesh of ../shared/meshes
-/// (run from the repository root): edges before/after culling, nodes, unrejectable and box-only
+/// Edge forest benchmark (DESIGN.md §11), a table printer: for each OBJ given on the
+/// command line, or without arguments for the six test meshes of tests/data/meshes/README.md
+/// (paths relative to the repository root, so run it from there): edges before/after culling,
+/// nodes, unrejectable and box-only
 /// inner nodes, build time with 1 and 2 threads (best of 5), bytes per edge, rejection tests per
 /// second (quadric and box, inner nodes x random points in a box 3x the mesh's size, one thread),
 /// and the false-accept rate (fraction of accepted inner nodes whose patch has no silhouette) of
@@ -14,8 +16,10 @@
 
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
 #include <random>
 #include <string>
+#include <vector>
 
 using namespace qsil;
 using namespace qsil::edgetree;
@@ -36,13 +40,25 @@ double best_build(const TriangleMesh& m, int threads, EdgeForest* out) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  const std::string dir = argc > 1 ? argv[1] : "../shared/meshes";
-  const char* meshes[] = {"spot", "bob", "bunny", "torus", "teapot", "wingnut"};
+  std::vector<std::string> meshes;
+  for (int i = 1; i < argc; ++i) meshes.emplace_back(argv[i]);
+  if (meshes.empty())
+    meshes = {"scenes/meshes/spot.obj",          "tests/data/meshes/bob.obj",
+              "scenes/meshes/bunny.obj",         "tests/data/meshes/torus.obj",
+              "scenes/stability/meshes/teapot.obj", "scenes/stability/meshes/wingnut.obj"};
   std::printf("%-8s %6s %6s %6s %6s %5s %5s %8s %8s %7s %9s %9s %7s %7s\n", "mesh", "edges", "kept",
               "nodes", "inner", "unrej", "boxo", "build1s", "build2s", "B/edge", "quad/s", "box/s",
               "FA-quad", "FA-box");
-  for (const char* name : meshes) {
-    const TriangleMesh m = load_obj(dir + "/" + name + ".obj");
+  for (const std::string& path : meshes) {
+    TriangleMesh m;
+    try {
+      m = load_obj(path);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "bench_forest: %s\n", e.what());
+      return 2;
+    }
+    const std::string stem = std::filesystem::path(path).stem().string();
+    const char* name = stem.c_str();
     EdgeForest f;
     const double t1 = best_build(m, 1, &f);
     const double t2 = best_build(m, 2, nullptr);
