@@ -1,7 +1,7 @@
-#!/usr/bin/python3
+#!/usr/bin/env python3
 """Labelled grid of `qsil candidates` pictures ([QSS] Fig. 8): rows = views, columns = methods.
 
-Usage: /usr/bin/python3 tools/candidates_grid.py DIR/summary.json OUT.png
+Usage: python3 tools/candidates_grid.py DIR/summary.json OUT.png
 Reads the summary written by `qsil candidates` and the PNGs next to it (Debian's python3-matplotlib).
 """
 import json

@@ -5,11 +5,20 @@
 
 #include "qsil/error.h"
 
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <cmath>
 #include <iostream>
+#include <vector>
+
+extern char** environ;
 
 namespace qsil::cli {
 
@@ -98,6 +107,55 @@ void add_render_attributes(Image& image, const CommonFlags& flags, const RenderR
 void report_nonfinite(const RenderResult& r) {
   if (r.nonfinite > 0)
     std::cerr << "warning: " << r.nonfinite << " sample(s) had a non-finite value and were replaced by 0\n";
+}
+
+void add_scripts_dir_option(CLI::App& app, std::string& scripts_dir) {
+  app.add_option("--scripts-dir", scripts_dir,
+                 "Directory of the chart scripts (default: $QSIL_SCRIPTS_DIR, else share/qsil beside or above "
+                 "the executable)");
+}
+
+std::filesystem::path find_script(const std::string& name, const std::string& scripts_dir) {
+  namespace fs = std::filesystem;
+  std::vector<fs::path> dirs;
+  if (!scripts_dir.empty()) dirs.emplace_back(scripts_dir);
+  if (const char* env = std::getenv("QSIL_SCRIPTS_DIR"); env && *env) dirs.emplace_back(env);
+  std::error_code ec;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  if (!ec) {
+    dirs.push_back(exe.parent_path() / "share" / "qsil");
+    dirs.push_back(exe.parent_path().parent_path() / "share" / "qsil");
+  }
+  for (const fs::path& d : dirs)
+    if (fs::is_regular_file(d / name, ec)) return d / name;
+  return {};
+}
+
+int run_python_script(const std::string& who, const std::string& name, const std::vector<std::string>& args,
+                      const std::string& scripts_dir) {
+  const std::filesystem::path script = find_script(name, scripts_dir);
+  if (script.empty()) {
+    std::cerr << who << ": warning: " << name << " not found (give --scripts-dir or set QSIL_SCRIPTS_DIR)\n";
+    return -1;
+  }
+  std::vector<std::string> words{"python3", script.string()};
+  words.insert(words.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (std::string& w : words) argv.push_back(w.data());
+  argv.push_back(nullptr);
+  std::fflush(stdout);
+  std::fflush(stderr);
+  pid_t pid = 0;
+  if (posix_spawnp(&pid, "python3", nullptr, nullptr, argv.data(), environ) != 0) {
+    std::cerr << who << ": warning: cannot run python3 (not on PATH?) for " << script.string() << "\n";
+    return -1;
+  }
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0)
+    if (errno != EINTR) return -1;
+  const int code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  if (code != 0) std::cerr << who << ": warning: python3 " << script.string() << " failed (exit " << code << ")\n";
+  return code;
 }
 
 }  // namespace qsil::cli

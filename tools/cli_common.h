@@ -10,6 +10,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include <filesystem>
 #include <map>
 #include <string>
 #include <vector>
@@ -45,6 +46,24 @@ void add_render_attributes(Image& image, const CommonFlags& flags, const RenderR
 
 /// Prints a warning line if samples were non-finite (they were replaced by 0).
 void report_nonfinite(const RenderResult& r);
+
+/// Adds `--scripts-dir DIR` (where the chart scripts are, see find_script) to `app`.
+void add_scripts_dir_option(CLI::App& app, std::string& scripts_dir);
+
+/// The chart script `name` (e.g. "plot_compare.py"), looked up in this order, independent of the
+/// working directory and of where the source tree was: `scripts_dir` (--scripts-dir) if
+/// non-empty, the environment variable QSIL_SCRIPTS_DIR if set, `<exe_dir>/share/qsil` (the build
+/// tree: CMake copies tools/*.py there) and `<exe_dir>/../share/qsil` (an installed layout:
+/// bin/qsil and share/qsil/*.py), where exe_dir is the directory of the running executable
+/// (/proc/self/exe). Returns an empty path if no candidate directory holds the file.
+std::filesystem::path find_script(const std::string& name, const std::string& scripts_dir);
+
+/// Runs `python3 SCRIPT ARGS...` (python3 found on PATH, arguments passed without a shell) with
+/// the script located by find_script, and waits for it. Returns its exit code; -1 with a warning
+/// line on stderr (prefixed by `who`) when the script is not found, python3 cannot be started or
+/// the script fails.
+int run_python_script(const std::string& who, const std::string& name, const std::vector<std::string>& args,
+                      const std::string& scripts_dir);
 
 }  // namespace qsil::cli
 

@@ -24,6 +24,7 @@
 /// shading point black with its normal; DIR/<method>-edges.obj: the candidate line sets and the
 /// point for external viewers; DIR/grid.png: labelled by tools/candidates_grid.py (matplotlib).
 
+#include "cli_common.h"
 #include "cli_wireframe.h"
 #include "commands.h"
 #include "edgetree/edge_forest.h"
@@ -61,6 +62,7 @@ struct CandidatesFlags {
   int size = 768;
   std::string out_dir;
   bool no_grid = false;
+  std::string scripts_dir;
 };
 
 /// Exhaustive traversal of the quadric forest: accepted children down to the leaves, whose
@@ -286,11 +288,9 @@ int run_candidates(const CandidatesFlags& f) {
   write_text(dir / "summary.json", js.str());
   write_text(dir / "summary.csv", csv.str());
   if (!f.no_grid) {
-    const std::string script = std::string(QSIL_SOURCE_DIR) + "/tools/candidates_grid.py";
-    const std::string cmd = "/usr/bin/python3 '" + script + "' '" + (dir / "summary.json").string() + "' '" +
-                            (dir / "grid.png").string() + "'";
-    if (std::system(cmd.c_str()) != 0)
-      std::fprintf(stderr, "candidates: warning: the grid image was not drawn (%s failed)\n", cmd.c_str());
+    if (run_python_script("candidates", "candidates_grid.py", {(dir / "summary.json").string(), (dir / "grid.png").string()},
+                          f.scripts_dir) != 0)
+      std::fprintf(stderr, "candidates: warning: the grid image was not drawn\n");
   }
   std::printf("candidates: %s at %s, p = (%.4f, %.4f, %.4f), %lld true silhouettes (%lld upper) -> %s\n",
               f.scene.c_str(), where.c_str(), p.x(), p.y(), p.z(), truth_sil, truth_upper, dir.string().c_str());
@@ -310,6 +310,7 @@ const CommandRegistrar registrar{{"candidates", "Edges each method can sample fr
     app.add_option("--size", f->size, "Larger side of the pictures in pixels")->capture_default_str();
     app.add_option("--out-dir", f->out_dir, "Output directory (default out/candidates)");
     app.add_flag("--no-grid", f->no_grid, "Skip the labelled grid image (no Python)");
+    add_scripts_dir_option(app, f->scripts_dir);
     return [f] { return run_candidates(*f); };
   }}};
 

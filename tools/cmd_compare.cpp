@@ -97,6 +97,7 @@ const CommandRegistrar registrar{{"compare", "Equal-time comparison of gradient 
       std::string out;
       double reference_factor = 8;
       bool no_plot = false;
+      std::string scripts_dir;
     };
     auto flags = std::make_shared<Flags>();
     app.add_option("scene", flags->scene, "Scene file (Mitsuba 3 XML subset)")->required();
@@ -131,7 +132,8 @@ const CommandRegistrar registrar{{"compare", "Equal-time comparison of gradient 
         ->capture_default_str()
         ->check(CLI::PositiveNumber);
     app.add_option("--out", flags->out, "Output directory")->required();
-    app.add_flag("--no-plot", flags->no_plot, "Do not call tools/plot_compare.py");
+    app.add_flag("--no-plot", flags->no_plot, "Do not call plot_compare.py (the charts)");
+    add_scripts_dir_option(app, flags->scripts_dir);
     return [flags]() {
       // ---- inputs
       if (flags->budgets.empty() == flags->spp_list.empty()) throw Error("give exactly one of --budgets and --spp-list");
@@ -320,14 +322,10 @@ const CommandRegistrar registrar{{"compare", "Equal-time comparison of gradient 
                       r.err.nonfinite_pixels);
       std::fflush(stdout);
 
-      // ---- charts (matplotlib, Debian's python3)
-      if (!flags->no_plot) {
-        const std::string cmd = "/usr/bin/python3 '" + std::string(QSIL_SOURCE_DIR) + "/tools/plot_compare.py' '" +
-                                fs::absolute(out).string() + "'";
-        if (std::system(cmd.c_str()) != 0) {
-          std::cerr << "warning: " << cmd << " failed; results.csv and results.json are written\n";
-          return 1;
-        }
+      // ---- charts (matplotlib, Debian's python3 found on PATH)
+      if (!flags->no_plot && run_python_script("compare", "plot_compare.py", {out.string()}, flags->scripts_dir) != 0) {
+        std::cerr << "warning: the charts were not drawn; results.csv and results.json are written\n";
+        return 1;
       }
       return 0;
     };

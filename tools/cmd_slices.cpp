@@ -15,6 +15,7 @@
 /// false rejects). A false reject is a soundness bug: it gets its own colour, an error line and
 /// exit code 1.
 
+#include "cli_common.h"
 #include "commands.h"
 #include "edgetree/canonical_patch.h"
 #include "edgetree/edge_forest.h"
@@ -52,6 +53,7 @@ struct SlicesFlags {
   int resolution = 256;
   std::string out_dir;
   bool no_grid = false;
+  std::string scripts_dir;
 };
 
 Vec3 vec3_of(const std::vector<double>& v, const char* flag) {
@@ -195,11 +197,9 @@ int run_slices(const SlicesFlags& f) {
                  "them in a plain tree and accept every point\n", tests.origin_silhouettes());
   // ---- The labelled grid (matplotlib from Debian's python3; the C++ side draws no text).
   if (!f.no_grid) {
-    const std::string script = std::string(QSIL_SOURCE_DIR) + "/tools/slices_grid.py";
-    const std::string cmd = "/usr/bin/python3 '" + script + "' '" + (dir / "summary.json").string() + "' '" +
-                            (dir / "grid.png").string() + "'";
-    if (std::system(cmd.c_str()) != 0)
-      std::fprintf(stderr, "slices: warning: the grid image was not drawn (%s failed)\n", cmd.c_str());
+    if (run_python_script("slices", "slices_grid.py", {(dir / "summary.json").string(), (dir / "grid.png").string()},
+                          f.scripts_dir) != 0)
+      std::fprintf(stderr, "slices: warning: the grid image was not drawn\n");
   }
   std::printf("slices: %s, %d edges, %dx%d points per plane -> %s\n", label.c_str(), tests.num_edges(), N, N,
               dir.string().c_str());
@@ -226,6 +226,7 @@ const CommandRegistrar registrar{{"slices", "False accepts of four rejection tes
     app.add_option("--resolution", f->resolution, "Points per side")->capture_default_str();
     app.add_option("--out-dir", f->out_dir, "Output directory (default out/slices-<patch>)");
     app.add_flag("--no-grid", f->no_grid, "Skip the labelled grid image (no Python)");
+    add_scripts_dir_option(app, f->scripts_dir);
     return [f] { return run_slices(*f); };
   }}};
 

@@ -1,7 +1,7 @@
-#!/usr/bin/python3
+#!/usr/bin/env python3
 """Charts of a `qsil compare` run (Debian's python3 with python3-matplotlib and numpy).
 
-Usage: /usr/bin/python3 tools/plot_compare.py DIR [--title TEXT]
+Usage: python3 tools/plot_compare.py DIR [--title TEXT]
 
 Reads DIR/results.json (and DIR/images/*.npy) and writes
   DIR/error_vs_time.png  relative MSE against wall time (or spp), log-log, one line per method,

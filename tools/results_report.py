@@ -1,8 +1,8 @@
-#!/usr/bin/python3
+#!/usr/bin/env python3
 """Regenerates docs/results.md: equal-time comparisons of the gradient methods on spot-mirror,
 shadow-quad and direct (charts in docs/images/compare/<scene>/).
 
-Usage: /usr/bin/python3 tools/results_report.py [--qsil PATH] [--budgets 0.5,1,2] [--res 64]
+Usage: python3 tools/results_report.py [--qsil PATH] [--budgets 0.5,1,2] [--res 64]
        [--ref-spp 256] [--threads 2]
 
 For each scene: `qsil reference --method quadric` at --ref-spp, then `qsil compare` with

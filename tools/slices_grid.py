@@ -1,7 +1,7 @@
-#!/usr/bin/python3
+#!/usr/bin/env python3
 """Labelled grid of `qsil slices` images ([QSS] Fig. 7): rows = planes, columns = tests.
 
-Usage: /usr/bin/python3 tools/slices_grid.py DIR/summary.json OUT.png
+Usage: python3 tools/slices_grid.py DIR/summary.json OUT.png
 Reads the summary written by `qsil slices` and the PNGs next to it (Debian's python3-matplotlib).
 """
 import json

@@ -1,8 +1,8 @@
-#!/usr/bin/python3
+#!/usr/bin/env python3
 """Stability study: every gradient method at equal (small) time on scenes/stability/*.xml, where
 methods are known or expected to fail; writes docs/stability.md and docs/images/stability/.
 
-Usage: /usr/bin/python3 tools/stability_study.py [--qsil PATH] [--budget 1] [--res 48]
+Usage: python3 tools/stability_study.py [--qsil PATH] [--budget 1] [--res 48]
        [--ref-spp 128] [--threads 2] [--only NAME,...]
 
 Per scene (scenes/stability/params.txt lists name, parameter, question): an FD reference
