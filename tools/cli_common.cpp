@@ -109,6 +109,14 @@ void report_nonfinite(const RenderResult& r) {
     std::cerr << "warning: " << r.nonfinite << " sample(s) had a non-finite value and were replaced by 0\n";
 }
 
+std::string portable_path(const std::string& path) {
+  const std::filesystem::path p(path);
+  std::error_code ec;
+  const std::filesystem::path cwd = std::filesystem::current_path(ec);
+  if (!p.is_absolute() || ec) return p.lexically_normal().string();
+  return p.lexically_proximate(cwd).string();
+}
+
 void add_scripts_dir_option(CLI::App& app, std::string& scripts_dir) {
   app.add_option("--scripts-dir", scripts_dir,
                  "Directory of the chart scripts (default: $QSIL_SCRIPTS_DIR, else share/qsil beside or above "

@@ -47,6 +47,11 @@ void add_render_attributes(Image& image, const CommonFlags& flags, const RenderR
 /// Prints a warning line if samples were non-finite (they were replaced by 0).
 void report_nonfinite(const RenderResult& r);
 
+/// A path as written into generated CSV/JSON files: an absolute path becomes relative to the
+/// working directory (the repository root when run from there; `..` steps where needed), a
+/// relative one is kept (normalised), so the files do not carry one machine's absolute paths.
+std::string portable_path(const std::string& path);
+
 /// Adds `--scripts-dir DIR` (where the chart scripts are, see find_script) to `app`.
 void add_scripts_dir_option(CLI::App& app, std::string& scripts_dir);
 

@@ -268,7 +268,7 @@ int run_candidates(const CandidatesFlags& f) {
   std::ostringstream js, csv;
   js.precision(9);
   csv.precision(9);
-  js << "{\n  \"scene\": \"" << f.scene << "\",\n  \"where\": \"" << where << "\",\n  \"shading_point\": [" << p.x()
+  js << "{\n  \"scene\": \"" << portable_path(f.scene) << "\",\n  \"where\": \"" << where << "\",\n  \"shading_point\": [" << p.x()
      << ", " << p.y() << ", " << p.z() << "],\n  \"normal\": [" << n.x() << ", " << n.y() << ", " << n.z()
      << "],\n  \"shape\": \"" << (shape >= 0 ? scene.shapes[size_t(shape)].id : std::string()) << "\",\n"
      << "  \"true_silhouettes\": " << truth_sil << ",\n  \"true_silhouettes_upper\": " << truth_upper

@@ -261,7 +261,7 @@ const CommandRegistrar registrar{{"compare", "Equal-time comparison of gradient 
       csv << "scene,param,method,mode,target,order,wall_seconds,spp,passes,mse,rel_mse,sum,sum_se,sum_ref,sum_ref_se,"
              "sum_error,nonfinite_pixels,nonfinite_samples,zero_contribution_rate,traversals,noise_floor,rel_noise_floor\n";
       for (const Row& r : rows)
-        csv << csv_field(flags->scene) << ',' << csv_field(params[0].text) << ',' << r.method << ',' << (equal_time ? "time" : "spp") << ','
+        csv << csv_field(portable_path(flags->scene)) << ',' << csv_field(params[0].text) << ',' << r.method << ',' << (equal_time ? "time" : "spp") << ','
             << num(r.target) << ',' << r.order << ',' << num(r.run.wall_seconds) << ',' << r.run.result.spp << ','
             << r.run.passes << ',' << num(r.err.mse) << ',' << num(r.err.rel_mse) << ',' << num(r.err.sum[0]) << ','
             << num(r.err.sum_se[0]) << ',' << num(ref.sum[0]) << ',' << num(ref.sum_se[0]) << ','
@@ -271,7 +271,7 @@ const CommandRegistrar registrar{{"compare", "Equal-time comparison of gradient 
       write_text_atomic(out / "results.csv", csv.str());
 
       std::ostringstream js;
-      js << "{\n  \"scene\": " << json_string(flags->scene) << ",\n  \"defines\": [";
+      js << "{\n  \"scene\": " << json_string(portable_path(flags->scene)) << ",\n  \"defines\": [";
       for (size_t i = 0; i < flags->defines.size(); ++i) js << (i ? ", " : "") << json_string(flags->defines[i]);
       js << "],\n  \"params\": [";
       for (int k = 0; k < K; ++k) js << (k ? ", " : "") << json_string(params[k].text);
@@ -284,7 +284,7 @@ const CommandRegistrar registrar{{"compare", "Equal-time comparison of gradient 
       js << "],\n  \"resolution\": [" << width << ", " << height << "],\n  \"machine\": {\"cpu\": "
          << json_string(cpu_model()) << ", \"hardware_threads\": " << std::thread::hardware_concurrency()
          << ", \"threads\": " << flags->render.threads << "},\n  \"reference\": {\"path\": "
-         << json_string(fs::absolute(ref_path).string()) << ", \"description\": " << json_string(ref_desc)
+         << json_string(portable_path(ref_path)) << ", \"description\": " << json_string(ref_desc)
          << ", \"noise_floor\": " << num(ref.noise_floor) << ", \"mean_sq\": " << num(ref.mean_sq)
          << ", \"rel_noise_floor\": " << num(ref.noise_floor / ref.mean_sq) << ", \"sum\": [";
       for (int k = 0; k < K; ++k) js << (k ? ", " : "") << num(ref.sum[k]);

@@ -7,7 +7,8 @@ Usage: python3 tools/results_report.py [--qsil PATH] [--budgets 0.5,1,2] [--res 
 
 For each scene: `qsil reference --method quadric` at --ref-spp, then `qsil compare` with
 quadric, quadric-box, vsphere, uniform and fd at each budget (methods interleaved), whose
-plot_compare.py draws the charts. Whole run: a few minutes on 2 cores.
+plot_compare.py draws the charts. Whole run: a few minutes on 2 cores. qsil runs in the
+repository root with repository-relative paths, so results.csv/json carry no absolute paths.
 """
 import argparse
 import json
@@ -25,9 +26,9 @@ METHODS = ["quadric", "quadric-box", "vsphere", "uniform", "fd"]
 
 
 def run(cmd):
-    """Runs a command, echoing it; raises on failure."""
+    """Runs a command in the repository root, echoing it; raises on failure."""
     print("+", " ".join(cmd), flush=True)
-    subprocess.run(cmd, check=True)
+    subprocess.run(cmd, check=True, cwd=ROOT)
 
 
 def cpu_model():
@@ -50,13 +51,14 @@ def main():
     ap.add_argument("--ref-spp", type=int, default=256)
     ap.add_argument("--threads", type=int, default=2)
     args = ap.parse_args()
+    args.qsil = os.path.abspath(args.qsil)
     out_root = os.path.join(ROOT, "docs", "images", "compare")
-    work = os.path.join(ROOT, "out", "results")
-    os.makedirs(work, exist_ok=True)
+    work = os.path.join("out", "results")  # relative to ROOT, where qsil runs
+    os.makedirs(os.path.join(ROOT, work), exist_ok=True)
     started = time.time()
     results = {}
     for scene, param in SCENES:
-        xml = os.path.join(ROOT, "scenes", scene + ".xml")
+        xml = os.path.join("scenes", scene + ".xml")
         ref = os.path.join(work, scene + "-ref.exr")
         d = os.path.join(work, scene)
         common = ["-D", f"res={args.res}", "--param", param, "--threads", str(args.threads)]
@@ -66,8 +68,8 @@ def main():
         dst = os.path.join(out_root, scene)
         os.makedirs(dst, exist_ok=True)
         for f in ("error_vs_time.png", "grid.png", "results.csv", "results.json"):
-            shutil.copy(os.path.join(d, f), os.path.join(dst, f))
-        results[scene] = json.load(open(os.path.join(d, "results.json")))
+            shutil.copy(os.path.join(ROOT, d, f), os.path.join(dst, f))
+        results[scene] = json.load(open(os.path.join(ROOT, d, "results.json")))
     elapsed = time.time() - started
 
     lines = ["# Equal-time comparisons", "",

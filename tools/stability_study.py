@@ -10,7 +10,8 @@ Per scene (scenes/stability/params.txt lists name, parameter, question): an FD r
 method at --budget seconds, so that a crash of one method is recorded and does not stop the
 others. Reported: non-finite pixels (must be 0), agreement of the image sum with the reference
 (z = error / combined standard error; |z| < 3 passes; FD is biased by O(h^2)), relative MSE, and
-the zero-contribution rate of the boundary samples.
+the zero-contribution rate of the boundary samples. qsil runs in the repository root with
+repository-relative paths, so the results.json files carry no absolute paths.
 """
 import argparse
 import json
@@ -34,13 +35,15 @@ def main():
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--only", default="")
     args = ap.parse_args()
-    sdir = os.path.join(ROOT, "scenes", "stability")
+    args.qsil = os.path.abspath(args.qsil)
+    os.chdir(ROOT)  # qsil gets repository-relative paths
+    sdir = os.path.join("scenes", "stability")
     cases = [l.rstrip("\n").split("\t") for l in open(os.path.join(sdir, "params.txt")) if l.strip()]
     if args.only:
         keep = set(args.only.split(","))
         cases = [c for c in cases if c[0] in keep]
-    work = os.path.join(ROOT, "out", "stability")
-    img_root = os.path.join(ROOT, "docs", "images", "stability")
+    work = os.path.join("out", "stability")
+    img_root = os.path.join("docs", "images", "stability")
     os.makedirs(work, exist_ok=True)
     started = time.time()
     table = []
@@ -89,7 +92,7 @@ def main():
         if resj:
             resj["rows"], resj["methods"] = rows, methods
             json.dump(resj, open(os.path.join(merged, "results.json"), "w"))
-            subprocess.run(["/usr/bin/python3", os.path.join(ROOT, "tools", "plot_compare.py"), merged, "--title",
+            subprocess.run([sys.executable, os.path.join("tools", "plot_compare.py"), merged, "--title",
                             f"stability/{name}: {param}"], check=False)
             os.makedirs(os.path.join(img_root, name), exist_ok=True)
             if os.path.exists(os.path.join(merged, "grid.png")):
@@ -123,7 +126,7 @@ def main():
         lines += [f"## {name}", "", question, ""]
         if os.path.exists(os.path.join(img_root, name, "grid.png")):
             lines += [f"![{name}](images/stability/{name}/grid.png)", ""]
-    with open(os.path.join(ROOT, "docs", "stability.md"), "w") as f:
+    with open(os.path.join("docs", "stability.md"), "w") as f:
         f.write("\n".join(lines))
     print(f"stability_study: docs/stability.md ({elapsed:.0f} s)")
     return 0
