@@ -11,6 +11,7 @@
 #define TINYOBJLOADER_IMPLEMENTATION
 #include <tiny_obj_loader.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <fstream>
 #include <map>
@@ -23,21 +24,33 @@ std::vector<Vec3> vertex_normals(const TriangleMesh& mesh) {
 }
 
 namespace {
-/// tinyobjloader reads a literal `nan` or `inf` coordinate as 0; scan the `v` lines first so that a
-/// non-finite coordinate is an error naming its line, never a silently wrong mesh.
-void check_finite_vertices(const std::filesystem::path& path) {
+/// tinyobjloader reads a literal `nan` or `inf` coordinate, or a word, as 0 and a missing one as 0;
+/// scan the `v` lines first so that a bad coordinate is an error naming its line and value, never
+/// a silently wrong mesh. Coordinates beyond kMaxCoordinate are refused too (scene.h says why).
+void check_vertices(const std::filesystem::path& path) {
   std::ifstream in(path);
   std::string line;
   for (int number = 1; std::getline(in, line); ++number) {
-    if (line.size() < 2 || line[0] != 'v' || (line[1] != ' ' && line[1] != '\t')) continue;
-    std::istringstream is(line.substr(2));
+    const size_t start = line.find_first_not_of(" \t");
+    if (start == std::string::npos || line[start] != 'v') continue;
+    const size_t after = start + 1;  // `v` alone or `v` followed by blanks: a vertex line
+    if (after < line.size() && line[after] != ' ' && line[after] != '\t' && line[after] != '\r') continue;
+    const std::string where = path.string() + ":" + std::to_string(number) + ": ";
+    std::istringstream is(line.substr(after));
     std::string token;
-    for (int k = 0; k < 3 && is >> token; ++k) {
+    int k = 0;
+    for (; k < 3 && is >> token; ++k) {
+      if (!token.empty() && token.back() == '\r') token.pop_back();
       char* end = nullptr;
       const double x = std::strtod(token.c_str(), &end);
-      if (!std::isfinite(x))
-        throw Error(path.string() + ":" + std::to_string(number) + ": non-finite coordinate '" + token + "' in a vertex");
+      if (token.empty() || end != token.c_str() + token.size())
+        throw Error(where + "vertex coordinate '" + token + "' is not a number");
+      if (!std::isfinite(x)) throw Error(where + "non-finite coordinate '" + token + "' in a vertex");
+      if (std::abs(x) > kMaxCoordinate)
+        throw Error(where + "vertex coordinate " + token + " exceeds the largest supported magnitude 1e12 (ray "
+                            "tracing is in float)");
     }
+    if (k < 3) throw Error(where + "vertex has " + std::to_string(k) + " coordinate(s), expected 3");
   }
 }
 }  // namespace
@@ -45,7 +58,7 @@ void check_finite_vertices(const std::filesystem::path& path) {
 TriangleMesh load_obj(const std::filesystem::path& path, bool weld, std::vector<std::string>* warnings) {
   const std::string name = path.string();
   if (!std::filesystem::exists(path)) throw Error(name + ": file not found");
-  check_finite_vertices(path);
+  check_vertices(path);
   tinyobj::ObjReaderConfig config;
   config.triangulate = true;
   config.vertex_color = false;

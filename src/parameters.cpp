@@ -97,6 +97,8 @@ ParameterSpec parse_parameter(const std::string& text, const Scene& scene) {
     if (p.kind != ParameterSpec::Kind::Rotate && p.kind != ParameterSpec::Kind::Scale)
       throw Error("--param '" + text + "': a centre @CX,CY,CZ applies to rotate and scale only");
     p.center = parse_vec3(center, text, "centre");
+    if (p.center.cwiseAbs().maxCoeff() > kMaxCoordinate)
+      throw Error("--param '" + text + "': centre coordinate beyond the largest supported magnitude 1e12");
     p.has_center = true;
   } else {
     p.center = scene.shapes[p.shape].mesh.bounds().center();

@@ -8,6 +8,7 @@
 #include <embree3/rtcore.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 
@@ -35,11 +36,29 @@ void embree_error(void*, RTCError code, const char* str) {
   (void)code;
   (void)str;  // Errors are checked where they matter (device creation, commit).
 }
+
+/// Invalid rays refused by every tracer of the process.
+std::atomic<uint64_t> g_invalid_rays{0};
 }  // namespace
+
+bool ray_is_valid(const Vec3& origin, const Vec3& dir, double tmax) {
+  if (!origin.allFinite() || !dir.allFinite() || std::isnan(tmax)) return false;
+  if (origin.cwiseAbs().maxCoeff() > kEmbreeLargestRayComponent) return false;
+  if (dir.cwiseAbs().maxCoeff() > kEmbreeLargestRayComponent) return false;
+  // The direction Embree sees is the float one: it must not round to zero.
+  const bool nonzero = float(dir.x()) != 0.0f || float(dir.y()) != 0.0f || float(dir.z()) != 0.0f;
+  return nonzero;
+}
 
 struct RayTracer::Impl {
   RTCDevice device = nullptr;
   RTCScene scene = nullptr;
+  mutable std::atomic<uint64_t> invalid_rays{0};
+  /// Counts a refused ray (here and process-wide).
+  void refuse() const {
+    invalid_rays.fetch_add(1, std::memory_order_relaxed);
+    g_invalid_rays.fetch_add(1, std::memory_order_relaxed);
+  }
 };
 
 void RayTracer::build_impl(Impl& impl, const Scene& scene, const std::vector<std::vector<Vec3>>* positions) {
@@ -81,8 +100,15 @@ RayTracer::~RayTracer() {
   if (impl_->device) rtcReleaseDevice(impl_->device);
 }
 
+uint64_t RayTracer::invalid_rays() const { return impl_->invalid_rays.load(std::memory_order_relaxed); }
+
+uint64_t RayTracer::total_invalid_rays() { return g_invalid_rays.load(std::memory_order_relaxed); }
+
 Hit RayTracer::intersect(const Vec3& origin, const Vec3& dir, double tmax, const IgnoreSet& ignore) const {
-  if (!origin.allFinite() || !dir.allFinite()) return Hit{};
+  if (!ray_is_valid(origin, dir, tmax)) {
+    impl_->refuse();
+    return Hit{};
+  }
   FilterContext ctx;
   rtcInitIntersectContext(&ctx.context);
   ctx.context.filter = ignore.empty() ? nullptr : ignore_filter;
@@ -113,7 +139,10 @@ Hit RayTracer::intersect(const Vec3& origin, const Vec3& dir, double tmax, const
 }
 
 bool RayTracer::occluded(const Vec3& origin, const Vec3& dir, double tmax, const IgnoreSet& ignore) const {
-  if (!origin.allFinite() || !dir.allFinite()) return false;
+  if (!ray_is_valid(origin, dir, tmax)) {
+    impl_->refuse();
+    return false;
+  }
   FilterContext ctx;
   rtcInitIntersectContext(&ctx.context);
   ctx.context.filter = ignore.empty() ? nullptr : ignore_filter;

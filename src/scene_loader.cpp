@@ -27,6 +27,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <map>
 #include <optional>
 #include <set>
@@ -225,6 +226,13 @@ void Loader::place_mesh(const Plugin& p, Shape& shape, const Mat4& to_world, boo
   for (auto& x : mesh.positions) {
     x = linear * x + to_world.block<3, 1>(0, 3);
     if (!x.allFinite()) src_.fail(where, "to_world produces a non-finite vertex position");
+    // Beyond kMaxCoordinate, Embree's float arithmetic overflows (qsil/scene.h).
+    if (const double m = x.cwiseAbs().maxCoeff(); m > kMaxCoordinate) {
+      char value[32];
+      std::snprintf(value, sizeof value, "%.6g", m);
+      src_.fail(where, std::string("to_world moves a vertex to coordinate magnitude ") + value +
+                           ", beyond the largest supported magnitude 1e12");
+    }
   }
   // A mirroring to_world (det < 0) reverses the winding; undo it so that counter-clockwise stays
   // the side the transformed normals point to (DESIGN.md §3). flip_normals reverses it on purpose.
@@ -464,6 +472,14 @@ void Loader::parse_sensor(pugi::xml_node node) {
     if (!is_affine(*m) || !is_orthogonal(m->block<3, 3>(0, 0)))
       src_.fail(p.at("to_world"), "sensor to_world must be rigid (rotation and translation): it "
                                   "contains scale or shear");
+    // The camera position is a ray origin: within kMaxCoordinate like the geometry (qsil/scene.h).
+    const Vec3 position = m->block<3, 1>(0, 3);
+    if (!position.allFinite() || position.cwiseAbs().maxCoeff() > kMaxCoordinate) {
+      char value[32];
+      std::snprintf(value, sizeof value, "%.6g", position.cwiseAbs().maxCoeff());
+      src_.fail(p.at("to_world"), std::string("sensor position coordinate magnitude ") + value +
+                                      " is beyond the largest supported magnitude 1e12");
+    }
     cam.to_world = *m;
   }
 }

@@ -4,6 +4,7 @@
 #include "cli_common.h"
 
 #include "qsil/error.h"
+#include "qsil/ray_tracer.h"
 
 #include <spawn.h>
 #include <sys/wait.h>
@@ -107,6 +108,9 @@ void add_render_attributes(Image& image, const CommonFlags& flags, const RenderR
 void report_nonfinite(const RenderResult& r) {
   if (r.nonfinite > 0)
     std::cerr << "warning: " << r.nonfinite << " sample(s) had a non-finite value and were replaced by 0\n";
+  if (const uint64_t invalid = RayTracer::total_invalid_rays(); invalid > 0)
+    std::cerr << "warning: " << invalid << " ray(s) had a non-finite or out-of-range origin, direction or length "
+              << "and were treated as misses\n";
 }
 
 std::string portable_path(const std::string& path) {

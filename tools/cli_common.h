@@ -44,7 +44,8 @@ double write_derivative_png(const std::string& path, const Image& image, const s
 /// Standard EXR attributes (qsil version, scene, spp, seed, seconds).
 void add_render_attributes(Image& image, const CommonFlags& flags, const RenderResult& r);
 
-/// Prints a warning line if samples were non-finite (they were replaced by 0).
+/// Prints a warning line if samples were non-finite (they were replaced by 0), and one if rays
+/// were invalid for Embree (RayTracer::total_invalid_rays(): treated as misses).
 void report_nonfinite(const RenderResult& r);
 
 /// A path as written into generated CSV/JSON files: an absolute path becomes relative to the

@@ -33,7 +33,7 @@ struct ParameterSpec {
 
 /// Parses a `--param` spec and resolves it against the scene. Throws qsil::Error
 /// "--param 'TEXT': reason" for an unknown shape id, a vertex index out of range, a zero
-/// direction/axis, or a malformed spec.
+/// direction/axis, a centre beyond kMaxCoordinate (scene.h), or a malformed spec.
 ParameterSpec parse_parameter(const std::string& text, const Scene& scene);
 
 /// Per-vertex velocities of all parameters, packed per vertex as a 3 x kMaxParameters matrix

@@ -9,6 +9,7 @@
 #include "qsil/scene.h"
 
 #include <array>
+#include <cstdint>
 #include <memory>
 
 namespace qsil {
@@ -51,16 +52,35 @@ class RayTracer {
   RayTracer& operator=(const RayTracer&) = delete;
 
   /// Closest hit of the ray origin + t*dir, t in [0, tmax), dir unit length (world space).
-  /// A ray with a non-finite origin or direction hits nothing (Embree must never see one).
+  /// A ray that is not ray_is_valid() never reaches Embree: it hits nothing and is counted
+  /// (invalid_rays(), total_invalid_rays()).
   Hit intersect(const Vec3& origin, const Vec3& dir, double tmax = kInf, const IgnoreSet& ignore = {}) const;
-  /// True if anything is hit for t in [0, tmax).
+  /// True if anything is hit for t in [0, tmax). An invalid ray (see intersect) is not occluded
+  /// and is counted.
   bool occluded(const Vec3& origin, const Vec3& dir, double tmax, const IgnoreSet& ignore = {}) const;
+
+  /// Number of invalid rays this tracer refused (treated as misses) so far. Thread-safe.
+  uint64_t invalid_rays() const;
+  /// Number of invalid rays refused by every RayTracer of the process so far (the CLI prints a
+  /// warning when it is non-zero). Thread-safe.
+  static uint64_t total_invalid_rays();
 
  private:
   struct Impl;
   static void build_impl(Impl& impl, const Scene& scene, const std::vector<std::vector<Vec3>>* positions);
   std::unique_ptr<Impl> impl_;
 };
+
+/// Largest magnitude Embree 3 accepts in a ray's origin and direction components (its FLT_LARGE,
+/// 1.844e18): a larger one fails Embree's `ray.valid()` assertion, which aborts the process.
+inline constexpr double kEmbreeLargestRayComponent = 1.844e18;
+
+/// True iff Embree may see the ray: origin and direction finite with every component's magnitude
+/// at most kEmbreeLargestRayComponent, a non-zero direction, and tmax not NaN (+inf is allowed,
+/// a negative tmax is a valid empty interval). The scene loader bounds coordinates by
+/// kMaxCoordinate (scene.h), far below this, so a loaded scene only produces invalid rays from
+/// arithmetic gone wrong; this check makes them misses instead of an abort.
+bool ray_is_valid(const Vec3& origin, const Vec3& dir, double tmax);
 
 /// Origin offset for a ray leaving a surface point p with geometric normal ng toward dir: moves p
 /// along ±ng by a distance relative to the coordinate magnitude `scale` (the largest absolute

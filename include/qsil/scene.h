@@ -14,6 +14,19 @@
 
 namespace qsil {
 
+/// Largest magnitude of a coordinate in a scene (scene units): load_obj() rejects vertex
+/// coordinates beyond it, load_scene() vertices moved beyond it by to_world and a camera placed
+/// beyond it, each with a one-line error naming the file, line and value. Why 1e12:
+/// - Embree intersects in float and aborts the process on a ray whose origin or direction
+///   component exceeds 1.844e18 (its `ray.valid()` assertion), e.g. a ray leaving a point on a
+///   triangle with a vertex at 1e30;
+/// - its watertight triangle test forms products of three coordinate differences (Plücker:
+///   T = 2 v0.(e1 x e2)); with every coordinate within 1e12, differences stay within 3.5e12 and
+///   |T| < 2 (3.5e12)^3 ~ 1e38, below float's largest value 3.4e38 (1e13 would overflow it);
+/// - the renderer's own distances and |w|^3 (boundary term) are double and far from overflow.
+/// Real scenes stay far below (the bundled ones within 1e4).
+inline constexpr double kMaxCoordinate = 1e12;
+
 /// A welded triangle mesh in world space.
 /// - positions: V vertices, scene units.
 /// - triangles: T index triples into positions; counter-clockwise winding seen from outside is the
@@ -129,7 +142,9 @@ Scene load_scene(const std::filesystem::path& file,
 /// Loads a Wavefront OBJ file as a welded TriangleMesh (positions welded by exact equality when
 /// `weld` is true; polygons fan-triangulated; OBJ normals kept when present and weld is false,
 /// otherwise area-weighted vertex normals). Zero-area triangles are dropped and counted in
-/// `warnings`. Throws qsil::Error "PATH: message" (missing file, no faces, non-finite coordinate).
+/// `warnings`. Throws qsil::Error "PATH: message" (missing file, no faces) or "PATH:LINE: message"
+/// for a vertex line whose first three coordinates are missing, not numbers, non-finite or larger
+/// in magnitude than kMaxCoordinate.
 TriangleMesh load_obj(const std::filesystem::path& path, bool weld = true,
                       std::vector<std::string>* warnings = nullptr);
 
