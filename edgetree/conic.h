@@ -13,7 +13,7 @@ namespace qsil::edgetree {
 
 /// Relative tolerance of the conic computations: a discriminant down to -kConicTol times the
 /// magnitude of its terms counts as zero (a tangent line), so near-degenerate real conics are
-/// found (leaning toward accept, DESIGN.md §5).
+/// found (leaning toward accept, docs/architecture.md §5).
 inline constexpr double kConicTol = 1e-9;
 
 /// Finds finite real points of the conic C following [QSS Appendix C]: intersect it with the

@@ -6,7 +6,7 @@ namespace qsil::edgetree {
 
 /// Index drawn with probabilities prob[0..n) (which sum to 1 up to rounding) from u in [0,1);
 /// never an index of zero probability, even when rounding leaves u beyond the last sum (the
-/// authors' code returned index 0 there: a possibly zero-probability choice, DESIGN.md §5).
+/// authors' code returned index 0 there: a possibly zero-probability choice, docs/architecture.md §5).
 /// Returns -1 only when every probability is 0.
 inline int choose(const double* prob, int n, double u) {
   double acc = 0;

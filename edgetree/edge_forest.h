@@ -1,6 +1,6 @@
 #pragma once
 /// @file edge_forest.h
-/// The quadric edge forest [QSS 4.1; DESIGN.md §5 "Tree"]: one 4-wide tree per shape over its
+/// The quadric edge forest [QSS 4.1; docs/architecture.md §5 "Tree"]: one 4-wide tree per shape over its
 /// candidate (convex, optionally concave) edges, built top-down with binned SAH splits; each
 /// shape's root is discarded so it contributes up to four forest roots. Inner nodes carry the
 /// dual bound of node_fit.h, the primal box B_p and the weighted length L_w; leaves hold up to 4

@@ -1,6 +1,6 @@
 #pragma once
 /// @file edge_point_sampler.h
-/// Sampling the point on a chosen edge (DESIGN.md §5 "Point on the edge").
+/// Sampling the point on a chosen edge (docs/architecture.md §5 "Point on the edge").
 ///
 /// Setting: a shading point p, its local shading frame (z = shading normal), an edge with
 /// endpoints x0, x1 given relative to p in that frame: w0 = x0 - p, w1 = x1 - p (scene units),
@@ -14,7 +14,7 @@
 ///   p_angle(t) = |w0 x w1| / (|w_t|^2 Phi),  Phi = angle(w0, w1),
 /// so p(t) > 0 for every t in [0, 1], including parts of the edge below the shading horizon or
 /// outside the LTC's support, where the true integrand (e.g. for another BSDF lobe, or the
-/// LTC's approximation error) may still be non-zero (DESIGN.md §5 pitfalls). eps = 1 when the
+/// LTC's approximation error) may still be non-zero (docs/architecture.md §5 pitfalls). eps = 1 when the
 /// LTC part vanishes on the whole edge (integral(g) = 0). When p lies on the edge's line
 /// (|w0 x w1| = 0, Phi = 0) the density is uniform in t (p(t) = 1); the integrand is 0 there anyway.
 ///
@@ -68,7 +68,7 @@ class EdgePointSampler {
 
   /// Integral of target(t) over [0, 1] in closed form (per scene unit): the LTC estimate of the
   /// edge's term in [QSS] Eq. 4 (with f_s cos). Usable as a per-edge importance in leaves
-  /// (mixed with a defensive term, DESIGN.md §5).
+  /// (mixed with a defensive term, docs/architecture.md §5).
   double target_integral() const { return target_integral_; }
 
   /// Angle Phi subtended by the edge at the shading point (radians, in [0, pi]).

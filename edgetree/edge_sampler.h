@@ -1,12 +1,12 @@
 #pragma once
 /// @file edge_sampler.h
-/// The interface of every secondary boundary-term edge sampler (`--boundary`, DESIGN.md §7):
+/// The interface of every secondary boundary-term edge sampler (`--boundary`, docs/architecture.md §7):
 /// given a shading point, sample one discontinuity edge and a point on it, with the exact
 /// probability density of having done so. Implementations: QuadricEdgeSampler (the edge forest
 /// with the quadric or box-only rejection test, silhouette_sampler.h); the baselines of issue 6
 /// (Li 2019's v-sphere tree, uniform) plug in here too.
 ///
-/// Contract (unbiasedness, DESIGN.md §5): for every edge that is a discontinuity for the query
+/// Contract (unbiasedness, docs/architecture.md §5): for every edge that is a discontinuity for the query
 /// point and eligible (SilhouetteQuery::eligible), the probability of returning it must be > 0,
 /// and so must the density of every t on it; `pdf` is the product of the discrete probability
 /// and the density of t. Returning no edge is allowed (a zero-contribution sample).

@@ -4,7 +4,7 @@
 /// half-diagonal of the patch's box. Dual data of a node (planes, D, A, B_q, quadrics) are stored
 /// in this frame for floating-point conditioning (a mesh translated by 1e4 or scaled by 1e-4 gives
 /// the same local numbers). Fitting is invariant under this similarity in exact arithmetic
-/// [QSS 4.3; DESIGN.md §5 "Fitted dual quadric"].
+/// [QSS 4.3; docs/architecture.md §5 "Fitted dual quadric"].
 
 #include "qsil/math.h"
 

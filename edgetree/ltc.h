@@ -1,7 +1,7 @@
 #pragma once
 /// @file ltc.h
 /// Linearly transformed cosines (LTC) approximating qsil's own GGX BSDF, and the spherical
-/// polygon integrals the importance of edge-forest nodes needs (DESIGN.md §5 "Importance", "LTC";
+/// polygon integrals the importance of edge-forest nodes needs (docs/architecture.md §5 "Importance", "LTC";
 /// [QSS] Sec. 3.5, 3.6).
 ///
 /// Source: Heitz, Dupuy, Hill, Neubelt 2016, "Real-Time Polygonal-Light Shading with Linearly
@@ -24,7 +24,7 @@
 /// hemisphere (w.z > 0) AND to the LTC's own support (M^-1 w).z > 0. The fitted lobe can put a
 /// little mass below the shading horizon (grazing wo); that mass is dropped, which is what the
 /// true BSDF does too. Both supports are narrower than the sphere: callers that need a density
-/// that is > 0 wherever the true integrand can be (DESIGN.md §5 pitfalls) must mix in a defensive
+/// that is > 0 wherever the true integrand can be (docs/architecture.md §5 pitfalls) must mix in a defensive
 /// term (edge_point_sampler does).
 
 #include "qsil/math.h"

@@ -1,5 +1,5 @@
 /// @file mesh_edges.cpp
-/// Edge extraction and classification (DESIGN.md §5 "Edges").
+/// Edge extraction and classification (docs/architecture.md §5 "Edges").
 
 #include "edgetree/mesh_edges.h"
 

@@ -1,11 +1,11 @@
 #pragma once
 /// @file mesh_edges.h
 /// Undirected edges of a welded triangle mesh with their two faces, classified as convex,
-/// concave, flat, boundary or non-manifold (DESIGN.md §5 "Edges", [QSS 4.1]).
+/// concave, flat, boundary or non-manifold (docs/architecture.md §5 "Edges", [QSS 4.1]).
 ///
 /// Frames and units: everything is in the mesh's own (world) frame, scene units; angles in
 /// radians. A face plane is the homogeneous 4-vector q = [n, -n.x0] with unit outward normal n
-/// (counter-clockwise winding is outward, DESIGN.md §3); for a point x = [p, 1], q.x > 0 means p
+/// (counter-clockwise winding is outward, docs/architecture.md §3); for a point x = [p, 1], q.x > 0 means p
 /// is in front of the face.
 
 #include "qsil/math.h"
@@ -74,14 +74,14 @@ struct MeshEdgeSet {
 Vec4 face_plane(const TriangleMesh& mesh, int f);
 
 /// Builds the undirected edge list of a welded mesh with adjacency, planes, lengths, exterior
-/// dihedral angles and classes (DESIGN.md §5 "Edges"). `shape` is stored in every edge.
+/// dihedral angles and classes (docs/architecture.md §5 "Edges"). `shape` is stored in every edge.
 /// Cost O(T log T). The input mesh is not modified.
 MeshEdgeSet build_mesh_edges(const TriangleMesh& mesh, int shape = 0,
                              const EdgeOptions& options = {});
 
 /// Exact silhouette predicate of one edge for the shading point p (world frame) [QSS 3.1]:
 /// true iff (q0.x)(q1.x) <= 0 with x = [p, 1]; always true for boundary, non-manifold and
-/// inconsistent edges. This is the ground truth of every soundness test (DESIGN.md §3).
+/// inconsistent edges. This is the ground truth of every soundness test (docs/architecture.md §3).
 bool edge_is_silhouette(const MeshEdge& e, const Vec3& p);
 
 }  // namespace qsil::edgetree

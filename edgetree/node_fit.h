@@ -2,7 +2,7 @@
 /// @file node_fit.h
 /// Fitting the dual-space bound of one node of the edge forest: offset direction D, basis A,
 /// dual box B_q, fitted quadric Q_f, offsets lambda0/lambda1 and the stored pair
-/// A^T Q0 A, A^T Q1 A [QSS 3.2-3.3, 4.2-4.4; DESIGN.md §5 "Per node"].
+/// A^T Q0 A, A^T Q1 A [QSS 3.2-3.3, 4.2-4.4; docs/architecture.md §5 "Per node"].
 
 #include "edgetree/local_frame.h"
 #include "qsil/math.h"

@@ -1,7 +1,7 @@
 #pragma once
 /// @file offset_direction.h
 /// The offset direction D of a node and the orthonormal basis A = [t1, t2, t3, Z] built from it
-/// [QSS 3.2, 4.4, Appendices B and G; DESIGN.md §5 "Per node"].
+/// [QSS 3.2, 4.4, Appendices B and G; docs/architecture.md §5 "Per node"].
 
 #include "qsil/math.h"
 

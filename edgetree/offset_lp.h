@@ -1,7 +1,7 @@
 #pragma once
 /// @file offset_lp.h
 /// The linear program of [QSS Eq. 6] for the offset point D of a node (the only interface to
-/// CLP; offset_lp.cpp is the only file that includes it, DESIGN.md §1).
+/// CLP; offset_lp.cpp is the only file that includes it, docs/architecture.md §1).
 
 #include "qsil/math.h"
 

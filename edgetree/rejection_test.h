@@ -1,6 +1,6 @@
 #pragma once
 /// @file rejection_test.h
-/// The rejection test of a forest node for a shading point [QSS 3.4, Appendix C; DESIGN.md §5
+/// The rejection test of a forest node for a shading point [QSS 3.4, Appendix C; docs/architecture.md §5
 /// "Rejection test"], the exact per-edge test of leaves and a brute-force reference.
 ///
 /// Soundness is the invariant: may_have_silhouette() returns false only if no edge of the node's
@@ -16,7 +16,7 @@ namespace qsil::edgetree {
 /// Which bound of an inner node the test uses.
 enum class RejectionMode {
   Quadric,  ///< dual box, then the bounding quadric pair ([QSS 3.4], "ours")
-  Box,      ///< dual box only ("quadric-box", DESIGN.md §7)
+  Box,      ///< dual box only ("quadric-box", docs/architecture.md §7)
 };
 
 /// Relative tolerance of the rejection test's sign decisions: a value within kRejectTol times

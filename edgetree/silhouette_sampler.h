@@ -1,7 +1,7 @@
 #pragma once
 /// @file silhouette_sampler.h
 /// Stochastic top-down traversal of the edge forest for one shading point [QSS 3.4-3.5, 4.1;
-/// DESIGN.md §5 "Importance", "Point on the edge"]: sample one discontinuity edge and a point on
+/// docs/architecture.md §5 "Importance", "Point on the edge"]: sample one discontinuity edge and a point on
 /// it, with the exact probability of having done so.
 ///
 /// At every level (the forest roots included) children that the rejection test rejects get

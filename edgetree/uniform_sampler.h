@@ -1,6 +1,6 @@
 #pragma once
 /// @file uniform_sampler.h
-/// The `uniform` edge sampler (DESIGN.md §7): a floor for the comparisons. No hierarchy and no
+/// The `uniform` edge sampler (docs/architecture.md §7): a floor for the comparisons. No hierarchy and no
 /// rejection: among the edges of the eligible shapes (the quadric forest's tree edges and its
 /// always-candidate edges) an edge is chosen with probability proportional to
 ///   w_e = length * exterior dihedral angle   (tree edges; redner's secondary_edge_weight idea)

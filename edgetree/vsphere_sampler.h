@@ -1,6 +1,6 @@
 #pragma once
 /// @file vsphere_sampler.h
-/// The `vsphere` and `vsphere-solid` edge samplers (DESIGN.md §7; [QSS] Sec. 2.3, App. F): Li's
+/// The `vsphere` and `vsphere-solid` edge samplers (docs/architecture.md §7; [QSS] Sec. 2.3, App. F): Li's
 /// (2019) stochastic traversal of the Hough-space edge tree (vsphere_tree.h), as in redner, plus
 /// the defensive share of our own sampler so that the estimator is unbiased for any BSDF.
 ///

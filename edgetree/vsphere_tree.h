@@ -1,12 +1,12 @@
 #pragma once
 /// @file vsphere_tree.h
 /// The edge hierarchy of Li (2019) as used in redner: a binary BVH over edges with the v-sphere
-/// rejection test in Hough space [QSS Sec. 2.3, Appendix F; Olson and Zhang 2006; DESIGN.md §7].
+/// rejection test in Hough space [QSS Sec. 2.3, Appendix F; Olson and Zhang 2006; docs/architecture.md §7].
 ///
 /// Hough space. Fix a Hough origin o (the camera centre in a render). A plane with unit normal n
 /// through x0 maps to the point h = n (n.(x0 - o)) = d n, the foot of the perpendicular from o
 /// (relative to o; d is the signed distance of the plane from o). For a world plane
-/// q = [n, -n.x0] (DESIGN.md §3) that is h = -n (q.[o,1]).
+/// q = [n, -n.x0] (docs/architecture.md §3) that is h = -n (q.[o,1]).
 /// For a shading point p let V = p - o. The v-sphere is the sphere with centre V/2 and radius
 /// |V|/2; with g(h) = |h - V/2|^2 - |V|^2/4 = |h|^2 - h.V one finds g(h) = -d (q.[p,1]). For an edge
 /// that is NOT a silhouette from o, d0 d1 > 0, so the edge is a silhouette for p iff
@@ -17,7 +17,7 @@
 /// to V/2)^2 - r^2. redner's original code tests a SOLID sphere (reject iff min g > 0 only): also
 /// sound, but it accepts every box inside the sphere ([QSS] App. F; VSphereTest::Solid).
 /// Edges that ARE silhouettes from o (d0 d1 <= 0) break the argument; they go into a plain
-/// spatial BVH that is never rejected (DESIGN.md §7).
+/// spatial BVH that is never rejected (docs/architecture.md §7).
 ///
 /// The tree (VSphereTree::build): per shape, the shape's tree edges of the quadric forest are
 /// split into the o-silhouette edges (plain 3D BVH over edge midpoints) and the others (6D BVH

@@ -1,6 +1,6 @@
 #pragma once
 /// @file boundary_term.h
-/// The boundary term at a path vertex [QSS Eq. 3, Appendix A; DESIGN.md §4-§5 "Evaluation"]:
+/// The boundary term at a path vertex [QSS Eq. 3, Appendix A; docs/architecture.md §4-§5 "Evaluation"]:
 ///   sum over discontinuity edges of  integral_0^1 dL_i(w(t)) f_s(w(t), wo) J(t) dt,
 ///   J(t) = det(w0, w1, v_t) / |w_t|^3,  v_t = d(edge point)/dtheta - dp/dtheta,
 /// estimated with one sampled edge point per vertex (sample_silhouette). The velocity is

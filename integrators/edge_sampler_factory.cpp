@@ -16,7 +16,7 @@ std::unique_ptr<edgetree::EdgeSampler> make_edge_sampler(BoundaryMethod method, 
       return std::make_unique<edgetree::QuadricEdgeSampler>(forest, edgetree::RejectionMode::Quadric);
     case BoundaryMethod::QuadricBox:
       return std::make_unique<edgetree::QuadricEdgeSampler>(forest, edgetree::RejectionMode::Box);
-    // Li 2019: the Hough origin is the camera centre (DESIGN.md §7).
+    // Li 2019: the Hough origin is the camera centre (docs/architecture.md §7).
     case BoundaryMethod::VSphere:
       return std::make_unique<edgetree::VSphereEdgeSampler>(forest, scene.camera.origin(), edgetree::VSphereTest::Hollow);
     case BoundaryMethod::VSphereSolid:

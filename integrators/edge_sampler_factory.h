@@ -1,6 +1,6 @@
 #pragma once
 /// @file edge_sampler_factory.h
-/// The secondary edge sampler of a `--boundary` method (DESIGN.md §7).
+/// The secondary edge sampler of a `--boundary` method (docs/architecture.md §7).
 
 #include "edgetree/edge_forest.h"
 #include "edgetree/edge_sampler.h"

@@ -2,7 +2,7 @@
 /// @file geometry_view.h
 /// How the integrators read vertex positions and shading normals: as doubles (PrimalView, for
 /// `render` and finite differences) or as dual numbers carrying dx/dtheta (DualView<N>, for the
-/// interior term in forward mode, DESIGN.md §4). Integrator code is written once over a view.
+/// interior term in forward mode, docs/architecture.md §4). Integrator code is written once over a view.
 
 #include "qsil/dual.h"
 #include "qsil/parameters.h"

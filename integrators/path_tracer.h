@@ -4,7 +4,7 @@
 /// sampling and emitter sampling, written once over a geometry view (PrimalView: radiance;
 /// DualView<N>: radiance and its interior-term derivative in forward mode).
 ///
-/// Parametrization (DESIGN.md §4, [QSS Eq. 2]): every direction is sampled from detached values
+/// Parametrization (docs/architecture.md §4, [QSS Eq. 2]): every direction is sampled from detached values
 /// and then held fixed; what depends on theta is recomputed along the fixed directions: hit
 /// points (t and barycentrics from the moving vertices and the moving origin), normals, BSDF
 /// values and cosines. Pdfs and MIS weights are computed from detached values: differentiating the

@@ -1,7 +1,7 @@
 #pragma once
 /// @file primary_boundary.h
 /// The primary boundary term: pixel coverage changes where silhouettes and outlines of moving
-/// shapes cross the image (DESIGN.md §6). The camera centre o is one fixed point, so its
+/// shapes cross the image (docs/architecture.md §6). The camera centre o is one fixed point, so its
 /// discontinuity edges are found once per render: forest edges of moving shapes that are
 /// silhouettes from o (exact per-edge test) and their always-candidate (boundary) edges, each
 /// clipped against the near plane and the four frustum planes and projected to the image.

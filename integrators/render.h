@@ -49,7 +49,7 @@ struct ImageSum {
 };
 ImageSum derivative_image_sum(const Film& film, int num_params, int k);
 
-/// The boundary-term estimator of `qsil grad` (DESIGN.md §7).
+/// The boundary-term estimator of `qsil grad` (docs/architecture.md §7).
 enum class BoundaryMethod {
   None,        ///< interior term only
   Quadric,     ///< edge forest with the dual box + bounding quadric pair test [QSS] (default)

@@ -1,6 +1,6 @@
 #pragma once
 /// @file surface_interaction.h
-/// The differentiable hit point of a fixed-direction ray (DESIGN.md §4): Embree chooses the
+/// The differentiable hit point of a fixed-direction ray (docs/architecture.md §4): Embree chooses the
 /// triangle; the distance t, the barycentrics, the point and the normals are recomputed over the
 /// view's scalar type from the (moving) vertices and the (moving) ray origin. The direction is a
 /// detached double: directions are fixed in qsil's parametrization.

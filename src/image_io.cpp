@@ -1,6 +1,6 @@
 /// @file image_io.cpp
 /// Image file I/O: OpenEXR (read any channels, write float channels with string attributes) and
-/// PNG through stb_image_write. The only file that includes OpenEXR or stb (DESIGN.md §1).
+/// PNG through stb_image_write. The only file that includes OpenEXR or stb (docs/architecture.md §1).
 /// Writes go to a temporary name beside the target and are renamed, so outputs are whole or absent.
 
 #include "qsil/error.h"

@@ -6,7 +6,7 @@
 #include "qsil/scene.h"
 #include "qsil/vertex_normals.h"
 
-// Coordinates in double (DESIGN.md §3): float parsing flips near-flat edges on bob and teapot.
+// Coordinates in double (docs/architecture.md §3): float parsing flips near-flat edges on bob and teapot.
 #define TINYOBJLOADER_USE_DOUBLE
 #define TINYOBJLOADER_IMPLEMENTATION
 #include <tiny_obj_loader.h>

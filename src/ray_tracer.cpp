@@ -1,5 +1,5 @@
 /// @file ray_tracer.cpp
-/// Embree 3 wrapper: the only file that includes Embree (DESIGN.md §1).
+/// Embree 3 wrapper: the only file that includes Embree (docs/architecture.md §1).
 
 #include "qsil/ray_tracer.h"
 

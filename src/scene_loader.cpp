@@ -1,5 +1,5 @@
 /// @file scene_loader.cpp
-/// load_scene(): the Mitsuba 3 XML subset of qsil (issue "Foundation"; DESIGN.md §2, §8).
+/// load_scene(): the Mitsuba 3 XML subset of qsil (issue "Foundation"; docs/architecture.md §2, §8).
 ///
 /// Supported plugins (Mitsuba 3 names, defaults and units):
 ///
@@ -235,7 +235,7 @@ void Loader::place_mesh(const Plugin& p, Shape& shape, const Mat4& to_world, boo
     }
   }
   // A mirroring to_world (det < 0) reverses the winding; undo it so that counter-clockwise stays
-  // the side the transformed normals point to (DESIGN.md §3). flip_normals reverses it on purpose.
+  // the side the transformed normals point to (docs/architecture.md §3). flip_normals reverses it on purpose.
   if ((det < 0) != flip)
     for (auto& t : mesh.triangles) std::swap(t[1], t[2]);
   // Transformed triangles can become degenerate (e.g. a tiny scale): drop and count them.

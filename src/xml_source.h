@@ -2,7 +2,7 @@
 /// @file xml_source.h
 /// Internal helper of the scene loader (src/scene_loader.cpp): one parsed XML file with its
 /// line numbers, `$name` substitution, and strict value parsing. Every failure throws qsil::Error
-/// as `FILE:LINE: message` (DESIGN.md §8). Only the scene loader's files include pugixml.
+/// as `FILE:LINE: message` (docs/architecture.md §8). Only the scene loader's files include pugixml.
 
 #include "qsil/math.h"
 

@@ -1,6 +1,6 @@
 #pragma once
 /// @file chi2.h
-/// Test helpers for statistical tests of sampling routines (DESIGN.md §9):
+/// Test helpers for statistical tests of sampling routines (docs/architecture.md §9):
 /// - Pearson's chi-square goodness-of-fit test with pooling of low-expected cells, as in
 ///   Mitsuba 3's `python/mitsuba/chi2.py` (ChiSquareTest) and pbrt-v4's `bsdfs_test.cpp`;
 /// - the chi-square survival function (regularized upper incomplete gamma, Numerical Recipes

@@ -9,7 +9,7 @@
 /// Shading point: the first hit of the ray through the centre of pixel (X,Y) (normal: the hit
 /// triangle's geometric normal, turned toward the camera for twosided BSDFs; wo toward the
 /// camera), or the given point/normal (wo toward the camera centre). Eligible shapes: every shape
-/// (as for a moving shading point, DESIGN.md §2) or the --shapes list.
+/// (as for a moving shading point, docs/architecture.md §2) or the --shapes list.
 /// Per method (quadric and quadric-box: the edge forest, every accepted child down to the
 /// leaves, whose edges are tested exactly; vsphere, vsphere-solid: Li's tree with the Hough
 /// origin at the camera centre, every accepted child down to the one-edge leaves; uniform: every

@@ -5,9 +5,9 @@
 /// light-power-free, area-proportional choice; Mitsuba 3 `area` emitter semantics).
 ///
 /// Emission is one-sided (Mitsuba 3): a shape emits its constant `radiance` only toward the side
-/// of its geometric normal (counter-clockwise winding, DESIGN.md §3), and is black from behind.
+/// of its geometric normal (counter-clockwise winding, docs/architecture.md §3), and is black from behind.
 ///
-/// Differentiation (DESIGN.md §4): next-event estimation keeps only the *direction* to a sampled
+/// Differentiation (docs/architecture.md §4): next-event estimation keeps only the *direction* to a sampled
 /// point and re-evaluates the emitter along it from the differentiable origin; the sample point,
 /// its pdf and to_solid_angle() are therefore double and detached.
 

@@ -16,7 +16,7 @@
 /// The separable form is not the height-correlated one (Heitz 2014 Eq. 99); it is chosen to match
 /// Mitsuba 3 exactly, so reference renders agree.
 ///
-/// Differentiation (DESIGN.md §4): bsdf_eval and the ggx_* evaluation helpers are templates over
+/// Differentiation (docs/architecture.md §4): bsdf_eval and the ggx_* evaluation helpers are templates over
 /// the scalar T (double or Eigen::AutoDiffScalar), so BSDF *values* carry derivatives with respect
 /// to the (moving) shading frame. Sampling and pdfs are double only: sampled directions and pdfs
 /// are detached. Only the support test (which side of the surface) branches.
@@ -38,7 +38,7 @@ inline double ggx_alpha(const BSDFDesc& b) { return std::max(b.alpha, kMinGGXAlp
 
 // ---------------------------------------------------------------------------------------------
 // GGX building blocks (isotropic, local frame). Usable with any alpha (e.g. for the importance of
-// edges, DESIGN.md §5).
+// edges, docs/architecture.md §5).
 // ---------------------------------------------------------------------------------------------
 
 /// GGX normal distribution D(m) for a unit microfacet normal m [Walter 2007 Eq. 33]:

@@ -1,6 +1,6 @@
 #pragma once
 /// @file dual.h
-/// Forward-mode dual numbers for the interior term (DESIGN.md §4): Eigen's AutoDiffScalar with a
+/// Forward-mode dual numbers for the interior term (docs/architecture.md §4): Eigen's AutoDiffScalar with a
 /// fixed-size derivative vector of N entries, one per geometry parameter (N in {1,2,4,8}; a run
 /// with K parameters uses the smallest N >= K). A well-kept library type rather than our own: its
 /// expression templates avoid temporaries, it works inside Eigen vectors (Vec3T<Dual<N>>), and a

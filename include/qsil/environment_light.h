@@ -15,7 +15,7 @@
 /// (u,v) with weights luminance(texel) * sin(theta at the row centre); the solid-angle density is
 /// pdf_omega = pdf_uv / (2 pi^2 sin(theta)) (|d omega| = 2 pi^2 sin(theta) du dv).
 ///
-/// Differentiation (DESIGN.md §4): an environment lookup depends on direction only, which is
+/// Differentiation (docs/architecture.md §4): an environment lookup depends on direction only, which is
 /// detached, so there is nothing to differentiate here (zero derivative).
 
 #include "qsil/math.h"

@@ -3,7 +3,7 @@
 /// The one error type of qsil. Every user-facing failure (bad scene file, bad flag, missing file,
 /// malformed mesh) throws qsil::Error with a one-line message that names the file, line or value,
 /// formatted `file:line: message` where a location exists. The CLI prints it and exits with code 2
-/// (DESIGN.md §8).
+/// (docs/architecture.md §8).
 
 #include <stdexcept>
 #include <string>

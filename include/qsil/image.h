@@ -1,7 +1,7 @@
 #pragma once
 /// @file image.h
 /// In-memory float images and their file I/O. src/image_io.cpp is the only file that includes
-/// OpenEXR and stb (DESIGN.md §1).
+/// OpenEXR and stb (docs/architecture.md §1).
 
 #include <filesystem>
 #include <map>

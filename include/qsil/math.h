@@ -2,7 +2,7 @@
 /// @file math.h
 /// Basic math types of qsil: double-precision Eigen vectors for geometry, RGB colours, constants,
 /// and the orthonormal shading frame. Geometry predicates and node fitting are in double
-/// (DESIGN.md §3 "Precision"); only Embree works in float.
+/// (docs/architecture.md §3 "Precision"); only Embree works in float.
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>

@@ -1,7 +1,7 @@
 #pragma once
 /// @file parameters.h
 /// Geometry parameters theta_k and their per-vertex velocities dx/dtheta_k at theta = 0
-/// (DESIGN.md §2-§3). A parameter moves the vertices of one shape:
+/// (docs/architecture.md §2-§3). A parameter moves the vertices of one shape:
 /// - `ID:translate:X,Y,Z`          x(theta) = x + theta * d            (d in scene units per unit theta)
 /// - `ID:rotate:X,Y,Z[@CX,CY,CZ]`  rotation by theta radians about unit axis a through c
 ///                                 (default c: the shape's bounding-box centre); dx = a x (x - c)

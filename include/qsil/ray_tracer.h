@@ -3,7 +3,7 @@
 /// Ray queries against a scene's triangle meshes through Embree 3 (src/ray_tracer.cpp is the only
 /// file that includes Embree). One RTCScene per RayTracer, one geometry per shape (geometry id =
 /// shape index), robust mode. Geometry is uploaded in float; callers that need exact hit points
-/// recompute them in double from the hit's triangle (DESIGN.md §4: Embree only chooses the triangle).
+/// recompute them in double from the hit's triangle (docs/architecture.md §4: Embree only chooses the triangle).
 
 #include "qsil/math.h"
 #include "qsil/scene.h"
@@ -85,7 +85,7 @@ bool ray_is_valid(const Vec3& origin, const Vec3& dir, double tmax);
 /// Origin offset for a ray leaving a surface point p with geometric normal ng toward dir: moves p
 /// along ±ng by a distance relative to the coordinate magnitude `scale` (the largest absolute
 /// vertex coordinate of the triangle), which bounds the float error of Embree's geometry. No
-/// absolute epsilon (DESIGN.md §5): scenes span 1e-3 to 1e4 units.
+/// absolute epsilon (docs/architecture.md §5): scenes span 1e-3 to 1e4 units.
 Vec3 offset_ray_origin(const Vec3& p, const Vec3& ng, const Vec3& dir, double scale);
 
 /// Relative size of the offset used by offset_ray_origin (times the coordinate magnitude).

@@ -1,7 +1,7 @@
 #pragma once
 /// @file rng.h
 /// Deterministic random numbers: one PCG32 stream (O'Neill 2014, pcg-cpp from Debian) per
-/// (seed, pixel, sample), so results are bit-identical for any thread count (DESIGN.md §3).
+/// (seed, pixel, sample), so results are bit-identical for any thread count (docs/architecture.md §3).
 
 #include "qsil/math.h"
 

@@ -8,7 +8,7 @@
 /// local frame whose z axis is the "up" direction of the warp (the shading normal for BSDFs);
 /// every pdf of a direction is per unit solid angle (sr^-1).
 ///
-/// Robustness (DESIGN.md §5 "Pitfalls"): the distributions never return a bin of zero
+/// Robustness (docs/architecture.md §5 "Pitfalls"): the distributions never return a bin of zero
 /// probability, not even when floating-point rounding of the CDF places u at a bin edge or when
 /// u rounds up to 1; an all-zero input is handled explicitly (see Distribution1D).
 

@@ -1,6 +1,6 @@
 #pragma once
 /// @file scene.h
-/// The scene model: what qsil's scenes need and no more (DESIGN.md §2). Loaded from the
+/// The scene model: what qsil's scenes need and no more (docs/architecture.md §2). Loaded from the
 /// Mitsuba 3 XML subset by load_scene() (src/scene_loader.cpp). All geometry is stored in world
 /// space, in double precision, after applying each shape's to_world.
 
@@ -30,7 +30,7 @@ inline constexpr double kMaxCoordinate = 1e12;
 /// A welded triangle mesh in world space.
 /// - positions: V vertices, scene units.
 /// - triangles: T index triples into positions; counter-clockwise winding seen from outside is the
-///   outward normal (DESIGN.md §3).
+///   outward normal (docs/architecture.md §3).
 /// - normals: V unit shading normals (from the OBJ, or area-weighted vertex normals), or empty
 ///   when the shape uses face normals.
 struct TriangleMesh {
@@ -53,7 +53,7 @@ struct TriangleMesh {
   }
 };
 
-/// A BSDF of the Mitsuba 3 subset (DESIGN.md; Mitsuba 3 plugin docs for parameter meaning).
+/// A BSDF of the Mitsuba 3 subset (docs/architecture.md; Mitsuba 3 plugin docs for parameter meaning).
 /// - Diffuse: Lambertian, `reflectance` (default 0.5).
 /// - RoughConductor: GGX microfacets with Smith shadowing, roughness `alpha` (default 0.1),
 ///   Fresnel factor 1 (Mitsuba's material="none"), scaled by `specular_reflectance` (default 1).
@@ -131,7 +131,7 @@ struct Scene {
   int find_shape(const std::string& id) const;  ///< index, or -1
 };
 
-/// Loads a scene in the Mitsuba 3 XML subset (DESIGN.md; issue "Foundation").
+/// Loads a scene in the Mitsuba 3 XML subset (docs/architecture.md; issue "Foundation").
 /// `defaults` override `<default name value>` entries (the CLI's -D name=value).
 /// Throws qsil::Error "scene.xml:LINE: message" for every unsupported or malformed input.
 /// `warnings` receives counted, non-fatal warnings (one line each).

@@ -1,5 +1,5 @@
 /// @file vsphere_soundness_test.cpp
-/// Soundness of the v-sphere rejection test by brute force ([QSS] App. F; DESIGN.md §7, §9): for
+/// Soundness of the v-sphere rejection test by brute force ([QSS] App. F; docs/architecture.md §7, §9): for
 /// every node of Li's Hough-space tree (inner nodes and one-edge leaves) of spot, torus, bunny and
 /// a subdivided cube, and many shading points (around the mesh, near the surface, on triangle
 /// planes; plus the Hough origin itself and points near it), whenever the node's edges include a

@@ -1,5 +1,5 @@
 /// @file forest_soundness_test.cpp
-/// Soundness of the rejection test by brute force (DESIGN.md §5, §9): for every inner node of
+/// Soundness of the rejection test by brute force (docs/architecture.md §5, §9): for every inner node of
 /// the forests of spot, torus, bunny and a subdivided cube, and many shading points (uniform in a
 /// box 3x the mesh's size, very close to the surface, exactly on triangle planes), whenever a
 /// node's patch has a silhouette edge (edge_is_silhouette, double, world frame) the test must

@@ -1,6 +1,6 @@
 /// @file mesh_edges_test.cpp
 /// Edge extraction and classification: counts per class must equal the edge statistics table of
-/// tests/data/meshes/README.md exactly (DESIGN.md §5 "Edges").
+/// tests/data/meshes/README.md exactly (docs/architecture.md §5 "Edges").
 
 #include "edgetree/mesh_edges.h"
 #include "qsil/scene.h"

@@ -132,7 +132,7 @@ TEST(InteriorTerm, BSDFValuesAndCosinesUnderAMovingFrameMatchCentralDifferences)
 }
 
 // Detachment is structural: sampled directions, pdfs and MIS weights are doubles whatever the
-// scalar type of the geometry, so they cannot carry a derivative (DESIGN.md §4).
+// scalar type of the geometry, so they cannot carry a derivative (docs/architecture.md §4).
 TEST(InteriorTerm, SampledDirectionsPdfsAndMisWeightsAreDetachedTypes) {
   static_assert(std::is_same_v<decltype(BSDFSample::wi), Vec3>);
   static_assert(std::is_same_v<decltype(BSDFSample::pdf), double>);

@@ -1,5 +1,5 @@
 /// @file bench_forest.cpp
-/// Edge forest benchmark (DESIGN.md §11), a table printer: for each OBJ given on the
+/// Edge forest benchmark (docs/architecture.md §11), a table printer: for each OBJ given on the
 /// command line, or without arguments for the six test meshes of tests/data/meshes/README.md
 /// (paths relative to the repository root, so run it from there): edges before/after culling,
 /// nodes, unrejectable and box-only
