@@ -150,7 +150,9 @@ int run_python_script(const std::string& who, const std::string& name, const std
     std::cerr << who << ": warning: " << name << " not found (give --scripts-dir or set QSIL_SCRIPTS_DIR)\n";
     return -1;
   }
-  std::vector<std::string> words{"python3", script.string()};
+  const char* env_python = std::getenv("QSIL_PYTHON");
+  const std::string python = env_python && *env_python ? env_python : "python3";
+  std::vector<std::string> words{python, script.string()};
   words.insert(words.end(), args.begin(), args.end());
   std::vector<char*> argv;
   for (std::string& w : words) argv.push_back(w.data());
@@ -158,15 +160,16 @@ int run_python_script(const std::string& who, const std::string& name, const std
   std::fflush(stdout);
   std::fflush(stderr);
   pid_t pid = 0;
-  if (posix_spawnp(&pid, "python3", nullptr, nullptr, argv.data(), environ) != 0) {
-    std::cerr << who << ": warning: cannot run python3 (not on PATH?) for " << script.string() << "\n";
+  if (posix_spawnp(&pid, python.c_str(), nullptr, nullptr, argv.data(), environ) != 0) {
+    std::cerr << who << ": warning: cannot run " << python << " (not on PATH? set QSIL_PYTHON) for " << script.string()
+              << "\n";
     return -1;
   }
   int status = 0;
   while (waitpid(pid, &status, 0) < 0)
     if (errno != EINTR) return -1;
   const int code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  if (code != 0) std::cerr << who << ": warning: python3 " << script.string() << " failed (exit " << code << ")\n";
+  if (code != 0) std::cerr << who << ": warning: " << python << " " << script.string() << " failed (exit " << code << ")\n";
   return code;
 }
 

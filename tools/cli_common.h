@@ -64,8 +64,10 @@ void add_scripts_dir_option(CLI::App& app, std::string& scripts_dir);
 /// (/proc/self/exe). Returns an empty path if no candidate directory holds the file.
 std::filesystem::path find_script(const std::string& name, const std::string& scripts_dir);
 
-/// Runs `python3 SCRIPT ARGS...` (python3 found on PATH, arguments passed without a shell) with
-/// the script located by find_script, and waits for it. Returns its exit code; -1 with a warning
+/// Runs `PYTHON SCRIPT ARGS...` with the script located by find_script and waits for it. PYTHON is
+/// the environment variable QSIL_PYTHON if set (e.g. /usr/bin/python3 when another python3 without
+/// matplotlib shadows Debian's on PATH), else `python3` found on PATH; arguments are passed
+/// without a shell. Returns its exit code; -1 with a warning
 /// line on stderr (prefixed by `who`) when the script is not found, python3 cannot be started or
 /// the script fails.
 int run_python_script(const std::string& who, const std::string& name, const std::vector<std::string>& args,
