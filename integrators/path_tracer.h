@@ -72,8 +72,7 @@ template <class T> struct ShadingPoint {
   Frame frame_value;   ///< its detached value (sampling happens here)
 };
 
-/// Smallest cosine between wo and the adapted shading normal, relative to its cosine with the
-/// geometric normal (see make_shading_point).
+/// Smallest cosine between wo and the adapted shading normal (see make_shading_point).
 inline constexpr double kShadingNormalMinCos = 1e-3;
 
 /// The shading frame of a surface interaction seen from direction `wo_world` (toward the viewer).
@@ -82,31 +81,43 @@ inline constexpr double kShadingNormalMinCos = 1e-3;
 /// would render black, and the border of that black fringe is a discontinuity that moves with
 /// the geometry but lies on no mesh edge: no edge sampler can find it, and the boundary term
 /// would see the fringe's black instead of the lit surface at a silhouette. The shading normal
-/// is therefore bent toward the geometric normal just enough that wo stays above its horizon:
-///   ns' = normalize(ns + k ng),  k = max(0, eps - (ns.wo)/(ng.wo)),
-/// which is continuous in the geometry (k = 0 wherever ns already faces wo), so the image and
-/// its derivative stay continuous there. A twosided BSDF seen from the back flips both normals.
+/// is therefore bent toward the viewer just enough that wo stays above its horizon:
+///   ns' = normalize(ns + k wo),  k = max(0, eps - ns.wo),
+/// so ns'.wo >= eps/|ns + k wo| > 0. It depends on ns and wo only, both continuous across the
+/// edges of a smooth-shaded mesh, so the image and its derivative stay continuous there (an
+/// adaptation toward the geometric normal would jump at every edge with the normal). Only where
+/// the geometric surface faces the viewer (ng.wo > 0): a one-sided surface seen from behind stays
+/// black, and that changes only at silhouettes. A twosided BSDF seen from the back flips the
+/// shading normal first (and the test uses |ng.wo|).
 template <class T>
 ShadingPoint<T> make_shading_point(const PathContext& ctx, const SurfaceInteraction<T>& si, const Vec3& wo_world) {
   const Shape& shape = ctx.scene->shapes[si.shape];
   const BSDFDesc* bsdf = &ctx.scene->bsdfs[shape.bsdf];
-  Vec3T<T> ns = si.ns, ng = si.ng;
+  Vec3T<T> ns = si.ns;
   const Vec3T<T> wo = lift<T>(wo_world);
-  T gw = ng.dot(wo);
-  if (value(gw) < 0 && bsdf->twosided) {
+  double gw = value(si.ng).dot(wo_world);
+  if (gw < 0 && bsdf->twosided) {
     ns = -ns;
-    ng = -ng;
     gw = -gw;
   }
-  if (value(gw) > 0) {
-    const T k = T(kShadingNormalMinCos) - ns.dot(wo) / gw;
+  if (gw > 0) {
+    const T k = T(kShadingNormalMinCos) - ns.dot(wo);
     if (value(k) > 0) {
       using std::sqrt;
-      const Vec3T<T> n = ns + ng * k;
+      const Vec3T<T> n = ns + wo * k;
       ns = n / sqrt(n.squaredNorm());
     }
   }
   return ShadingPoint<T>{bsdf, FrameT<T>(ns), Frame(value(ns))};
+}
+
+/// True when direction `w` leaves the surface of `si` on the side opposite to the viewer
+/// direction `wo_world` (a "sliver" direction, reachable only through a shading normal tilted
+/// past the geometric one). Such rays pass through back faces (IgnoreSet::through_back_faces:
+/// why is explained there); the test is on detached values.
+template <class T> bool leaves_below(const SurfaceInteraction<T>& si, const Vec3& wo_world, const Vec3& w) {
+  const Vec3 ng = value(si.ng);
+  return ng.dot(w) * ng.dot(wo_world) < 0;
 }
 
 /// The hook of a path vertex for estimators that add a term there (the boundary term); the primal
@@ -203,9 +214,11 @@ ColorT<typename View::Real> trace_path(const PathContext& ctx, const View& view,
           // The shadow ray starts at the offset origin and stops short of the light's own
           // triangle by a relative margin, measured from that origin (measured from p, an
           // offset toward the light could reach the light itself).
-          const Vec3 origin = offset_ray_origin(p, ng, wi, si.scale);
+          const Vec3 origin = spawn_origin(si, wi);
           const double tmax = light_point.allFinite() ? (light_point - origin).norm() * (1.0 - 1.0 / 4096.0) : kInf;
-          if (!ctx.tracer->occluded(origin, wi, tmax)) {
+          IgnoreSet ignore;
+          ignore.through_back_faces = leaves_below(si, wo_world, wi);
+          if (!ctx.tracer->occluded(origin, wi, tmax, ignore)) {
             const double w = power_heuristic(pdf_light, bsdf_pdf(*sp.bsdf, value(wi_local), wo_value));
             L += beta * f * lift<T>(Color(Le * (w / pdf_light)));
           }
@@ -222,7 +235,9 @@ ColorT<typename View::Real> trace_path(const PathContext& ctx, const View& view,
     if ((value(beta) == 0).all()) break;
     bsdf_pdf_prev = bs.pdf;
     ++stats.rays;
-    hit = ctx.tracer->intersect(offset_ray_origin(p, ng, wi, si.scale), wi);
+    IgnoreSet ignore;
+    ignore.through_back_faces = leaves_below(si, wo_world, wi);
+    hit = ctx.tracer->intersect(spawn_origin(si, wi), wi, kInf, ignore);
     o = si.p;
     d = wi;
   }

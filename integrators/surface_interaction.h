@@ -20,6 +20,11 @@ template <class T> struct SurfaceInteraction {
   Vec3T<T> ng;      ///< unit geometric normal (counter-clockwise winding = outward)
   Vec3T<T> ns;      ///< unit shading normal (interpolated vertex normals, or ng for face_normals)
   double scale = 0; ///< largest absolute vertex coordinate of the triangle (ray offsets)
+  /// For a point given exactly (Hit::exact: a sampled edge point, on the triangle's boundary):
+  /// the unit in-plane direction from p toward the triangle's centroid, else zero. Rays leaving
+  /// such a point start a relative offset inside the triangle (spawn_origin), so that what they
+  /// see is the limit from the face's interior, not from the edge itself.
+  Vec3 inward = Vec3::Zero();
 };
 
 /// Ray-triangle intersection (Moller-Trumbore 1997) over scalar T with origin o (T) and fixed unit
@@ -51,6 +56,8 @@ SurfaceInteraction<typename View::Real> make_interaction(const View& view, const
     si.b2 = T(hit.v);
     si.p = v0 + e1 * si.b1 + e2 * si.b2;
     si.t = (si.p - o).dot(dT);
+    const Vec3 to_centroid = value(Vec3T<T>((v0 + v1 + v2) / T(3.0) - si.p));
+    if (to_centroid.norm() > 0) si.inward = to_centroid.normalized();
   } else {
     si.b1 = tvec.dot(pvec) * inv_det;
     si.b2 = dT.dot(qvec) * inv_det;
@@ -73,6 +80,22 @@ SurfaceInteraction<typename View::Real> make_interaction(const View& view, const
   si.scale = std::max({P[tri[0]].cwiseAbs().maxCoeff(), P[tri[1]].cwiseAbs().maxCoeff(),
                        P[tri[2]].cwiseAbs().maxCoeff()});
   return si;
+}
+
+/// Origin of a ray leaving surface interaction `si` toward unit direction `dir`: offset off the
+/// surface along the geometric normal (offset_ray_origin), and for a point exactly on the
+/// triangle's boundary also into the triangle by the same relative distance. Why the second
+/// offset: the radiance leaving an edge point (a silhouette's foreground) is the limit from the
+/// face's interior. From an interior point of face A, a direction below A's plane (a shading
+/// normal tilted past the geometric one lets the BSDF send it there) meets the back of the
+/// neighbouring face B at a convex edge, which stops it when B is twosided (one-sided back faces
+/// let such rays through, IgnoreSet::through_back_faces); from the edge point itself the same ray
+/// would slip past the edge (docs/design-notes.md "Smooth shading").
+template <class T> Vec3 spawn_origin(const SurfaceInteraction<T>& si, const Vec3& dir) {
+  const Vec3 p = value(si.p);
+  Vec3 o = offset_ray_origin(p, value(si.ng), dir, si.scale);
+  if (si.inward != Vec3::Zero()) o += kRayOffsetRelative * std::max(si.scale, p.cwiseAbs().maxCoeff()) * si.inward;
+  return o;
 }
 
 }  // namespace qsil

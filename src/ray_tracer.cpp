@@ -15,10 +15,11 @@
 namespace qsil {
 
 namespace {
-/// Intersection context extended with the primitives to ignore (Embree 3 context filter).
+/// Intersection context extended with what to ignore (Embree 3 context filter).
 struct FilterContext {
   RTCIntersectContext context;
   const IgnoreSet* ignore;
+  const std::vector<char>* one_sided;  ///< per geometry: its BSDF is not twosided
 };
 
 void ignore_filter(const RTCFilterFunctionNArguments* args) {
@@ -28,7 +29,17 @@ void ignore_filter(const RTCFilterFunctionNArguments* args) {
     if (args->valid[i] != -1) continue;
     const unsigned geom = RTCHitN_geomID(args->hit, args->N, i);
     const unsigned prim = RTCHitN_primID(args->hit, args->N, i);
-    if (ctx->ignore->contains(int(geom), int(prim))) args->valid[i] = 0;
+    if (ctx->ignore->contains(int(geom), int(prim))) {
+      args->valid[i] = 0;
+      continue;
+    }
+    if (ctx->ignore->through_back_faces && (*ctx->one_sided)[geom]) {
+      // Embree's Ng is (v1 - v0) x (v2 - v0): the counter-clockwise, outward normal (tested).
+      const float d = RTCHitN_Ng_x(args->hit, args->N, i) * RTCRayN_dir_x(args->ray, args->N, i) +
+                      RTCHitN_Ng_y(args->hit, args->N, i) * RTCRayN_dir_y(args->ray, args->N, i) +
+                      RTCHitN_Ng_z(args->hit, args->N, i) * RTCRayN_dir_z(args->ray, args->N, i);
+      if (d > 0) args->valid[i] = 0;  // the ray meets the back side
+    }
   }
 }
 
@@ -59,6 +70,7 @@ struct RayTracer::Impl {
     invalid_rays.fetch_add(1, std::memory_order_relaxed);
     g_invalid_rays.fetch_add(1, std::memory_order_relaxed);
   }
+  std::vector<char> one_sided;  ///< per geometry (= shape index)
 };
 
 void RayTracer::build_impl(Impl& impl, const Scene& scene, const std::vector<std::vector<Vec3>>* positions) {
@@ -68,7 +80,10 @@ void RayTracer::build_impl(Impl& impl, const Scene& scene, const std::vector<std
   impl.scene = rtcNewScene(impl.device);
   rtcSetSceneFlags(impl.scene, RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION);
   rtcSetSceneBuildQuality(impl.scene, RTC_BUILD_QUALITY_HIGH);
+  impl.one_sided.assign(scene.shapes.size(), 1);
   for (size_t s = 0; s < scene.shapes.size(); ++s) {
+    const int b = scene.shapes[s].bsdf;
+    if (b >= 0 && b < int(scene.bsdfs.size()) && scene.bsdfs[size_t(b)].twosided) impl.one_sided[s] = 0;
     const TriangleMesh& mesh = scene.shapes[s].mesh;
     const auto& pos = positions ? (*positions)[s] : mesh.positions;
     RTCGeometry geom = rtcNewGeometry(impl.device, RTC_GEOMETRY_TYPE_TRIANGLE);
@@ -113,6 +128,7 @@ Hit RayTracer::intersect(const Vec3& origin, const Vec3& dir, double tmax, const
   rtcInitIntersectContext(&ctx.context);
   ctx.context.filter = ignore.empty() ? nullptr : ignore_filter;
   ctx.ignore = &ignore;
+  ctx.one_sided = &impl_->one_sided;
   RTCRayHit rh;
   rh.ray.org_x = float(origin.x());
   rh.ray.org_y = float(origin.y());
@@ -147,6 +163,7 @@ bool RayTracer::occluded(const Vec3& origin, const Vec3& dir, double tmax, const
   rtcInitIntersectContext(&ctx.context);
   ctx.context.filter = ignore.empty() ? nullptr : ignore_filter;
   ctx.ignore = &ignore;
+  ctx.one_sided = &impl_->one_sided;
   RTCRay ray;
   ray.org_x = float(origin.x());
   ray.org_y = float(origin.y());

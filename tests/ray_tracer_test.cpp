@@ -3,7 +3,8 @@
 /// directions, zero directions and NaN lengths are misses ("not occluded") and are counted, where
 /// Embree would abort the process on its `ray.valid()` assertion. And the gradient of the scene
 /// that aborted (spot-mirror with one Spot vertex at 1e30, placed in memory past the loader that
-/// now refuses it) completes.
+/// now refuses it) completes. And rays that pass through back faces (IgnoreSet::through_back_faces,
+/// the smooth-shading fix of issue 13) skip exactly the back sides of one-sided surfaces.
 
 #include "integrators/render.h"
 #include "qsil/ray_tracer.h"
@@ -107,4 +108,62 @@ TEST(RayTracer, GradientWithAHugeVertexCompletes) {
 }
 
 }  // namespace
+namespace {
+
+/// One unit quad in the plane z = 0 facing +z (counter-clockwise seen from +z), optionally
+/// twosided, and a second, one-sided quad at z = -1 facing +z.
+Scene two_quads(bool twosided) {
+  Scene s;
+  s.bsdfs.push_back(BSDFDesc{});
+  s.bsdfs[0].twosided = twosided;
+  s.bsdfs.push_back(BSDFDesc{});
+  for (double z : {0.0, -1.0}) {
+    Shape q;
+    q.type = "obj";
+    q.mesh.positions = {Vec3(-1, -1, z), Vec3(1, -1, z), Vec3(1, 1, z), Vec3(-1, 1, z)};
+    q.mesh.triangles = {Eigen::Vector3i(0, 1, 2), Eigen::Vector3i(0, 2, 3)};
+    q.bsdf = z == 0.0 ? 0 : 1;
+    s.shapes.push_back(q);
+  }
+  return s;
+}
+
+}  // namespace
+
+// A ray meets the front side of the upper quad from above, and the back side from below; with
+// through_back_faces the back side of a one-sided quad is skipped (and the ray goes on), the
+// front side never is, and a twosided quad is never skipped. This pins Embree's normal
+// orientation, which the filter relies on (counter-clockwise = front, as the meshes are wound).
+TEST(RayTracer, ThroughBackFacesSkipsOnlyBackSidesOfOneSidedSurfaces) {
+  const Scene one = two_quads(false);
+  const RayTracer rt(one);
+  IgnoreSet pass;
+  pass.through_back_faces = true;
+  // From above, downward: front of quad 0 (z = 0) with or without the flag.
+  EXPECT_EQ(rt.intersect(Vec3(0.1, 0.2, 1), Vec3(0, 0, -1)).shape, 0);
+  EXPECT_EQ(rt.intersect(Vec3(0.1, 0.2, 1), Vec3(0, 0, -1), kInf, pass).shape, 0);
+  EXPECT_TRUE(rt.occluded(Vec3(0.1, 0.2, 1), Vec3(0, 0, -1), 2.0, pass));
+  // From between the quads, upward: the back side of quad 0.
+  const Hit back = rt.intersect(Vec3(0.1, 0.2, -0.5), Vec3(0, 0, 1));
+  EXPECT_EQ(back.shape, 0);
+  EXPECT_NEAR(back.t, 0.5, 1e-6);
+  EXPECT_FALSE(rt.intersect(Vec3(0.1, 0.2, -0.5), Vec3(0, 0, 1), kInf, pass).valid());
+  EXPECT_TRUE(rt.occluded(Vec3(0.1, 0.2, -0.5), Vec3(0, 0, 1), 2.0));
+  EXPECT_FALSE(rt.occluded(Vec3(0.1, 0.2, -0.5), Vec3(0, 0, 1), 2.0, pass));
+  // From below both, upward through the back of quad 1 and quad 0: nothing with the flag.
+  EXPECT_EQ(rt.intersect(Vec3(0.1, 0.2, -2), Vec3(0, 0, 1)).shape, 1);
+  EXPECT_FALSE(rt.intersect(Vec3(0.1, 0.2, -2), Vec3(0, 0, 1), kInf, pass).valid());
+  // A twosided quad 0 stops the ray from behind even with the flag (its back side scatters).
+  const Scene two = two_quads(true);
+  const RayTracer rt2(two);
+  EXPECT_EQ(rt2.intersect(Vec3(0.1, 0.2, -0.5), Vec3(0, 0, 1), kInf, pass).shape, 0);
+  // The flag combines with ignored triangles: ignoring both triangles of quad 0 from above
+  // leaves the front of quad 1.
+  IgnoreSet both = pass;
+  both.prims[0] = {0, 0};
+  both.prims[1] = {0, 1};
+  EXPECT_EQ(rt.intersect(Vec3(0.1, 0.2, 1), Vec3(0, 0, -1), kInf, both).shape, 1);
+}
+
+
 }  // namespace qsil

@@ -27,15 +27,27 @@ struct Hit {
   bool valid() const { return shape >= 0; }
 };
 
-/// Up to two triangles that a ray must not hit (e.g. the two faces of a sampled edge, or the
-/// triangle the ray starts on). shape = -1 marks an unused slot.
+/// What a ray must not hit: up to two triangles (e.g. the two faces of a sampled edge, or the
+/// triangle the ray starts on; shape = -1 marks an unused slot), and optionally the back side of
+/// every one-sided surface (`through_back_faces`).
+///
+/// Why rays pass through back faces: a ray that leaves a surface on the side opposite to the
+/// viewer (possible only through a shading normal that tilts past the geometric one: a "sliver"
+/// direction) starts inside the mesh, where it could only meet back faces. Which directions are
+/// slivers depends on the geometric normal, which jumps at every edge of a smooth-shaded mesh; if
+/// back faces stopped such rays, the radiance would jump at every such edge, a discontinuity on
+/// no silhouette that no edge sampler finds (the smooth-mesh bias: the main job's derivative was
+/// 10 % low against finite differences). Passing through back faces of one-sided surfaces makes
+/// the sliver see what lies beyond the mesh, continuously across edges (docs/design-notes.md).
 struct IgnoreSet {
   std::array<std::pair<int, int>, 2> prims{{{-1, -1}, {-1, -1}}};
+  bool through_back_faces = false;  ///< skip hits on the back side of one-sided surfaces
   bool contains(int shape, int tri) const {
     return (prims[0].first == shape && prims[0].second == tri) ||
            (prims[1].first == shape && prims[1].second == tri);
   }
-  bool empty() const { return prims[0].first < 0 && prims[1].first < 0; }
+  /// True when no hit is filtered (Embree then runs without a filter function).
+  bool empty() const { return prims[0].first < 0 && prims[1].first < 0 && !through_back_faces; }
 };
 
 /// Embree scene over all shapes of a Scene. Thread-safe for queries after construction.
