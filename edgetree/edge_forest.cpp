@@ -33,6 +33,70 @@ std::vector<std::pair<int, int>> split4(std::vector<ForestEdge>& edges, int b, i
   return out;
 }
 
+/// Top-down 4-wide topology over edges [ebase, eend) of `edges` (reordered in place), appended
+/// to `nodes` breadth-first so that every level is a contiguous node range; the root is
+/// discarded, its children become `roots`. Inner nodes of a silhouette tree get a slot in
+/// `bounds` (fitted later); nodes of an always-candidate tree carry kNodeAlways and no bound.
+/// Returns the node range of every level; `depth` receives the number of levels.
+std::vector<std::pair<int, int>> build_topology(std::vector<ForestEdge>& edges, int ebase, int eend, int shape,
+                                                bool always, const ForestOptions& opt, std::vector<ForestNode>& nodes,
+                                                std::vector<NodeBound>* bounds, std::vector<int>& roots, int& depth) {
+  std::vector<std::pair<int, int>> levels;
+  depth = 0;
+  if (eend <= ebase) return levels;
+  const int nbase = int(nodes.size());
+  std::vector<std::pair<int, int>> top;
+  if (eend - ebase <= opt.leaf_size) top.push_back({ebase, eend});
+  else top = split4(edges, ebase, eend, opt);
+  auto add_node = [&](int b, int e, int parent, int d) {
+    ForestNode n;
+    n.edge_begin = b;
+    n.edge_end = e;
+    n.parent = parent;
+    n.shape = shape;
+    n.depth = std::uint16_t(d);
+    if (always) n.flags |= kNodeAlways;
+    if (e - b <= opt.leaf_size) {
+      n.flags |= kNodeLeaf;
+      n.first = b;
+      n.count = e - b;
+    }
+    nodes.push_back(n);
+  };
+  for (auto [b, e] : top) {
+    roots.push_back(int(nodes.size()));
+    add_node(b, e, -1, 0);
+  }
+  int level_begin = nbase;
+  while (level_begin < int(nodes.size())) {
+    const int level_end = int(nodes.size());
+    levels.push_back({level_begin, level_end});
+    for (int i = level_begin; i < level_end; ++i) {
+      if (nodes[i].is_leaf()) continue;
+      const auto groups = split4(edges, nodes[i].edge_begin, nodes[i].edge_end, opt);
+      nodes[i].first = int(nodes.size());
+      nodes[i].count = int(groups.size());
+      if (!always) {
+        nodes[i].bound = int(bounds->size());
+        bounds->emplace_back();
+      }
+      for (auto [b, e] : groups) add_node(b, e, i, depth + 1);
+    }
+    level_begin = level_end;
+    ++depth;
+  }
+  // ---- B_p and L_w of every node (edges are in their final order now), in parallel
+  tbb::parallel_for(nbase, int(nodes.size()), [&](int i) {
+    ForestNode& n = nodes[i];
+    for (int k = n.edge_begin; k < n.edge_end; ++k) {
+      n.bp.expand(edges[k].p0);
+      n.bp.expand(edges[k].p1);
+      n.lw += always ? always_edge_weight(edges[k]) : edges[k].length * edges[k].angle;
+    }
+  });
+  return levels;
+}
+
 // Fits one inner node from its edge range; `face_planes` are the shape's face planes.
 NodeFit fit_range(const std::vector<ForestEdge>& edges, const std::vector<Vec4>& face_planes,
                   const ForestNode& n, const NodeFit* parent, const NodeFitOptions& opt) {
@@ -80,81 +144,53 @@ EdgeForest EdgeForest::build(std::span<const ForestShapeInput> shapes, const For
       fe.p1 = mesh.positions[fe.v1];
       return fe;
     };
-    for (int idx : set.always) f.always_.push_back(make(idx));
-    const int ebase = int(f.edges_.size());
-    if (in.face_normals) {
-      // Creases: every edge between two faces that are not coplanar (convex and concave alike).
-      for (size_t idx = 0; idx < set.edges.size(); ++idx) {
-        const EdgeClass cls = set.edges[idx].cls;
-        if (cls == EdgeClass::Convex || cls == EdgeClass::Concave) {
-          f.always_.push_back(make(int(idx)));
-          f.always_.back().crease = true;
-          ++st.edges_always;
-        }
+    // ---- always-candidate edges: boundary, non-manifold, inconsistent, and the creases
+    const CreaseSet creases = in.face_normals ? CreaseSet::All : in.creases;
+    std::vector<ForestEdge> always;
+    for (int idx : set.always) always.push_back(make(idx));
+    std::vector<char> is_crease(set.edges.size(), 0);
+    for (size_t idx = 0; idx < set.edges.size(); ++idx) {
+      const EdgeClass cls = set.edges[idx].cls;
+      if ((cls == EdgeClass::Concave && creases != CreaseSet::None) || (cls == EdgeClass::Convex && creases == CreaseSet::All)) {
+        is_crease[idx] = 1;
+        always.push_back(make(int(idx)));
+        always.back().crease = true;
+        ++st.creases;
       }
-      st.edges_kept = 0;
-    } else {
-      for (int idx : set.kept) f.edges_.push_back(make(idx));
     }
-    const int eend = int(f.edges_.size());
+    st.edges_always = int(always.size());
+    const int abase = int(f.always_.size());
+    f.always_.insert(f.always_.end(), always.begin(), always.end());
+    const int aend = int(f.always_.size());
+    if (aend - abase > opt.always_tree_min_edges) {
+      const int n0 = int(f.nodes_.size());
+      int always_depth = 0;
+      build_topology(f.always_, abase, aend, in.shape, /*always=*/true, opt, f.nodes_, nullptr, f.always_roots_,
+                     always_depth);
+      st.always_nodes = int(f.nodes_.size()) - n0;
+    } else {
+      for (int i = abase; i < aend; ++i) f.loose_always_.push_back(i);
+    }
 
-    // ---- topology: breadth-first, so every level is a contiguous node range
+    // ---- silhouette tree edges: the kept edges that are not creases (a flat-shaded shape has
+    // none: its crease branch covers silhouettes too)
+    const int ebase = int(f.edges_.size());
+    if (!in.face_normals)
+      for (int idx : set.kept)
+        if (!is_crease[size_t(idx)]) f.edges_.push_back(make(idx));
+    const int eend = int(f.edges_.size());
+    st.edges_kept = eend - ebase;
+
+    // ---- topology and B_p, L_w of every node
     const int nbase = int(f.nodes_.size());
     const int bbase = int(f.bounds_.size());
-    std::vector<std::pair<int, int>> levels;  // node ranges per depth
-    if (eend > ebase) {
-      std::vector<std::pair<int, int>> top;
-      if (eend - ebase <= opt.leaf_size) top.push_back({ebase, eend});
-      else top = split4(f.edges_, ebase, eend, opt);
-      auto add_node = [&](int b, int e, int parent, int depth) {
-        ForestNode n;
-        n.edge_begin = b;
-        n.edge_end = e;
-        n.parent = parent;
-        n.shape = in.shape;
-        n.depth = std::uint16_t(depth);
-        if (e - b <= opt.leaf_size) {
-          n.flags |= kNodeLeaf;
-          n.first = b;
-          n.count = e - b;
-        }
-        f.nodes_.push_back(n);
-      };
-      for (auto [b, e] : top) {
-        f.roots_.push_back(int(f.nodes_.size()));
-        add_node(b, e, -1, 0);
-      }
-      st.roots = int(top.size());
-      int level_begin = nbase;
-      int depth = 0;
-      while (level_begin < int(f.nodes_.size())) {
-        const int level_end = int(f.nodes_.size());
-        levels.push_back({level_begin, level_end});
-        for (int i = level_begin; i < level_end; ++i) {
-          if (f.nodes_[i].is_leaf()) continue;
-          const auto groups = split4(f.edges_, f.nodes_[i].edge_begin, f.nodes_[i].edge_end, opt);
-          f.nodes_[i].first = int(f.nodes_.size());
-          f.nodes_[i].count = int(groups.size());
-          f.nodes_[i].bound = int(f.bounds_.size());
-          f.bounds_.emplace_back();
-          for (auto [b, e] : groups) add_node(b, e, i, depth + 1);
-        }
-        level_begin = level_end;
-        ++depth;
-      }
-      st.depth = depth;
-    }
-
-    // ---- B_p, L_w for every node (edges are in final order now), in parallel
+    int depth = 0;
+    const size_t roots_before = f.roots_.size();
+    const std::vector<std::pair<int, int>> levels =
+        build_topology(f.edges_, ebase, eend, in.shape, /*always=*/false, opt, f.nodes_, &f.bounds_, f.roots_, depth);
+    st.roots = int(f.roots_.size() - roots_before);
+    st.depth = depth;
     const int nend = int(f.nodes_.size());
-    tbb::parallel_for(nbase, nend, [&](int i) {
-      ForestNode& n = f.nodes_[i];
-      for (int k = n.edge_begin; k < n.edge_end; ++k) {
-        n.bp.expand(f.edges_[k].p0);
-        n.bp.expand(f.edges_[k].p1);
-        n.lw += f.edges_[k].length * f.edges_[k].angle;
-      }
-    });
 
     // ---- fit inner nodes level by level (parents first, for inheritance)
     std::vector<NodeFit> fits(f.bounds_.size() - bbase);
@@ -192,10 +228,25 @@ EdgeForest EdgeForest::build(std::span<const ForestShapeInput> shapes, const For
   return f;
 }
 
+std::vector<ForestShapeInput> forest_inputs(const Scene& scene) {
+  std::vector<ForestShapeInput> inputs;
+  for (size_t s = 0; s < scene.shapes.size(); ++s) {
+    const Shape& shape = scene.shapes[s];
+    ForestShapeInput in;
+    in.mesh = &shape.mesh;
+    in.shape = int(s);
+    in.face_normals = shape.face_normals || shape.mesh.normals.empty();
+    const bool twosided = shape.bsdf >= 0 && shape.bsdf < int(scene.bsdfs.size()) && scene.bsdfs[size_t(shape.bsdf)].twosided;
+    in.creases = twosided ? CreaseSet::All : CreaseSet::Concave;
+    inputs.push_back(in);
+  }
+  return inputs;
+}
+
 size_t EdgeForest::memory_bytes() const {
   return nodes_.capacity() * sizeof(ForestNode) + bounds_.capacity() * sizeof(NodeBound) +
          edges_.capacity() * sizeof(ForestEdge) + always_.capacity() * sizeof(ForestEdge) +
-         roots_.capacity() * sizeof(int);
+         (roots_.capacity() + always_roots_.capacity() + loose_always_.capacity()) * sizeof(int);
 }
 
 }  // namespace qsil::edgetree

@@ -19,6 +19,7 @@ enum NodeFlags : std::uint16_t {
   kNodeBoxOnly = 4,       ///< no usable quadric: the rejection test stops after the dual box
   kNodeInherited = 8,     ///< Q_f inherited from the parent (too few planes or failed fit)
   kNodeUsedLp = 16,       ///< D came from the LP [QSS Eq. 6] (a point, not a direction)
+  kNodeAlways = 32,       ///< a node of an always-candidate tree: no rejection test, no dual bound
 };
 
 /// Relative padding of every fitted bound (dual box, lambda range): 1e-9 of the magnitude of the

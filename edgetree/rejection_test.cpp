@@ -163,6 +163,7 @@ bool leaf_has_silhouette(const EdgeForest& forest, int leaf, const Vec3& p) {
 
 bool may_have_silhouette(const EdgeForest& forest, int node, const Vec3& p, RejectionMode mode) {
   const ForestNode& n = forest.node(node);
+  if (n.always()) return true;  // an always-candidate tree: no rejection
   if (n.is_leaf()) return leaf_has_silhouette(forest, node, p);
   if (n.unrejectable() || n.bound < 0) return true;
   return bound_may_have_silhouette(forest.bounds()[n.bound],
@@ -170,9 +171,8 @@ bool may_have_silhouette(const EdgeForest& forest, int node, const Vec3& p, Reje
 }
 
 bool node_has_silhouette(const EdgeForest& forest, int node, const Vec3& p) {
-  const ForestNode& n = forest.node(node);
-  for (int i = n.edge_begin; i < n.edge_end; ++i)
-    if (edge_is_silhouette(forest.edges()[i], p)) return true;
+  for (const ForestEdge& e : forest.node_edges(node))
+    if (edge_is_silhouette(e, p)) return true;
   return false;
 }
 

@@ -48,7 +48,8 @@ bool eligible(const SilhouetteQuery& q, int shape) {
   return !q.eligible || (shape < int(q.eligible->size()) && (*q.eligible)[shape]);
 }
 
-/// The candidates at the top level: accepted, eligible forest roots and always-candidate edges.
+/// The candidates at the top level: accepted, eligible forest roots, the roots of the
+/// always-candidate trees (never rejected) and the loose always-candidate edges.
 int top_candidates(const EdgeForest& f, const SilhouetteQuery& q, std::vector<Candidate>& out, int& tests) {
   out.clear();
   for (int r : f.roots()) {
@@ -57,7 +58,10 @@ int top_candidates(const EdgeForest& f, const SilhouetteQuery& q, std::vector<Ca
     if (!may_have_silhouette(f, r, q.p, q.mode)) continue;
     out.push_back({r, nullptr, node_weight(f.node(r), q)});
   }
-  for (const ForestEdge& e : f.always_edges()) {
+  for (int r : f.always_roots())
+    if (eligible(q, f.node(r).shape)) out.push_back({r, nullptr, node_weight(f.node(r), q)});
+  for (int i : f.loose_always()) {
+    const ForestEdge& e = f.always_edges()[size_t(i)];
     if (!eligible(q, e.shape)) continue;
     out.push_back({-1, &e, edge_weight(e, q)});
   }
@@ -69,8 +73,10 @@ int child_candidates(const EdgeForest& f, int n, const SilhouetteQuery& q, std::
   int k = 0;
   const ForestNode& node = f.node(n);
   for (int c = node.first; c < node.first + node.count; ++c) {
-    ++tests;
-    if (!may_have_silhouette(f, c, q.p, q.mode)) continue;
+    if (!f.node(c).always()) {  // always-candidate trees have no rejection test
+      ++tests;
+      if (!may_have_silhouette(f, c, q.p, q.mode)) continue;
+    }
     out[k++] = {c, nullptr, node_weight(f.node(c), q)};
   }
   return k;
@@ -175,24 +181,24 @@ SilhouetteSample sample_on_edge(const ForestEdge& e, double pmf, const Silhouett
 }
 
 double silhouette_edge_probability(const EdgeForest& forest, const SilhouetteQuery& query, const ForestEdge* edge) {
+  // A candidate leads to `edge` when it is that edge or a node whose edge range holds it.
+  auto leads_to = [&](const Candidate& c) {
+    if (c.edge) return c.edge == edge;
+    const std::span<const ForestEdge> below = forest.node_edges(c.node);
+    return edge >= below.data() && edge < below.data() + below.size();
+  };
   int tests = 0;
   std::vector<Candidate> top;
   const int n_top = top_candidates(forest, query, top, tests);
   std::vector<double> prob(size_t(std::max(n_top, 1)));
   choice_probabilities(top, n_top, prob.data());
-  const bool is_always = edge >= forest.always_edges().data() &&
-                         edge < forest.always_edges().data() + forest.always_edges().size();
-  const int index = is_always ? -1 : int(edge - forest.edges().data());
   double pmf = 0;
   Candidate cur;
-  for (int i = 0; i < n_top; ++i) {
-    const Candidate& c = top[size_t(i)];
-    if (c.edge == edge || (!is_always && c.node >= 0 && index >= forest.node(c.node).edge_begin &&
-                           index < forest.node(c.node).edge_end)) {
+  for (int i = 0; i < n_top; ++i)
+    if (leads_to(top[size_t(i)])) {
       pmf = prob[size_t(i)];
-      cur = c;
+      cur = top[size_t(i)];
     }
-  }
   if (pmf == 0) return 0;
   std::array<Candidate, 4> cand;
   std::array<double, 4> p4;
@@ -203,11 +209,9 @@ double silhouette_edge_probability(const EdgeForest& forest, const SilhouetteQue
     choice_probabilities(cand, k, p4.data());
     bool found = false;
     for (int i = 0; i < k && !found; ++i) {
-      const Candidate& c = cand[size_t(i)];
-      if (c.edge == edge || (c.node >= 0 && !node.is_leaf() && index >= forest.node(c.node).edge_begin &&
-                             index < forest.node(c.node).edge_end)) {
+      if (leads_to(cand[size_t(i)])) {
         pmf *= p4[size_t(i)];
-        cur = c;
+        cur = cand[size_t(i)];
         found = true;
       }
     }

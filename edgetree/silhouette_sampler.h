@@ -18,7 +18,10 @@
 /// silhouette edges (exact per-edge test) the same way with I_e = the LTC line integral of the
 /// edge's [QSS Eq. 4] integrand and G_e = length / |midpoint - p|^2; the point on the edge comes
 /// from EdgePointSampler (itself defensive). Always-candidate edges (boundary edges: the outlines
-/// of rectangles, area lights, open meshes) compete with the forest roots at the top level.
+/// of rectangles, area lights, open meshes; creases) compete with the forest roots at the top
+/// level: a shape's many always-candidates through the roots of its always-candidate tree, whose
+/// nodes are never rejected and are weighed like the forest's (L_w = always_edge_weight), a
+/// shape's few (e.g. a rectangle's outline) one by one.
 
 #include "edgetree/edge_forest.h"
 #include "edgetree/ltc.h"

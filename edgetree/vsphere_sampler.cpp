@@ -133,7 +133,7 @@ int VSphereEdgeSampler::top_candidates(const SilhouetteQuery& q, std::vector<Can
     out.push_back(c);
   }
   for (const ForestEdge& e : forest_.always_edges()) {
-    if (!eligible(q, e.shape)) continue;
+    if (e.crease || !eligible(q, e.shape)) continue;  // creases are in the tree's plain BVH
     Cand c;
     c.edge = &e;
     Box3 b;

@@ -132,9 +132,13 @@ VSphereTree VSphereTree::build(const EdgeForest& forest, const Vec3& o) {
   t.origin_ = o;
   int num_shapes = 0;
   for (const ForestEdge& e : forest.edges()) num_shapes = std::max(num_shapes, e.shape + 1);
+  for (const ForestEdge& e : forest.always_edges()) num_shapes = std::max(num_shapes, e.shape + 1);
   std::vector<std::vector<const ForestEdge*>> plain(static_cast<size_t>(num_shapes)), hough(static_cast<size_t>(num_shapes));
   for (const ForestEdge& e : forest.edges())
     (edge_is_silhouette(e, o) ? plain : hough)[size_t(e.shape)].push_back(&e);
+  // Creases are candidates for every point (no v-sphere test applies): the plain BVH.
+  for (const ForestEdge& e : forest.always_edges())
+    if (e.crease) plain[size_t(e.shape)].push_back(&e);
   std::vector<BuildItem> items;
   for (int pass = 0; pass < 2; ++pass) {  // plain trees first: edges_[0, plain_edges_) are theirs
     for (int s = 0; s < num_shapes; ++s) {

@@ -79,8 +79,9 @@ struct VSphereRoot {
 };
 
 /// Li's (2019) Hough-space edge tree over the tree edges of a quadric edge forest (the same
-/// candidate edges: convex, plus concave ones where the forest keeps them). Always-candidate
-/// (boundary) edges are not in it: samplers handle them at the top level.
+/// candidate edges: convex, plus concave ones where the forest keeps them) and its creases (in
+/// the plain, untested part: a crease is a candidate for every point). The other
+/// always-candidate (boundary) edges are not in it: samplers handle them at the top level.
 class VSphereTree {
  public:
   VSphereTree() = default;

@@ -60,16 +60,19 @@ inline edgetree::LTC bsdf_ltc(const BSDFDesc& b, Vec3 wo_local) {
 /// The radiance jump and the Jacobian at a point of a discontinuity edge seen from p (shared by
 /// the secondary and the primary boundary terms). On success (returns true):
 /// - jump = s (L_bg - L_fg): the occluder-side sign times background minus foreground radiance
-///   for a silhouette or boundary edge; for a crease of a flat-shaded shape (an edge whose two
+///   for a silhouette or boundary edge; for a crease (edgetree::CreaseSet; an edge whose two
 ///   faces both face p), the radiance on the minus side minus that on the plus side of the plane
-///   (p, edge), the plus side being where w0 x w1 points;
+///   (p, edge), the plus side being where w0 x w1 points, both with the same random numbers;
 /// - J[k] = det(w0, w1, v_t) / |w_t|^3 for parameter k (per unit t), v_t relative to p.
 /// Returns false for a zero contribution: p on the edge's line, no relative velocity, or the edge
 /// point hidden from p. `vis_origin` starts the visibility ray (p, offset off its surface).
+/// `through_back_faces`: the direction from p to the edge point leaves p's surface on the side
+/// opposite to p's viewer (leaves_below), so that ray and its continuation beyond the edge pass
+/// through back faces, as every such ray of the path tracer does.
 template <int N>
 bool edge_jump(const PathContext& ctx, const SceneVelocities& vel, const edgetree::ForestEdge& e, double t,
-               const Vec3& p, const Vec3& vis_origin, const Eigen::Matrix<double, 3, N>& dp, int seg,
-               Sampler& sampler, PathStats& stats, Color& jump, Eigen::Matrix<double, 1, N>& J) {
+               const Vec3& p, const Vec3& vis_origin, bool through_back_faces, const Eigen::Matrix<double, 3, N>& dp,
+               int seg, Sampler& sampler, PathStats& stats, Color& jump, Eigen::Matrix<double, 1, N>& J) {
   const Scene& scene = *ctx.scene;
   const Vec3 w0 = e.p0 - p, w1 = e.p1 - p;
   const Vec3 wt = w0 + t * (w1 - w0);
@@ -88,6 +91,7 @@ bool edge_jump(const PathContext& ctx, const SceneVelocities& vel, const edgetre
   IgnoreSet ignore;
   ignore.prims[0] = {e.shape, e.f0};
   ignore.prims[1] = {e.f1 >= 0 ? e.shape : -1, e.f1};
+  ignore.through_back_faces = through_back_faces;
   const double vis_dist = (e.p0 + t * (e.p1 - e.p0) - vis_origin).norm();
   ++stats.rays;
   if (ctx.tracer->occluded(vis_origin, w, vis_dist * (1.0 - 1.0 / 4096.0), ignore)) return false;
@@ -104,7 +108,7 @@ bool edge_jump(const PathContext& ctx, const SceneVelocities& vel, const edgetre
   // The point is known: barycentrics (1-t at v0, t at v1) in the face's vertex order (the face
   // may be seen edge-on from p, where a ray-plane intersection degenerates).
   const PrimalView pv{&scene};
-  auto face_radiance = [&](int face) {
+  auto face_radiance = [&](int face, Sampler& rng) {
     Hit h;
     h.shape = e.shape;
     h.triangle = face;
@@ -113,15 +117,18 @@ bool edge_jump(const PathContext& ctx, const SceneVelocities& vel, const edgetre
     h.u = weight(1);
     h.v = weight(2);
     h.exact = true;
-    return Color(trace_path(ctx, pv, p, w, h, seg, 0.0, sampler, stats));
+    return Color(trace_path(ctx, pv, p, w, h, seg, 0.0, rng, stats));
   };
   if (e.crease && !edgetree::edge_is_silhouette(e, p)) {
-    // ---- A crease of a flat-shaded shape, both faces facing p: the two faces lie on opposite
+    // ---- A crease (edgetree::CreaseSet), both faces facing p: the two faces lie on opposite
     // sides of the plane (p, edge); the radiance jumps from one face's to the other's.
     // Reynolds transport: jump = L(side -) - L(side +), + the side (w0 x w1) points to.
     const double s0 = side_of(e.f0);
     if (s0 == 0) return false;
-    const Color L0 = face_radiance(e.f0), L1 = face_radiance(e.f1);
+    // Common random numbers: both faces continue their paths with the same random numbers, so
+    // the difference is the jump itself (where the two paths differ), not two independent noises.
+    Sampler same = sampler;
+    const Color L0 = face_radiance(e.f0, sampler), L1 = face_radiance(e.f1, same);
     jump = s0 > 0 ? Color(L1 - L0) : Color(L0 - L1);
     return true;
   }
@@ -133,7 +140,7 @@ bool edge_jump(const PathContext& ctx, const SceneVelocities& vel, const edgetre
   // (escaping rays see the environment).
   const Vec4 x(p.x(), p.y(), p.z(), 1.0);
   const int face = (e.f1 < 0 || e.q0.dot(x) > 0) ? e.f0 : e.f1;
-  const Color L_fg = face_radiance(face);
+  const Color L_fg = face_radiance(face, sampler);
   const Vec3 xe = p + wt;
   ++stats.rays;
   const Hit bg = ctx.tracer->intersect(xe, w, kInf, ignore);
@@ -163,7 +170,7 @@ template <int N> struct BoundaryHook {
     q.lights = &bctx->lights;
     q.env_weight = bctx->env_weight;
     const Color T = value(beta);
-    const Vec3 ng = value(si.ng);
+    const Vec3 wo_world = q.frame.to_world(wo_local);
     for (int sample = 0; sample < bctx->samples_per_vertex; ++sample) {
       ++stats.boundary_traversals;
       const edgetree::SilhouetteSample s =
@@ -176,8 +183,8 @@ template <int N> struct BoundaryHook {
       const Color f = bsdf_eval<double>(*sp.bsdf, q.frame.to_local(w), wo_local);
       Color jump;
       Eigen::Matrix<double, 1, N> J;
-      if ((f == 0).all() || !edge_jump<N>(*ctx, *bctx->velocities, *s.edge, s.t, q.p,
-                                          offset_ray_origin(q.p, ng, w, si.scale), dp, seg, *sampler, stats, jump, J) ||
+      if ((f == 0).all() || !edge_jump<N>(*ctx, *bctx->velocities, *s.edge, s.t, q.p, spawn_origin(si, w),
+                                          leaves_below(si, wo_world, w), dp, seg, *sampler, stats, jump, J) ||
           (jump == 0).all()) {
         ++stats.boundary_zero;
         continue;

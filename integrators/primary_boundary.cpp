@@ -51,7 +51,8 @@ void run_chunk(const PathContext& ctx, const SceneVelocities& vel, const std::ve
   Sampler sampler(seed, uint64_t(chunk), 0, 2);
   for (long long i = first; i < first + count; ++i) {
     ++stats.boundary_traversals;
-    // ---- An edge by projected length, a point uniformly along its projected segment.
+    // ---- An edge by its weight (projected length, less for creases), a point uniformly along
+    // its projected segment.
     const double u = sampler.next() * cdf.back();
     const size_t j = std::min(size_t(std::upper_bound(cdf.begin(), cdf.end(), u) - cdf.begin()) - 1, edges.size() - 1);
     const PrimaryEdge& pe = edges[j];
@@ -59,7 +60,7 @@ void run_chunk(const PathContext& ctx, const SceneVelocities& vel, const std::ve
     const double tp = s * pe.za / (pe.zb * (1 - s) + s * pe.za);                 // perspective-correct
     const double dsdt = pe.za * pe.zb / std::pow((1 - tp) * pe.za + tp * pe.zb, 2);  // ds/dt'
     const double t = pe.ta + tp * (pe.tb - pe.ta);
-    const double pdf = (pe.length / cdf.back()) * dsdt / (pe.tb - pe.ta);
+    const double pdf = (pe.weight / cdf.back()) * dsdt / (pe.tb - pe.ta);
     const Vec2 film = pe.a + s * (pe.b - pe.a);
     const int px = std::clamp(int(film.x()), 0, cam.width - 1), py = std::clamp(int(film.y()), 0, cam.height - 1);
     // ---- W(w) = f_x f_y / cos^3: pixels^2 per steradian of the box-filtered pixel.
@@ -72,7 +73,7 @@ void run_chunk(const PathContext& ctx, const SceneVelocities& vel, const std::ve
     const double W = fx * fy / (cos_theta * cos_theta * cos_theta);
     Color jump;
     Eigen::Matrix<double, 1, N> J;
-    if (!edge_jump<N>(ctx, vel, *pe.edge, t, o, o, dp, 0, sampler, stats, jump, J) || (jump == 0).all()) {
+    if (!edge_jump<N>(ctx, vel, *pe.edge, t, o, o, false, dp, 0, sampler, stats, jump, J) || (jump == 0).all()) {
       ++stats.boundary_zero;
       continue;
     }
@@ -116,7 +117,8 @@ std::vector<PrimaryEdge> find_primary_edges(const Scene& scene, const edgetree::
     pe.a = project_to_film(cam, e.p0 + pe.ta * (e.p1 - e.p0), &pe.za);
     pe.b = project_to_film(cam, e.p0 + pe.tb * (e.p1 - e.p0), &pe.zb);
     pe.length = (pe.b - pe.a).norm();
-    if (pe.length > 0 && pe.za > 0 && pe.zb > 0) out.push_back(pe);
+    pe.weight = pe.length * (e.crease ? std::max(e.angle, 1e-3) / kPi : 1.0);
+    if (pe.weight > 0 && pe.za > 0 && pe.zb > 0) out.push_back(pe);
   };
   for (const auto& e : forest.edges()) consider(e);
   for (const auto& e : forest.always_edges()) consider(e);
@@ -128,7 +130,7 @@ void add_primary_boundary(Film& film, const PathContext& ctx, const SceneVelocit
                           int threads, PathStats& stats) {
   if (edges.empty() || num_samples <= 0) return;
   std::vector<double> cdf(1, 0.0);
-  for (const auto& e : edges) cdf.push_back(cdf.back() + e.length);
+  for (const auto& e : edges) cdf.push_back(cdf.back() + e.weight);
   // Each sample estimates the whole image's primary term; a pixel's film mean divides by spp.
   const double per_sample = double(spp) / double(num_samples);
   const long long chunk_size = 1024;

@@ -12,7 +12,8 @@
 /// with W in place of the cosine-weighted BSDF:
 ///   dI_pixel/dtheta = sum_e integral s (L_bg - L_fg) W(w(t)) det(w0, w1, v_t)/|w_t|^3 dt
 /// restricted to the t whose image point lies in the pixel. An edge is chosen with probability
-/// proportional to its projected length and a point uniformly along its projected segment (so
+/// proportional to PrimaryEdge::weight (projected length, times angle/pi for a crease) and a
+/// point uniformly along its projected segment (so
 /// the density in t carries the perspective Jacobian ds/dt); each sample is splatted into the
 /// pixel it lands in.
 
@@ -30,6 +31,10 @@ struct PrimaryEdge {
   Vec2 a = Vec2::Zero(), b = Vec2::Zero();  ///< film positions (pixels) of ta and tb
   double za = 1, zb = 1;     ///< camera-space depths of ta and tb
   double length = 0;         ///< |b - a| in pixels
+  /// Sampling weight (pixels): length for silhouettes and boundary edges, length * angle / pi
+  /// for a crease, whose jump grows with its bend angle (always_edge_weight's scale): a smooth
+  /// mesh's many shallow concave creases do not crowd out its silhouettes.
+  double weight = 0;
 };
 
 /// The discontinuity edges of moving shapes seen from the camera centre, clipped and projected.

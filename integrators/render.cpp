@@ -107,10 +107,7 @@ RenderResult render_gradient_n(const Scene& scene, const std::vector<ParameterSp
   const bool boundary = gopt.boundary != BoundaryMethod::None && vel.any_moving();
   if (boundary) {
     const auto t0 = std::chrono::steady_clock::now();
-    std::vector<edgetree::ForestShapeInput> inputs;
-    for (size_t s = 0; s < scene.shapes.size(); ++s)
-      inputs.push_back({&scene.shapes[s].mesh, int(s), scene.shapes[s].face_normals});
-    forest = edgetree::EdgeForest::build(inputs);
+    forest = edgetree::EdgeForest::build(edgetree::forest_inputs(scene));
     edge_sampler = make_edge_sampler(gopt.boundary, scene, forest);
     if (report) report->forest_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     bctx.sampler = edge_sampler.get();

@@ -168,9 +168,7 @@ int run_candidates(const CandidatesFlags& f) {
   }
   q.eligible = &eligible;
   // ---- The forest (over every shape, as render_gradient builds it) and the samplers.
-  std::vector<edgetree::ForestShapeInput> inputs;
-  for (size_t s = 0; s < scene.shapes.size(); ++s) inputs.push_back({&scene.shapes[s].mesh, int(s)});
-  const EdgeForest forest = EdgeForest::build(inputs);
+  const EdgeForest forest = EdgeForest::build(edgetree::forest_inputs(scene));
   const fs::path dir = f.out_dir.empty() ? fs::path("out") / "candidates" : fs::path(f.out_dir);
   fs::create_directories(dir);
   // Ground truth over the eligible shapes' candidate edges.

@@ -34,17 +34,23 @@ int run_forest(const ForestFlags& f) {
   if (!fs::exists(path)) throw Error(f.input + ": no such file");
   std::string ext = path.extension().string();
   for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  // The forest's inputs as the boundary term builds them (edgetree::forest_inputs): a scene's
+  // shapes with their crease sets; a lone mesh is smooth-shaded and one-sided (concave creases).
   std::vector<TriangleMesh> meshes;
   std::vector<std::string> names;
+  std::vector<edgetree::ForestShapeInput> in;
+  Scene scene;
   if (ext == ".obj") {
     meshes.push_back(load_obj(path));
     names.push_back(path.filename().string());
+    edgetree::ForestShapeInput one;
+    one.mesh = &meshes[0];
+    one.creases = edgetree::CreaseSet::Concave;
+    in.push_back(one);
   } else if (ext == ".xml") {
-    Scene scene = load_scene(path);
-    for (auto& s : scene.shapes) {
-      names.push_back(s.id.empty() ? s.type + " (" + s.source + ")" : s.id);
-      meshes.push_back(std::move(s.mesh));
-    }
+    scene = load_scene(path);
+    for (const auto& s : scene.shapes) names.push_back(s.id.empty() ? s.type + " (" + s.source + ")" : s.id);
+    in = edgetree::forest_inputs(scene);
   } else {
     throw Error(f.input + ": expected a .obj mesh or a .xml scene");
   }
@@ -52,8 +58,6 @@ int run_forest(const ForestFlags& f) {
   if (f.threads > 0)
     gc = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
                                                size_t(f.threads));
-  std::vector<edgetree::ForestShapeInput> in;
-  for (size_t i = 0; i < meshes.size(); ++i) in.push_back({&meshes[i], int(i)});
   edgetree::ForestOptions opt;
   opt.edges.keep_concave = f.keep_concave;
   opt.fit.min_fit_planes = f.min_fit_planes;
@@ -68,12 +72,12 @@ int run_forest(const ForestFlags& f) {
     edges_total += st.edges_kept + st.edges_always;
     if (f.stats) {
       std::printf("shape %d (%s)\n", st.shape, names[st.shape].c_str());
-      std::printf("  edges: %d total, %d convex, %d concave%s, %d flat, %d boundary, "
+      std::printf("  edges: %d total, %d convex, %d concave, %d flat, %d boundary, "
                   "%d non-manifold, %d inconsistent\n",
-                  st.edges_total, c(EdgeClass::Convex), c(EdgeClass::Concave),
-                  f.keep_concave ? " (kept)" : " (culled)", c(EdgeClass::Flat),
+                  st.edges_total, c(EdgeClass::Convex), c(EdgeClass::Concave), c(EdgeClass::Flat),
                   c(EdgeClass::Boundary), c(EdgeClass::NonManifold), c(EdgeClass::Inconsistent));
-      std::printf("  kept in tree: %d, always-candidate: %d\n", st.edges_kept, st.edges_always);
+      std::printf("  kept in tree: %d, always-candidate: %d (%d creases; always-candidate tree: %d nodes)\n",
+                  st.edges_kept, st.edges_always, st.creases, st.always_nodes);
       std::printf("  nodes: %d (%d inner, %d leaves, %d roots), depth %d\n", st.nodes,
                   st.inner_nodes, st.leaves, st.roots, st.depth);
       std::printf("  inner nodes: %d unrejectable, %d box-only, %d inherited quadric, %d LP\n",

@@ -150,9 +150,7 @@ inline Estimate boundary_estimate(const Scene& scene, BoundaryMethod method, con
   ctx.environment = &env;
   ctx.area_lights = &lights;
   ctx.max_depth = scene.max_depth;
-  std::vector<edgetree::ForestShapeInput> inputs;
-  for (size_t s = 0; s < scene.shapes.size(); ++s) inputs.push_back({&scene.shapes[s].mesh, int(s)});
-  const edgetree::EdgeForest forest = edgetree::EdgeForest::build(inputs);
+  const edgetree::EdgeForest forest = edgetree::EdgeForest::build(edgetree::forest_inputs(scene));
   const auto edge_sampler = make_edge_sampler(method, scene, forest);
   const std::vector<bool> all(scene.shapes.size(), true);
   edgetree::SilhouetteQuery q;
@@ -173,7 +171,7 @@ inline Estimate boundary_estimate(const Scene& scene, BoundaryMethod method, con
       const Color f = bsdf_eval<double>(scene.bsdfs[0], q.frame.to_local(w), wo_local);
       Color jump;
       Eigen::Matrix<double, 1, 1> J;
-      if (edge_jump<1>(ctx, vel, *s.edge, s.t, p, p + Vec3(0, 0, 1e-6), dpm, 1, sampler, stats, jump, J))
+      if (edge_jump<1>(ctx, vel, *s.edge, s.t, p, p + Vec3(0, 0, 1e-6), false, dpm, 1, sampler, stats, jump, J))
         v = f[0] * jump[0] * J[0] / s.pdf;
     }
     sum += v;
