@@ -33,6 +33,14 @@ std::vector<Case> cases() {
       {"spot-selfshadow", "tests/data/gradient/spot-selfshadow.xml", {}, "spot:translate:1,0,0", 1e-2},
       // A flat-shaded cube rotating: its creases are discontinuities (primary and secondary).
       {"faceted-cube", "tests/data/gradient/faceted-cube.xml", {}, "cube:rotate:0,1,0", 1e-2},
+      // A coarse smooth-shaded cube (vertex normals up to 55 deg off the faces') moving toward the
+      // camera: the shading must not jump at its edges (smooth-mesh issue).
+      {"smooth-cube", "tests/data/gradient/smooth-cube.xml", {}, "cube:translate:0,0,1", 1e-2},
+      // One mirror point of spot-mirror whose GGX lobe sees Spot's silhouette (a 1x1 image with a
+      // 0.02 deg field of view): the boundary term through a near-specular lobe. FD needs a small
+      // step: the radiance varies on the scale of the lobe's footprint on Spot (h = 0.01 is 8 %
+      // off at alpha 0.01, h = 0.003 and 0.001 agree).
+      {"mirror-point", "tests/data/gradient/mirror-point.xml", {}, "spot:translate:0,1,0", 2e-3},
   };
 }
 

@@ -40,9 +40,9 @@ struct Case {
   Case resolved(const std::filesystem::path& root) const;
 };
 
-/// The five scenes of the boundary-term issue, in the order it lists them, and a flat-shaded
-/// (face_normals) case: spot-mirror, shadow-quad, direct (scenes/), plane-light, spot-selfshadow,
-/// faceted-cube (tests/data/gradient/).
+/// The five scenes of the boundary-term issue, in the order it lists them, a flat-shaded
+/// (face_normals) case and two smooth-shading cases: spot-mirror, shadow-quad, direct (scenes/),
+/// plane-light, spot-selfshadow, faceted-cube, smooth-cube, mirror-point (tests/data/gradient/).
 std::vector<Case> cases();
 
 /// The case named `name`; throws qsil::Error "no gradient case NAME" otherwise.
