@@ -1,10 +1,10 @@
 /// @file canonical_patch.cpp
 /// See canonical_patch.h.
 
-#include "edgetree/canonical_patch.h"
+#include "qsil/edgetree/canonical_patch.h"
 
-#include "edgetree/mesh_edges.h"
-#include "edgetree/rejection_test.h"
+#include "qsil/edgetree/mesh_edges.h"
+#include "qsil/edgetree/rejection_test.h"
 #include "qsil/error.h"
 
 #include <cmath>

@@ -1,7 +1,7 @@
 /// @file edge_forest.cpp
 /// Forest topology (top-down 4-wide SAH) and parallel node fitting [QSS 4.1-4.4].
 
-#include "edgetree/edge_forest.h"
+#include "qsil/edgetree/edge_forest.h"
 
 #include "edgetree/sah_split.h"
 

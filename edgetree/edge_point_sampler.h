@@ -33,7 +33,7 @@
 ///
 /// Units: t is dimensionless, pdf(t) per unit t, target(t) and target_integral() per scene unit.
 
-#include "edgetree/ltc.h"
+#include "qsil/edgetree/ltc.h"
 #include "qsil/math.h"
 
 namespace qsil::edgetree {

@@ -1,7 +1,7 @@
 /// @file ltc.cpp
 /// LTC lookup, evaluation and spherical polygon integrals (see ltc.h; Heitz et al. 2016).
 
-#include "edgetree/ltc.h"
+#include "qsil/edgetree/ltc.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,7 +1,7 @@
 /// @file mesh_edges.cpp
 /// Edge extraction and classification (docs/architecture.md §5 "Edges").
 
-#include "edgetree/mesh_edges.h"
+#include "qsil/edgetree/mesh_edges.h"
 
 #include <tbb/parallel_sort.h>
 

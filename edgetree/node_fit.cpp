@@ -1,7 +1,7 @@
 /// @file node_fit.cpp
 /// One node's dual bound [QSS 3.2-3.3, 4.2-4.4].
 
-#include "edgetree/node_fit.h"
+#include "qsil/edgetree/node_fit.h"
 
 #include "edgetree/offset_direction.h"
 #include "edgetree/quadric_fit.h"

@@ -3,7 +3,7 @@
 
 #include "edgetree/quadric_fit.h"
 
-#include "edgetree/local_frame.h"
+#include "qsil/edgetree/local_frame.h"
 
 #include <Eigen/Eigenvalues>
 

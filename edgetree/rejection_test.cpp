@@ -1,7 +1,7 @@
 /// @file rejection_test.cpp
 /// Node rejection test [QSS 3.4, Appendix C].
 
-#include "edgetree/rejection_test.h"
+#include "qsil/edgetree/rejection_test.h"
 
 #include "edgetree/conic.h"
 

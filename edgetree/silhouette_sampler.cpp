@@ -1,7 +1,7 @@
 /// @file silhouette_sampler.cpp
 /// See silhouette_sampler.h.
 
-#include "edgetree/silhouette_sampler.h"
+#include "qsil/edgetree/silhouette_sampler.h"
 
 #include "edgetree/discrete_choice.h"
 #include "edgetree/edge_point_sampler.h"

@@ -1,7 +1,7 @@
 /// @file uniform_sampler.cpp
 /// See uniform_sampler.h.
 
-#include "edgetree/uniform_sampler.h"
+#include "qsil/edgetree/uniform_sampler.h"
 
 #include "edgetree/edge_point_sampler.h"
 

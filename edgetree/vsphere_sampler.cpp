@@ -1,11 +1,11 @@
 /// @file vsphere_sampler.cpp
 /// See vsphere_sampler.h.
 
-#include "edgetree/vsphere_sampler.h"
+#include "qsil/edgetree/vsphere_sampler.h"
 
 #include "edgetree/discrete_choice.h"
 #include "edgetree/edge_point_sampler.h"
-#include "edgetree/ltc.h"
+#include "qsil/edgetree/ltc.h"
 
 #include <algorithm>
 #include <cmath>

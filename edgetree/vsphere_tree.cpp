@@ -1,7 +1,7 @@
 /// @file vsphere_tree.cpp
 /// See vsphere_tree.h.
 
-#include "edgetree/vsphere_tree.h"
+#include "qsil/edgetree/vsphere_tree.h"
 
 #include <algorithm>
 #include <bit>

@@ -3,8 +3,8 @@
 
 #include "integrators/edge_sampler_factory.h"
 
-#include "edgetree/uniform_sampler.h"
-#include "edgetree/vsphere_sampler.h"
+#include "qsil/edgetree/uniform_sampler.h"
+#include "qsil/edgetree/vsphere_sampler.h"
 
 namespace qsil {
 

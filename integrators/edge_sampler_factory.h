@@ -2,9 +2,9 @@
 /// @file edge_sampler_factory.h
 /// The secondary edge sampler of a `--boundary` method (docs/architecture.md §7).
 
-#include "edgetree/edge_forest.h"
-#include "edgetree/edge_sampler.h"
-#include "integrators/render.h"
+#include "qsil/edgetree/edge_forest.h"
+#include "qsil/edgetree/edge_sampler.h"
+#include "qsil/integrators/render.h"
 
 #include <memory>
 

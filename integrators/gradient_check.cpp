@@ -1,7 +1,7 @@
 /// @file gradient_check.cpp
 /// Image-level gradient checks against finite differences; see gradient_check.h.
 
-#include "integrators/gradient_check.h"
+#include "qsil/integrators/gradient_check.h"
 
 #include "qsil/error.h"
 

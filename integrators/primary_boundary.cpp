@@ -3,8 +3,8 @@
 
 #include "integrators/primary_boundary.h"
 
-#include "edgetree/mesh_edges.h"
-#include "integrators/boundary_term.h"
+#include "qsil/edgetree/mesh_edges.h"
+#include "qsil/integrators/boundary_term.h"
 
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>

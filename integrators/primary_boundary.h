@@ -17,8 +17,8 @@
 /// the density in t carries the perspective Jacobian ds/dt); each sample is splatted into the
 /// pixel it lands in.
 
-#include "edgetree/edge_forest.h"
-#include "integrators/path_tracer.h"
+#include "qsil/edgetree/edge_forest.h"
+#include "qsil/integrators/path_tracer.h"
 #include "qsil/film.h"
 #include "qsil/parameters.h"
 

@@ -1,7 +1,7 @@
 /// @file progressive.cpp
 /// See progressive.h.
 
-#include "integrators/progressive.h"
+#include "qsil/integrators/progressive.h"
 
 #include "qsil/error.h"
 

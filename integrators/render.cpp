@@ -1,13 +1,13 @@
 /// @file render.cpp
 /// Primal and gradient image loops; see render.h.
 
-#include "integrators/render.h"
+#include "qsil/integrators/render.h"
 
-#include "edgetree/edge_forest.h"
-#include "integrators/boundary_term.h"
+#include "qsil/edgetree/edge_forest.h"
+#include "qsil/integrators/boundary_term.h"
 #include "integrators/edge_sampler_factory.h"
-#include "integrators/geometry_view.h"
-#include "integrators/path_tracer.h"
+#include "qsil/integrators/geometry_view.h"
+#include "qsil/integrators/path_tracer.h"
 #include "integrators/pixel_loop.h"
 #include "integrators/primary_boundary.h"
 #include "qsil/error.h"

@@ -1,5 +1,5 @@
 // Path tracer: white furnace, closed-form albedo, determinism across thread counts.
-#include "integrators/render.h"
+#include "qsil/integrators/render.h"
 #include "test_scenes.h"
 
 #include <gtest/gtest.h>

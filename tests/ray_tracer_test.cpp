@@ -6,7 +6,7 @@
 /// now refuses it) completes. And rays that pass through back faces (IgnoreSet::through_back_faces,
 /// the smooth-shading fix of issue 13) skip exactly the back sides of one-sided surfaces.
 
-#include "integrators/render.h"
+#include "qsil/integrators/render.h"
 #include "qsil/ray_tracer.h"
 #include "qsil/scene.h"
 #include "test_data.h"

@@ -3,7 +3,7 @@
 /// Pieces shared by the subcommands: scene loading with -D overrides and warnings, common render
 /// flags, EXR/PNG output with metadata, and the one-line summary.
 
-#include "integrators/render.h"
+#include "qsil/integrators/render.h"
 #include "qsil/parameters.h"
 #include "qsil/image.h"
 #include "qsil/scene.h"

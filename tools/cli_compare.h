@@ -4,8 +4,8 @@
 /// estimators and finite differences) as progressive passes, reference EXRs with per-pixel
 /// standard errors, error metrics against a reference, and .npy output for the plotting script.
 
-#include "integrators/progressive.h"
-#include "integrators/render.h"
+#include "qsil/integrators/progressive.h"
+#include "qsil/integrators/render.h"
 #include "qsil/image.h"
 #include "qsil/parameters.h"
 #include "qsil/scene.h"

@@ -5,7 +5,7 @@
 /// build time and bytes per edge. Bad input: one-line qsil::Error, exit code 2.
 
 #include "commands.h"
-#include "edgetree/edge_forest.h"
+#include "qsil/edgetree/edge_forest.h"
 #include "qsil/error.h"
 #include "qsil/scene.h"
 

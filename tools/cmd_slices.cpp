@@ -17,8 +17,8 @@
 
 #include "cli_common.h"
 #include "commands.h"
-#include "edgetree/canonical_patch.h"
-#include "edgetree/edge_forest.h"
+#include "qsil/edgetree/canonical_patch.h"
+#include "qsil/edgetree/edge_forest.h"
 #include "qsil/error.h"
 #include "qsil/image.h"
 #include "qsil/scene.h"

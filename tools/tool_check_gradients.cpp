@@ -12,7 +12,7 @@
 /// --csv writes DIR/NAME.csv with every pixel-channel (x,y,c,primal,grad,grad_se,fd,fd_se,interior).
 /// Exit code 1 when a criterion fails (sums within 3 SE, >= 98% of pixel-channels within 4 SE).
 
-#include "integrators/gradient_check.h"
+#include "qsil/integrators/gradient_check.h"
 
 #include <cstdio>
 #include <cstdlib>

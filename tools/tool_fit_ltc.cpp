@@ -24,7 +24,7 @@
 /// Accuracy printed on stderr: the relative L1 error  integral |f cos - albedo D| / albedo  over
 /// the sphere (0 = perfect, 2 = disjoint), and the LTC mass below the shading horizon.
 
-#include "edgetree/ltc.h"
+#include "qsil/edgetree/ltc.h"
 #include "qsil/bsdf.h"
 #include "qsil/sampling.h"
 

@@ -12,11 +12,11 @@
 
 #include "baselines/baseline_test_util.h"
 #include "chi2.h"
-#include "edgetree/edge_forest.h"
+#include "qsil/edgetree/edge_forest.h"
 #include "edgetree/edge_point_sampler.h"
-#include "edgetree/ltc.h"
-#include "edgetree/uniform_sampler.h"
-#include "edgetree/vsphere_sampler.h"
+#include "qsil/edgetree/ltc.h"
+#include "qsil/edgetree/uniform_sampler.h"
+#include "qsil/edgetree/vsphere_sampler.h"
 #include "qsil/rng.h"
 
 #include <gtest/gtest.h>

@@ -9,8 +9,8 @@
 /// the mesh centre (inside). Fixed seeds; ~1e3 points per mesh and origin.
 
 #include "baselines/baseline_test_util.h"
-#include "edgetree/edge_forest.h"
-#include "edgetree/vsphere_tree.h"
+#include "qsil/edgetree/edge_forest.h"
+#include "qsil/edgetree/vsphere_tree.h"
 
 #include <gtest/gtest.h>
 #include <tbb/parallel_for.h>

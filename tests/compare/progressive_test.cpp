@@ -1,5 +1,5 @@
 // Progressive rendering (integrators/progressive.h) and `qsil compare` output (tools/cmd_compare.cpp).
-#include "integrators/progressive.h"
+#include "qsil/integrators/progressive.h"
 
 #include "qsil/scene.h"
 

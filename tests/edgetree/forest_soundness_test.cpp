@@ -9,9 +9,9 @@
 /// single wedge, nearly parallel planes). Fixed seeds. The quick suite uses 1e4 points per mesh,
 /// the Slow suite 1e5.
 
-#include "edgetree/edge_forest.h"
-#include "edgetree/node_fit.h"
-#include "edgetree/rejection_test.h"
+#include "qsil/edgetree/edge_forest.h"
+#include "qsil/edgetree/node_fit.h"
+#include "qsil/edgetree/rejection_test.h"
 #include "qsil/scene.h"
 
 #include <gtest/gtest.h>

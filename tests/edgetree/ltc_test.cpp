@@ -8,7 +8,7 @@
 /// error is < 1e-3 relative for the polygons used, measured by refining 2x; tolerances below
 /// take 2-5x margin). No randomness apart from fixed-seed TestRng draws of the polygons and points.
 
-#include "edgetree/ltc.h"
+#include "qsil/edgetree/ltc.h"
 #include "qsil/bsdf.h"
 
 #include "chi2.h"

@@ -2,7 +2,7 @@
 /// Edge extraction and classification: counts per class must equal the edge statistics table of
 /// tests/data/meshes/README.md exactly (docs/architecture.md §5 "Edges").
 
-#include "edgetree/mesh_edges.h"
+#include "qsil/edgetree/mesh_edges.h"
 #include "qsil/scene.h"
 #include "test_data.h"
 

@@ -9,11 +9,11 @@
 // central difference of that deterministic formula; no Monte Carlo on the reference side. The
 // interior term is zero (black occluder, constant emission, fixed receiver normal), so the
 // boundary estimator alone must match.
-#include "edgetree/edge_forest.h"
-#include "edgetree/ltc.h"
-#include "integrators/boundary_term.h"
+#include "qsil/edgetree/edge_forest.h"
+#include "qsil/edgetree/ltc.h"
+#include "qsil/integrators/boundary_term.h"
 #include "integrators/edge_sampler_factory.h"
-#include "integrators/render.h"
+#include "qsil/integrators/render.h"
 
 #include <algorithm>
 

@@ -6,7 +6,7 @@
 // heavy-tailed pixels whose SE is itself noisy). The scenes and the statistics are shared with
 // `qsil-check_gradients` (tools/tool_check_gradients.cpp), which runs them at higher spp and
 // resolution; its output is docs/gradient-checks.md. The whole file runs in a few seconds.
-#include "integrators/gradient_check.h"
+#include "qsil/integrators/gradient_check.h"
 #include "qsil/scene.h"
 #include "test_data.h"
 

@@ -1,10 +1,10 @@
 // Interior term (issue "Geometry parameters, the interior term in forward mode"): the
 // differentiable pieces against central differences of the same function in double, the
 // detachment of sampled quantities, and exact zeros for unmoving geometry.
-#include "integrators/geometry_view.h"
-#include "integrators/path_tracer.h"
-#include "integrators/render.h"
-#include "integrators/surface_interaction.h"
+#include "qsil/integrators/geometry_view.h"
+#include "qsil/integrators/path_tracer.h"
+#include "qsil/integrators/render.h"
+#include "qsil/integrators/surface_interaction.h"
 #include "qsil/bsdf.h"
 #include "qsil/parameters.h"
 #include "test_scenes.h"

@@ -2,7 +2,7 @@
 // interior term is the full derivative: `grad --boundary none` must agree with central finite
 // differences. Criteria (issue "interior term"): per pixel within 4 combined standard errors in at
 // least 99% of pixels, and the image sum within 3 combined standard errors. Fixed seeds.
-#include "integrators/render.h"
+#include "qsil/integrators/render.h"
 #include "qsil/image.h"
 #include "test_data.h"
 #include "test_scenes.h"

@@ -18,10 +18,10 @@
 //
 // Statistical tests use fixed seeds; each states its confidence where it asserts agreement.
 
-#include "edgetree/mesh_edges.h"
-#include "integrators/geometry_view.h"
-#include "integrators/gradient_check.h"
-#include "integrators/path_tracer.h"
+#include "qsil/edgetree/mesh_edges.h"
+#include "qsil/integrators/geometry_view.h"
+#include "qsil/integrators/gradient_check.h"
+#include "qsil/integrators/path_tracer.h"
 #include "qsil/area_lights.h"
 #include "qsil/environment_light.h"
 #include "qsil/ray_tracer.h"

@@ -8,8 +8,8 @@
 /// and the false-accept rate (fraction of accepted inner nodes whose patch has no silhouette) of
 /// the quadric test vs the dual box alone.
 
-#include "edgetree/edge_forest.h"
-#include "edgetree/rejection_test.h"
+#include "qsil/edgetree/edge_forest.h"
+#include "qsil/edgetree/rejection_test.h"
 #include "qsil/scene.h"
 
 #include <tbb/global_control.h>

@@ -11,7 +11,7 @@
 /// and so must the density of every t on it; `pdf` is the product of the discrete probability
 /// and the density of t. Returning no edge is allowed (a zero-contribution sample).
 
-#include "edgetree/silhouette_sampler.h"
+#include "qsil/edgetree/silhouette_sampler.h"
 
 #include <functional>
 #include <string>

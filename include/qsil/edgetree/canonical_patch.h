@@ -13,9 +13,9 @@
 ///
 /// Units: scene units; frames: the mesh's.
 
-#include "edgetree/edge_forest.h"
-#include "edgetree/node_fit.h"
-#include "edgetree/vsphere_tree.h"
+#include "qsil/edgetree/edge_forest.h"
+#include "qsil/edgetree/node_fit.h"
+#include "qsil/edgetree/vsphere_tree.h"
 #include "qsil/math.h"
 #include "qsil/scene.h"
 

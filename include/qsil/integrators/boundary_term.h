@@ -21,11 +21,11 @@
 ///   the derivative part of the path's radiance. T is the (detached) throughput to p: the
 ///   boundary term is already a first derivative.
 
-#include "edgetree/edge_forest.h"
-#include "edgetree/edge_sampler.h"
-#include "edgetree/mesh_edges.h"
-#include "integrators/geometry_view.h"
-#include "integrators/path_tracer.h"
+#include "qsil/edgetree/edge_forest.h"
+#include "qsil/edgetree/edge_sampler.h"
+#include "qsil/edgetree/mesh_edges.h"
+#include "qsil/integrators/geometry_view.h"
+#include "qsil/integrators/path_tracer.h"
 
 #include <chrono>
 

@@ -8,7 +8,7 @@
 /// evaluated in double, world frame). Every tolerance leans toward accept; NaN or degenerate
 /// computations accept.
 
-#include "edgetree/edge_forest.h"
+#include "qsil/edgetree/edge_forest.h"
 #include "qsil/math.h"
 
 namespace qsil::edgetree {

@@ -10,7 +10,7 @@
 /// grow geometrically (at most doubling the samples so far), so the prediction is refreshed
 /// often while the per-pass overhead stays small. The first pass always runs.
 
-#include "integrators/render.h"
+#include "qsil/integrators/render.h"
 
 #include <cstdint>
 #include <functional>

@@ -4,7 +4,7 @@
 /// dual box B_q, fitted quadric Q_f, offsets lambda0/lambda1 and the stored pair
 /// A^T Q0 A, A^T Q1 A [QSS 3.2-3.3, 4.2-4.4; docs/architecture.md §5 "Per node"].
 
-#include "edgetree/local_frame.h"
+#include "qsil/edgetree/local_frame.h"
 #include "qsil/math.h"
 
 #include <cstdint>

@@ -22,8 +22,8 @@
 ///
 /// No per-query heap allocation: the top-level candidates live in a thread-local buffer.
 
-#include "edgetree/edge_sampler.h"
-#include "edgetree/vsphere_tree.h"
+#include "qsil/edgetree/edge_sampler.h"
+#include "qsil/edgetree/vsphere_tree.h"
 
 #include <functional>
 #include <string>

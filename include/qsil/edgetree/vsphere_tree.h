@@ -29,7 +29,7 @@
 ///
 /// Units: positions in scene units (world frame), Hough points in scene units relative to o.
 
-#include "edgetree/edge_forest.h"
+#include "qsil/edgetree/edge_forest.h"
 #include "qsil/math.h"
 
 #include <cstdint>

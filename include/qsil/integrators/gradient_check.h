@@ -18,7 +18,7 @@
 /// Case files are relative to the repository root; resolve them with Case::resolved() (the test
 /// passes the source tree, the tool its --root).
 
-#include "integrators/render.h"
+#include "qsil/integrators/render.h"
 #include "qsil/parameters.h"
 #include "qsil/scene.h"
 

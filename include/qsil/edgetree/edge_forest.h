@@ -6,8 +6,8 @@
 /// dual bound of node_fit.h, the primal box B_p and the weighted length L_w; leaves hold up to 4
 /// edges. Nodes live in one flat array; children of a node are contiguous.
 
-#include "edgetree/mesh_edges.h"
-#include "edgetree/node_fit.h"
+#include "qsil/edgetree/mesh_edges.h"
+#include "qsil/edgetree/node_fit.h"
 #include "qsil/math.h"
 #include "qsil/scene.h"
 

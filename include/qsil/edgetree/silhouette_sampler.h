@@ -23,9 +23,9 @@
 /// nodes are never rejected and are weighed like the forest's (L_w = always_edge_weight), a
 /// shape's few (e.g. a rectangle's outline) one by one.
 
-#include "edgetree/edge_forest.h"
-#include "edgetree/ltc.h"
-#include "edgetree/rejection_test.h"
+#include "qsil/edgetree/edge_forest.h"
+#include "qsil/edgetree/ltc.h"
+#include "qsil/edgetree/rejection_test.h"
 #include "qsil/math.h"
 
 #include <array>

@@ -15,7 +15,7 @@
 /// Depth follows Mitsuba 3: max_depth counts path segments (1 = directly seen emitters,
 /// 2 = direct illumination); -1 means unbounded, capped at kUnboundedDepthCap segments.
 
-#include "integrators/surface_interaction.h"
+#include "qsil/integrators/surface_interaction.h"
 #include "qsil/area_lights.h"
 #include "qsil/bsdf.h"
 #include "qsil/dual.h"

@@ -12,8 +12,8 @@
 /// Per shape a cumulative table over its edges; a query draws the shape among the eligible ones
 /// (a loop over shapes) and then the edge by binary search. No per-query allocation.
 
-#include "edgetree/edge_sampler.h"
-#include "edgetree/vsphere_sampler.h"
+#include "qsil/edgetree/edge_sampler.h"
+#include "qsil/edgetree/vsphere_sampler.h"
 
 #include <functional>
 #include <string>
