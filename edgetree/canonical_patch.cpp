@@ -4,7 +4,8 @@
 #include "qsil/edgetree/canonical_patch.h"
 
 #include "qsil/edgetree/mesh_edges.h"
-#include "qsil/edgetree/rejection_test.h"
+#include "qsil/edgetree/node_rejection.h"
+#include "qsil/check.h"
 #include "qsil/error.h"
 
 #include <cmath>
@@ -18,14 +19,11 @@ PatchKind parse_patch_kind(const std::string& name) {
   throw Error("--patch '" + name + "': unsupported (supported: sphere, torus)");
 }
 
-const char* slice_test_name(SliceTest t) {
-  switch (t) {
-    case SliceTest::Quadric: return "quadric";
-    case SliceTest::QuadricBox: return "quadric-box";
-    case SliceTest::VSphere: return "vsphere";
-    case SliceTest::VSphereSolid: return "vsphere-solid";
-  }
-  return "?";
+bool SliceVerdict::accepts(Method method) const {
+  for (size_t i = 0; i < kRejectionMethods.size(); ++i)
+    if (kRejectionMethods[i] == method) return accept[i];
+  QSIL_CHECK_MSG(false, "no rejection test for method " << method_name(method));
+  return false;  // not reached
 }
 
 namespace {
@@ -156,20 +154,19 @@ SliceVerdict PatchTests::evaluate(const Vec3& p) const {
       break;
     }
   }
-  if (forest_) {
-    v.accept[int(SliceTest::Quadric)] = may_have_silhouette(*forest_, node_, p, RejectionMode::Quadric);
-    v.accept[int(SliceTest::QuadricBox)] = may_have_silhouette(*forest_, node_, p, RejectionMode::Box);
-  } else {
-    const bool unrej = flags_ & kNodeUnrejectable;
-    const bool box_only = flags_ & kNodeBoxOnly;
-    v.accept[int(SliceTest::Quadric)] = unrej || bound_may_have_silhouette(bound_, box_only, p);
-    v.accept[int(SliceTest::QuadricBox)] = unrej || bound_may_have_silhouette(bound_, true, p);
+  for (size_t i = 0; i < kRejectionMethods.size(); ++i) {
+    const Method m = kRejectionMethods[i];
+    if (uses_edge_forest(m)) {
+      if (forest_) {
+        v.accept[i] = may_have_silhouette(*forest_, node_, p, m);
+      } else {
+        const bool box_only = m == Method::QuadricBox || (flags_ & kNodeBoxOnly);
+        v.accept[i] = (flags_ & kNodeUnrejectable) || bound_may_have_silhouette(bound_, box_only, p);
+      }
+    } else {
+      v.accept[i] = origin_sil_ > 0 || vsphere_box_may_have_silhouette(bh_, bp_.max_abs(), p, o_, m);
+    }
   }
-  const double scale = bp_.max_abs();
-  v.accept[int(SliceTest::VSphere)] =
-      origin_sil_ > 0 || vsphere_box_may_have_silhouette(bh_, scale, p, o_, VSphereTest::Hollow);
-  v.accept[int(SliceTest::VSphereSolid)] =
-      origin_sil_ > 0 || vsphere_box_may_have_silhouette(bh_, scale, p, o_, VSphereTest::Solid);
   return v;
 }
 

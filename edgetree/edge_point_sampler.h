@@ -71,9 +71,6 @@ class EdgePointSampler {
   /// (mixed with a defensive term, docs/architecture.md §5).
   double target_integral() const { return target_integral_; }
 
-  /// Angle Phi subtended by the edge at the shading point (radians, in [0, pi]).
-  double subtended_angle() const { return phi_; }
-
   /// The defensive share actually used (1 when the LTC part vanishes).
   double defensive_share() const { return eps_; }
 

@@ -10,18 +10,6 @@
 
 namespace qsil::edgetree {
 
-const char* edge_class_name(EdgeClass c) {
-  switch (c) {
-    case EdgeClass::Convex: return "convex";
-    case EdgeClass::Concave: return "concave";
-    case EdgeClass::Flat: return "flat";
-    case EdgeClass::Boundary: return "boundary";
-    case EdgeClass::NonManifold: return "non-manifold";
-    case EdgeClass::Inconsistent: return "inconsistent";
-  }
-  return "?";
-}
-
 Vec4 face_plane(const TriangleMesh& mesh, int f) {
   const Vec3 c = mesh.face_cross(f);
   const double len = c.norm();

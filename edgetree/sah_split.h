@@ -2,7 +2,7 @@
 /// @file sah_split.h
 /// Binned surface-area-heuristic split of a range of edges [QSS 4.1; Pharr et al. 2023, 4.3.2].
 
-#include "qsil/edgetree/edge_forest.h"
+#include "qsil/edgetree/edge_set.h"
 
 #include <span>
 

@@ -21,17 +21,8 @@ struct Candidate {
 
 /// Probabilities of a choice among candidates (see the file comment of the header).
 template <class Range> void choice_probabilities(const Range& c, int n, double* prob) {
-  double si = 0, sg = 0;
-  for (int i = 0; i < n; ++i) {
-    si += c[i].w.importance;
-    sg += c[i].w.defensive;
-  }
-  const double eps = si > 0 ? kNodeDefensiveShare : 1.0;
-  for (int i = 0; i < n; ++i) {
-    const double pi = si > 0 ? c[i].w.importance / si : 0.0;
-    const double pg = sg > 0 ? c[i].w.defensive / sg : 1.0 / n;
-    prob[i] = (1.0 - eps) * pi + eps * pg;
-  }
+  defensive_probabilities(
+      c, n, [](const Candidate& x) { return x.w.importance; }, [](const Candidate& x) { return x.w.defensive; }, prob);
 }
 
 double edge_defensive(const ForestEdge& e, const Vec3& p) {
@@ -44,38 +35,36 @@ NodeWeight edge_weight(const ForestEdge& e, const SilhouetteQuery& q) {
   return {q.ltc.norm * s.target_integral(), edge_defensive(e, q.p)};
 }
 
-bool eligible(const SilhouetteQuery& q, int shape) {
-  return !q.eligible || (shape < int(q.eligible->size()) && (*q.eligible)[shape]);
-}
-
 /// The candidates at the top level: accepted, eligible forest roots, the roots of the
 /// always-candidate trees (never rejected) and the loose always-candidate edges.
-int top_candidates(const EdgeForest& f, const SilhouetteQuery& q, std::vector<Candidate>& out, int& tests) {
+int top_candidates(const EdgeForest& f, const SilhouetteQuery& q, Method method, std::vector<Candidate>& out,
+                   int& tests) {
   out.clear();
   for (int r : f.roots()) {
-    if (!eligible(q, f.node(r).shape)) continue;
+    if (!q.is_eligible(f.node(r).shape)) continue;
     ++tests;
-    if (!may_have_silhouette(f, r, q.p, q.mode)) continue;
+    if (!may_have_silhouette(f, r, q.p, method)) continue;
     out.push_back({r, nullptr, node_weight(f.node(r), q)});
   }
   for (int r : f.always_roots())
-    if (eligible(q, f.node(r).shape)) out.push_back({r, nullptr, node_weight(f.node(r), q)});
+    if (q.is_eligible(f.node(r).shape)) out.push_back({r, nullptr, node_weight(f.node(r), q)});
   for (int i : f.loose_always()) {
     const ForestEdge& e = f.always_edges()[size_t(i)];
-    if (!eligible(q, e.shape)) continue;
+    if (!q.is_eligible(e.shape)) continue;
     out.push_back({-1, &e, edge_weight(e, q)});
   }
   return int(out.size());
 }
 
 /// The accepted children of inner node `n` (up to 4).
-int child_candidates(const EdgeForest& f, int n, const SilhouetteQuery& q, std::array<Candidate, 4>& out, int& tests) {
+int child_candidates(const EdgeForest& f, int n, const SilhouetteQuery& q, Method method,
+                     std::array<Candidate, 4>& out, int& tests) {
   int k = 0;
   const ForestNode& node = f.node(n);
   for (int c = node.first; c < node.first + node.count; ++c) {
     if (!f.node(c).always()) {  // always-candidate trees have no rejection test
       ++tests;
-      if (!may_have_silhouette(f, c, q.p, q.mode)) continue;
+      if (!may_have_silhouette(f, c, q.p, method)) continue;
     }
     out[k++] = {c, nullptr, node_weight(f.node(c), q)};
   }
@@ -138,10 +127,11 @@ NodeWeight node_weight(const ForestNode& node, const SilhouetteQuery& q) {
 }
 
 SilhouetteSample sample_silhouette(const EdgeForest& forest, const SilhouetteQuery& query,
-                                   const std::function<double()>& next) {
+                                   const std::function<double()>& next, Method method) {
+  QSIL_DCHECK(uses_edge_forest(method));
   SilhouetteSample s;
   thread_local std::vector<Candidate> top;
-  const int n_top = top_candidates(forest, query, top, s.rejection_tests);
+  const int n_top = top_candidates(forest, query, method, top, s.rejection_tests);
   if (n_top == 0) return s;
   thread_local std::vector<double> prob;
   prob.resize(size_t(n_top));
@@ -155,7 +145,7 @@ SilhouetteSample sample_silhouette(const EdgeForest& forest, const SilhouetteQue
   while (!cur.edge) {
     const ForestNode& node = forest.node(cur.node);
     const int k = node.is_leaf() ? leaf_candidates(forest, cur.node, query, cand)
-                                 : child_candidates(forest, cur.node, query, cand, s.rejection_tests);
+                                 : child_candidates(forest, cur.node, query, method, cand, s.rejection_tests);
     if (k == 0) return s;  // a false accept: no silhouette below (a zero-contribution traversal)
     choice_probabilities(cand, k, p4.data());
     i = choose(p4.data(), k, next());
@@ -163,24 +153,25 @@ SilhouetteSample sample_silhouette(const EdgeForest& forest, const SilhouetteQue
     cur = cand[size_t(i)];
   }
   // ---- The point on the edge.
-  const int tests = s.rejection_tests;
-  s = sample_on_edge(*cur.edge, pmf, query, next());
-  s.rejection_tests = tests;
-  return s;
+  return sample_on_edge(*cur.edge, pmf, query, next(), s.rejection_tests);
 }
 
-SilhouetteSample sample_on_edge(const ForestEdge& e, double pmf, const SilhouetteQuery& query, double u) {
+SilhouetteSample sample_on_edge(const ForestEdge& e, double pmf, const SilhouetteQuery& query, double u,
+                                int rejection_tests) {
   SilhouetteSample s;
+  s.rejection_tests = rejection_tests;
   if (!is_discontinuity(e, query.p)) return s;
   const EdgePointSampler ps(query.frame.to_local(e.p0 - query.p), query.frame.to_local(e.p1 - query.p), query.ltc);
   const EdgePointSample ts = ps.sample(u);
+  QSIL_DCHECK_MSG(pmf > 0 && ts.pdf > 0, "edge probability " << pmf << ", density of t " << ts.pdf);
   s.edge = &e;
   s.t = ts.t;
   s.pdf = pmf * ts.pdf;
   return s;
 }
 
-double silhouette_edge_probability(const EdgeForest& forest, const SilhouetteQuery& query, const ForestEdge* edge) {
+double silhouette_edge_probability(const EdgeForest& forest, const SilhouetteQuery& query, const ForestEdge* edge,
+                                   Method method) {
   // A candidate leads to `edge` when it is that edge or a node whose edge range holds it.
   auto leads_to = [&](const Candidate& c) {
     if (c.edge) return c.edge == edge;
@@ -189,7 +180,7 @@ double silhouette_edge_probability(const EdgeForest& forest, const SilhouetteQue
   };
   int tests = 0;
   std::vector<Candidate> top;
-  const int n_top = top_candidates(forest, query, top, tests);
+  const int n_top = top_candidates(forest, query, method, top, tests);
   std::vector<double> prob(size_t(std::max(n_top, 1)));
   choice_probabilities(top, n_top, prob.data());
   double pmf = 0;
@@ -205,7 +196,7 @@ double silhouette_edge_probability(const EdgeForest& forest, const SilhouetteQue
   while (!cur.edge) {
     const ForestNode& node = forest.node(cur.node);
     const int k = node.is_leaf() ? leaf_candidates(forest, cur.node, query, cand)
-                                 : child_candidates(forest, cur.node, query, cand, tests);
+                                 : child_candidates(forest, cur.node, query, method, cand, tests);
     choice_probabilities(cand, k, p4.data());
     bool found = false;
     for (int i = 0; i < k && !found; ++i) {

@@ -9,19 +9,13 @@
 
 namespace qsil::edgetree {
 
-namespace {
-bool eligible(const SilhouetteQuery& q, int shape) {
-  return !q.eligible || (shape < int(q.eligible->size()) && (*q.eligible)[shape]);
-}
-}  // namespace
-
 double UniformEdgeSampler::weight(const ForestEdge& e) {
   const bool always = e.f1 < 0 || e.cls == EdgeClass::Boundary || e.cls == EdgeClass::NonManifold ||
                       e.cls == EdgeClass::Inconsistent;
   return e.length * (always ? kPi : e.angle);
 }
 
-UniformEdgeSampler::UniformEdgeSampler(const EdgeForest& forest) {
+UniformEdgeSampler::UniformEdgeSampler(const EdgeSet& edges) {
   auto add = [&](const ForestEdge& e) {
     const double w = weight(e);
     if (!(w > 0)) return;  // a zero-length edge contributes nothing
@@ -31,21 +25,21 @@ UniformEdgeSampler::UniformEdgeSampler(const EdgeForest& forest) {
     t.total += w;
     t.cdf.push_back(t.total);
   };
-  for (const ForestEdge& e : forest.edges()) add(e);
-  for (const ForestEdge& e : forest.always_edges()) add(e);
+  for (const ForestEdge& e : edges.edges()) add(e);
+  for (const ForestEdge& e : edges.always_edges()) add(e);
 }
 
 SilhouetteSample UniformEdgeSampler::sample(const SilhouetteQuery& query, const std::function<double()>& next) const {
   SilhouetteSample s;
   double sum = 0;
   for (size_t k = 0; k < shapes_.size(); ++k)
-    if (eligible(query, int(k))) sum += shapes_[k].total;
+    if (query.is_eligible(int(k))) sum += shapes_[k].total;
   if (!(sum > 0)) return s;
   // ---- The shape, then the edge within it (one uniform number, rescaled).
   double u = next() * sum;
   const ShapeTable* t = nullptr;
   for (size_t k = 0; k < shapes_.size(); ++k) {
-    if (!eligible(query, int(k)) || !(shapes_[k].total > 0)) continue;
+    if (!query.is_eligible(int(k)) || !(shapes_[k].total > 0)) continue;
     t = &shapes_[k];
     if (u < shapes_[k].total) break;
     u -= shapes_[k].total;
@@ -54,21 +48,17 @@ SilhouetteSample UniformEdgeSampler::sample(const SilhouetteQuery& query, const 
   size_t i = size_t(std::upper_bound(t->cdf.begin(), t->cdf.end(), u) - t->cdf.begin());
   i = std::min(i, t->edges.size() - 1);
   const ForestEdge& e = *t->edges[i];
-  const double pmf = weight(e) / sum;
-  const int tests = s.rejection_tests;
-  s = sample_on_edge(e, pmf, query, next());  // no edge for a non-discontinuity: a zero sample
-  s.rejection_tests = tests;
-  return s;
+  return sample_on_edge(e, weight(e) / sum, query, next());  // no edge for a non-discontinuity: a zero sample
 }
 
 std::vector<EdgeProbability> UniformEdgeSampler::edge_probabilities(const SilhouetteQuery& query) const {
   std::vector<EdgeProbability> out;
   double sum = 0;
   for (size_t k = 0; k < shapes_.size(); ++k)
-    if (eligible(query, int(k))) sum += shapes_[k].total;
+    if (query.is_eligible(int(k))) sum += shapes_[k].total;
   if (!(sum > 0)) return out;
   for (size_t k = 0; k < shapes_.size(); ++k) {
-    if (!eligible(query, int(k))) continue;
+    if (!query.is_eligible(int(k))) continue;
     for (const ForestEdge* e : shapes_[k].edges) out.push_back({e, weight(*e) / sum});
   }
   return out;

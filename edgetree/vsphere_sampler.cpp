@@ -3,6 +3,8 @@
 
 #include "qsil/edgetree/vsphere_sampler.h"
 
+#include "qsil/check.h"
+
 #include "edgetree/discrete_choice.h"
 #include "edgetree/edge_point_sampler.h"
 #include "qsil/edgetree/ltc.h"
@@ -13,10 +15,6 @@
 namespace qsil::edgetree {
 
 namespace {
-
-bool eligible(const SilhouetteQuery& q, int shape) {
-  return !q.eligible || (shape < int(q.eligible->size()) && (*q.eligible)[shape]);
-}
 
 bool contains(const Box3& b, const Vec3& p) {
   return !b.empty() && (p.array() >= b.lo.array()).all() && (p.array() <= b.hi.array()).all();
@@ -98,33 +96,26 @@ void weigh(const Box3& bp, double lw, const SilhouetteQuery& q, bool parent_cont
   importance = denom > 0 ? lw * fmax / denom : lw * fmax;
 }
 
-/// P(i) = (1 - eps) I_i / sum I + eps G_i / sum G (eps = 1 when sum I = 0).
+/// The choice probabilities of candidates (defensive_probabilities, discrete_choice.h).
 template <class C> void mix(const C* c, int n, double* prob) {
-  double si = 0, sg = 0;
-  for (int i = 0; i < n; ++i) {
-    si += c[i].importance;
-    sg += c[i].defensive;
-  }
-  const double eps = si > 0 ? kNodeDefensiveShare : 1.0;
-  for (int i = 0; i < n; ++i) {
-    const double pi = si > 0 ? c[i].importance / si : 0.0;
-    const double pg = sg > 0 ? c[i].defensive / sg : 1.0 / n;
-    prob[i] = (1.0 - eps) * pi + eps * pg;
-  }
+  defensive_probabilities(
+      c, n, [](const C& x) { return x.importance; }, [](const C& x) { return x.defensive; }, prob);
 }
 
 }  // namespace
 
-VSphereEdgeSampler::VSphereEdgeSampler(const EdgeForest& forest, const Vec3& hough_origin, VSphereTest test)
-    : forest_(forest), tree_(VSphereTree::build(forest, hough_origin)), test_(test) {}
+VSphereEdgeSampler::VSphereEdgeSampler(const EdgeSet& edges, const Vec3& hough_origin, Method method)
+    : edges_(edges), tree_(VSphereTree::build(edges, hough_origin)), method_(method) {
+  QSIL_CHECK(method == Method::VSphere || method == Method::VSphereSolid);
+}
 
 int VSphereEdgeSampler::top_candidates(const SilhouetteQuery& q, std::vector<Cand>& out, int& tests) const {
   out.clear();
   for (const VSphereRoot& r : tree_.roots()) {
-    if (!eligible(q, r.shape)) continue;
+    if (!q.is_eligible(r.shape)) continue;
     if (r.hough) {
       ++tests;
-      if (!tree_.may_have_silhouette(r.node, q.p, test_)) continue;
+      if (!tree_.may_have_silhouette(r.node, q.p, method_)) continue;
     }
     Cand c;
     c.node = r.node;
@@ -132,8 +123,8 @@ int VSphereEdgeSampler::top_candidates(const SilhouetteQuery& q, std::vector<Can
     weigh(n.bp, n.lw, q, false, c.importance, c.defensive);
     out.push_back(c);
   }
-  for (const ForestEdge& e : forest_.always_edges()) {
-    if (e.crease || !eligible(q, e.shape)) continue;  // creases are in the tree's plain BVH
+  for (const ForestEdge& e : edges_.always_edges()) {
+    if (e.crease || !q.is_eligible(e.shape)) continue;  // creases are in the tree's plain BVH
     Cand c;
     c.edge = &e;
     Box3 b;
@@ -153,7 +144,7 @@ int VSphereEdgeSampler::child_candidates(int n, const SilhouetteQuery& q, Cand* 
     const VSphereNode& ch = tree_.node(c);
     if (ch.hough) {
       ++tests;
-      if (!tree_.may_have_silhouette(c, q.p, test_)) continue;
+      if (!tree_.may_have_silhouette(c, q.p, method_)) continue;
     }
     out[k].node = c;
     out[k].edge = nullptr;
@@ -190,12 +181,9 @@ SilhouetteSample VSphereEdgeSampler::sample(const SilhouetteQuery& query, const 
     pmf *= p2[i];
     cur = c[i];
   }
-  // ---- Leaves are not tested exactly (Li's method): a non-silhouette is a zero sample.
-  const ForestEdge& e = *cur.edge;
-  const int tests = s.rejection_tests;
-  s = sample_on_edge(e, pmf, query, next());  // no edge for a non-discontinuity: a zero sample
-  s.rejection_tests = tests;
-  return s;
+  // ---- Leaves are not tested exactly (Li's method): a non-silhouette is a zero sample (no
+  // edge from sample_on_edge).
+  return sample_on_edge(*cur.edge, pmf, query, next(), s.rejection_tests);
 }
 
 std::vector<EdgeProbability> VSphereEdgeSampler::edge_probabilities(const SilhouetteQuery& query) const {

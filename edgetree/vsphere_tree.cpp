@@ -3,6 +3,8 @@
 
 #include "qsil/edgetree/vsphere_tree.h"
 
+#include "qsil/check.h"
+
 #include <algorithm>
 #include <bit>
 #include <cmath>
@@ -16,7 +18,8 @@ Vec3 hough_point(const Vec4& q, const Vec3& o) {
 }
 
 bool vsphere_box_may_have_silhouette(const Box3& hb, double world_scale, const Vec3& p, const Vec3& o,
-                                     VSphereTest test) {
+                                     Method method) {
+  QSIL_DCHECK(method == Method::VSphere || method == Method::VSphereSolid);
   if (hb.empty()) return false;
   const Vec3 V = p - o;
   const Vec3 c = 0.5 * V;
@@ -35,7 +38,7 @@ bool vsphere_box_may_have_silhouette(const Box3& hb, double world_scale, const V
   const double L = world_scale + p.cwiseAbs().maxCoeff() + o.cwiseAbs().maxCoeff() + V.norm() + hmax;
   const double tol = kVSphereTol * L * (hmax + 1e-6 * L);
   if (!(dmin2 - r2 <= tol)) return std::isnan(dmin2 - r2);  // the box lies outside the sphere
-  if (test == VSphereTest::Solid) return true;
+  if (method == Method::VSphereSolid) return true;
   return !(dmax2 - r2 < -tol);  // hollow: reject a box strictly inside the sphere
 }
 
@@ -127,17 +130,17 @@ struct Builder {
 
 }  // namespace
 
-VSphereTree VSphereTree::build(const EdgeForest& forest, const Vec3& o) {
+VSphereTree VSphereTree::build(const EdgeSet& set, const Vec3& o) {
   VSphereTree t;
   t.origin_ = o;
   int num_shapes = 0;
-  for (const ForestEdge& e : forest.edges()) num_shapes = std::max(num_shapes, e.shape + 1);
-  for (const ForestEdge& e : forest.always_edges()) num_shapes = std::max(num_shapes, e.shape + 1);
+  for (const ForestEdge& e : set.edges()) num_shapes = std::max(num_shapes, e.shape + 1);
+  for (const ForestEdge& e : set.always_edges()) num_shapes = std::max(num_shapes, e.shape + 1);
   std::vector<std::vector<const ForestEdge*>> plain(static_cast<size_t>(num_shapes)), hough(static_cast<size_t>(num_shapes));
-  for (const ForestEdge& e : forest.edges())
+  for (const ForestEdge& e : set.edges())
     (edge_is_silhouette(e, o) ? plain : hough)[size_t(e.shape)].push_back(&e);
   // Creases are candidates for every point (no v-sphere test applies): the plain BVH.
-  for (const ForestEdge& e : forest.always_edges())
+  for (const ForestEdge& e : set.always_edges())
     if (e.crease) plain[size_t(e.shape)].push_back(&e);
   std::vector<BuildItem> items;
   for (int pass = 0; pass < 2; ++pass) {  // plain trees first: edges_[0, plain_edges_) are theirs
@@ -186,10 +189,10 @@ VSphereTree VSphereTree::build(const EdgeForest& forest, const Vec3& o) {
   return t;
 }
 
-bool VSphereTree::may_have_silhouette(int i, const Vec3& p, VSphereTest test) const {
+bool VSphereTree::may_have_silhouette(int i, const Vec3& p, Method method) const {
   const VSphereNode& n = nodes_[size_t(i)];
   if (!n.hough) return true;
-  return vsphere_box_may_have_silhouette(n.bh, n.bp.max_abs(), p, origin_, test);
+  return vsphere_box_may_have_silhouette(n.bh, n.bp.max_abs(), p, origin_, method);
 }
 
 size_t VSphereTree::memory_bytes() const {

@@ -4,8 +4,7 @@
 #include "qsil/integrators/gradient_check.h"
 
 #include "qsil/error.h"
-
-#include <unistd.h>
+#include "qsil/files.h"
 
 #include <algorithm>
 #include <cmath>
@@ -34,7 +33,7 @@ std::vector<Case> cases() {
       // A flat-shaded cube rotating: its creases are discontinuities (primary and secondary).
       {"faceted-cube", "tests/data/gradient/faceted-cube.xml", {}, "cube:rotate:0,1,0", 1e-2},
       // A coarse smooth-shaded cube (vertex normals up to 55 deg off the faces') moving toward the
-      // camera: the shading must not jump at its edges (smooth-mesh issue).
+      // camera: the shading must not jump at its edges (smooth shading).
       {"smooth-cube", "tests/data/gradient/smooth-cube.xml", {}, "cube:translate:0,0,1", 1e-2},
       // One mirror point of spot-mirror whose GGX lobe sees Spot's silhouette (a 1x1 image with a
       // 0.02 deg field of view): the boundary term through a near-specular lobe. FD needs a small
@@ -70,7 +69,7 @@ Agreement compare(const RenderResult& g, const RenderResult& f, const RenderResu
   for (int y = 0; y < g.film.height(); ++y)
     for (int x = 0; x < g.film.width(); ++x)
       for (int c = 0; c < 3; ++c) {
-        const int ch = 3 + c;
+        const int ch = g.film.layout().derivative(0, c);
         Outlier o;
         o.x = x;
         o.y = y;
@@ -98,9 +97,9 @@ Agreement compare(const RenderResult& g, const RenderResult& f, const RenderResu
   std::sort(all.begin(), all.end(), [](const Outlier& p, const Outlier& q) { return std::abs(p.z()) > std::abs(q.z()); });
   all.resize(std::min<size_t>(all.size(), 8));
   a.worst = all;
-  a.grad = derivative_image_sum(g.film, 1, 0);
-  a.fd = derivative_image_sum(f.film, 1, 0);
-  if (interior) a.interior = derivative_image_sum(interior->film, 1, 0);
+  a.grad = g.film.derivative_sum(0);
+  a.fd = f.film.derivative_sum(0);
+  if (interior) a.interior = interior->film.derivative_sum(0);
   a.sum_se = std::hypot(a.grad.standard_error, a.fd.standard_error);
   a.nonfinite = g.nonfinite + f.nonfinite;
   return a;
@@ -115,14 +114,13 @@ Agreement run(const Case& c, int res, int grad_spp, int fd_spp, double h, bool w
   o.threads = threads;
   o.seed = 21;
   o.spp = grad_spp;
-  Agreement a;
-  GradientReport report;
-  const RenderResult g = render_gradient(scene, params, o, GradientOptions{BoundaryMethod::Quadric, 1}, &report);
+  const RenderResult g = Estimator(scene, EstimatorConfig::gradient(params, Method::Quadric)).run(o);
   RenderResult interior;
-  if (with_interior) interior = render_gradient(scene, params, o, GradientOptions{BoundaryMethod::None, 1});
+  if (with_interior) interior = Estimator(scene, EstimatorConfig::gradient(params, Method::None)).run(o);
   o.seed = 22;
   o.spp = fd_spp;
-  const RenderResult f = render_finite_differences(scene, params, {h}, o);
+  const RenderResult f = Estimator(scene, EstimatorConfig::finite_differences(params, {h})).run(o);
+  Agreement a;
   a = compare(g, f, with_interior ? &interior : nullptr);
   a.res = res;
   a.grad_spp = grad_spp;
@@ -131,7 +129,8 @@ Agreement run(const Case& c, int res, int grad_spp, int fd_spp, double h, bool w
   a.grad_seconds = g.seconds;
   a.fd_seconds = f.seconds;
   a.interior_seconds = with_interior ? interior.seconds : 0.0;
-  a.report = report;
+  a.traversals = g.traversals;
+  a.zero_traversals = g.zero_traversals;
   if (keep) {
     keep->grad = g;
     keep->fd = f;
@@ -141,27 +140,22 @@ Agreement run(const Case& c, int res, int grad_spp, int fd_spp, double h, bool w
 }
 
 void write_csv(const std::string& path, const Films& films) {
-  // Written to a temporary name beside the target and renamed: the file is whole or absent.
-  const std::string tmp = path + ".tmp" + std::to_string(::getpid());
-  FILE* out = std::fopen(tmp.c_str(), "w");
-  if (!out) throw Error(path + ": cannot write");
-  std::fprintf(out, "x,y,c,primal,grad,grad_se,fd,fd_se,interior\n");
+  std::string out = "x,y,c,primal,grad,grad_se,fd,fd_se,interior\n";
   const Film& g = films.grad.film;
-  const bool has_interior = films.interior.film.width() == g.width();
+  const FilmLayout& layout = g.layout();
+  const bool has_interior = films.interior.film.layout().num_params() > 0;
+  char line[256];
   for (int y = 0; y < g.height(); ++y)
     for (int x = 0; x < g.width(); ++x)
-      for (int c = 0; c < 3; ++c)
-        std::fprintf(out, "%d,%d,%d,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g\n", x, y, c, g.mean(c, x, y), g.mean(3 + c, x, y), g.standard_error(3 + c, x, y),
-                     films.fd.film.mean(3 + c, x, y), films.fd.film.standard_error(3 + c, x, y),
-                     has_interior ? films.interior.film.mean(3 + c, x, y) : 0.0);
-  const bool ok = std::fflush(out) == 0 && !std::ferror(out);
-  std::fclose(out);
-  std::error_code ec;
-  if (ok) std::filesystem::rename(tmp, path, ec);
-  if (!ok || ec) {
-    std::filesystem::remove(tmp, ec);
-    throw Error(path + ": cannot write");
-  }
+      for (int c = 0; c < 3; ++c) {
+        const int d = layout.derivative(0, c);
+        std::snprintf(line, sizeof line, "%d,%d,%d,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g\n", x, y, c,
+                      g.mean(layout.primal(c), x, y), g.mean(d, x, y), g.standard_error(d, x, y),
+                      films.fd.film.mean(d, x, y), films.fd.film.standard_error(d, x, y),
+                      has_interior ? films.interior.film.mean(d, x, y) : 0.0);
+        out += line;
+      }
+  write_file(path, out);
 }
 
 std::string describe(const std::string& name, const Agreement& a) {

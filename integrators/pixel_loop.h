@@ -1,11 +1,24 @@
 #pragma once
 /// @file pixel_loop.h
-/// Parallel loop over the pixels of an image with oneTBB, with a progress bar on stderr for runs
+/// Parallel loops over the pixels of an image with oneTBB, with a progress bar on stderr for runs
 /// longer than a second. Each pixel is processed by exactly one task, and its samples are drawn
-/// from streams seeded by (seed, pixel, sample), so results do not depend on the thread count.
+/// from streams seeded by (seed, pixel, sample index), so results do not depend on the thread
+/// count, and a run over a sample range draws exactly the samples of that range.
 
+#include "qsil/film.h"
+#include "qsil/integrators/estimator.h"
+#include "qsil/integrators/path_tracer.h"
+#include "qsil/rng.h"
+
+#include <tbb/enumerable_thread_specific.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
 #include <functional>
 #include <string>
+#include <vector>
 
 namespace qsil {
 
@@ -13,5 +26,48 @@ namespace qsil {
 /// `threads` threads (0 = all cores). `label` prefixes the progress bar ("" = no bar).
 void for_each_pixel(int width, int height, int threads, const std::string& label,
                     const std::function<void(int x, int y)>& body);
+
+/// One estimator run over samples [first, first + count) of every pixel of `camera`'s image:
+/// `sample(x, y, s, sampler, stats, out)` fills out[0 .. layout.channels()) for sample s of
+/// pixel (x, y), drawing from `sampler` = Sampler(seed, pixel, s). A sample with a non-finite
+/// value is replaced by zeros and counted. Fills result.film, spp, first_sample, seconds, rays and
+/// nonfinite; adds every thread's counters to `total`.
+template <class SampleFn>
+void run_pixels(const Camera& camera, const FilmLayout& layout, const RenderOptions& options, int first, int count,
+                const std::string& label, SampleFn&& sample, RenderResult& result, PathStats& total) {
+  const int W = camera.width, H = camera.height;
+  const int channels = layout.channels();
+  result.film = Film(W, H, layout);
+  result.first_sample = first;
+  result.spp = count;
+  tbb::enumerable_thread_specific<PathStats> stats;
+  std::atomic<uint64_t> nonfinite{0};
+  const auto t0 = std::chrono::steady_clock::now();
+  for_each_pixel(W, H, options.threads, options.progress ? label : "", [&](int x, int y) {
+    std::vector<double> out(static_cast<size_t>(channels));
+    PathStats& st = stats.local();
+    const uint64_t pixel = uint64_t(y) * W + x;
+    for (int s = first; s < first + count; ++s) {
+      Sampler sampler(options.seed, pixel, uint64_t(s));
+      sample(x, y, s, sampler, st, out.data());
+      bool finite = true;
+      for (double v : out) finite = finite && std::isfinite(v);
+      if (!finite) {
+        nonfinite.fetch_add(1);
+        std::fill(out.begin(), out.end(), 0.0);
+      }
+      result.film.add_sample(x, y, out.data());
+    }
+  });
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  for (const PathStats& st : stats) {
+    result.rays += st.rays;
+    total.rays += st.rays;
+    total.boundary_traversals += st.boundary_traversals;
+    total.boundary_zero += st.boundary_zero;
+    total.boundary_seconds += st.boundary_seconds;
+  }
+  result.nonfinite = nonfinite.load();
+}
 
 }  // namespace qsil

@@ -15,11 +15,6 @@ namespace qsil {
 
 namespace {
 
-/// Camera-space position of world point x (camera looks along +z).
-Vec3 to_camera(const Camera& cam, const Vec3& x) {
-  return cam.to_world.block<3, 3>(0, 0).transpose() * (x - cam.origin());
-}
-
 /// Clips the camera-space segment c0 + t (c1 - c0), t in [ta, tb], to the half space n.c >= d.
 bool clip(const Vec3& c0, const Vec3& c1, const Vec3& n, double d, double& ta, double& tb) {
   const double f0 = n.dot(c0) - d, f1 = n.dot(c1) - d;
@@ -39,17 +34,18 @@ struct Splat {
 
 template <int N>
 void run_chunk(const PathContext& ctx, const SceneVelocities& vel, const std::vector<PrimaryEdge>& edges,
-               const std::vector<double>& cdf, long long first, long long count, double per_sample, uint64_t seed,
-               long long chunk, std::vector<Splat>& out, PathStats& stats) {
+               const std::vector<double>& cdf, long long count, double per_sample, uint64_t seed, long long chunk,
+               int range_key, std::vector<Splat>& out, PathStats& stats) {
   const Camera& cam = ctx.scene->camera;
   const Vec2 tanf = cam.tan_half_fov();
   const double fx = cam.width / (2.0 * tanf.x()), fy = cam.height / (2.0 * tanf.y());
   const Vec3 o = cam.origin();
   const Vec3 forward = cam.to_world.block<3, 1>(0, 2).normalized();
   const int K = vel.num_params;
+  const FilmLayout layout(K);
   const Eigen::Matrix<double, 3, N> dp = Eigen::Matrix<double, 3, N>::Zero();  // the camera does not move
-  Sampler sampler(seed, uint64_t(chunk), 0, 2);
-  for (long long i = first; i < first + count; ++i) {
+  Sampler sampler(seed, uint64_t(chunk), uint64_t(range_key), 2);
+  for (long long i = 0; i < count; ++i) {
     ++stats.boundary_traversals;
     // ---- An edge by its weight (projected length, less for creases), a point uniformly along
     // its projected segment.
@@ -79,22 +75,15 @@ void run_chunk(const PathContext& ctx, const SceneVelocities& vel, const std::ve
     }
     const Color weight = jump * (W * per_sample / pdf);
     for (int k = 0; k < K; ++k) {
-      for (int c = 0; c < 3; ++c) out.push_back({px, py, 3 * (1 + k) + c, weight[c] * J[k]});
-      out.push_back({px, py, 3 * (1 + K) + k, weight.mean() * J[k]});
+      for (int c = 0; c < 3; ++c) out.push_back({px, py, layout.derivative(k, c), weight[c] * J[k]});
+      out.push_back({px, py, layout.derivative_mean(k), weight.mean() * J[k]});
     }
   }
 }
 
 }  // namespace
 
-Vec2 project_to_film(const Camera& cam, const Vec3& x, double* depth) {
-  const Vec3 c = to_camera(cam, x);
-  const Vec2 t = cam.tan_half_fov();
-  if (depth) *depth = c.z();
-  return Vec2(0.5 * cam.width * (1.0 - c.x() / (c.z() * t.x())), 0.5 * cam.height * (1.0 - c.y() / (c.z() * t.y())));
-}
-
-std::vector<PrimaryEdge> find_primary_edges(const Scene& scene, const edgetree::EdgeForest& forest,
+std::vector<PrimaryEdge> find_primary_edges(const Scene& scene, const edgetree::EdgeSet& edges,
                                             const std::vector<bool>& moving) {
   const Camera& cam = scene.camera;
   const Vec3 o = cam.origin();
@@ -105,7 +94,7 @@ std::vector<PrimaryEdge> find_primary_edges(const Scene& scene, const edgetree::
   auto consider = [&](const edgetree::ForestEdge& e) {
     if (e.shape >= int(moving.size()) || !moving[e.shape]) return;
     if (!edgetree::is_discontinuity(e, o)) return;
-    const Vec3 c0 = to_camera(cam, e.p0), c1 = to_camera(cam, e.p1);
+    const Vec3 c0 = cam.to_camera(e.p0), c1 = cam.to_camera(e.p1);
     PrimaryEdge pe;
     pe.edge = &e;
     // Near plane and the four side planes of the frustum (camera space).
@@ -114,38 +103,46 @@ std::vector<PrimaryEdge> find_primary_edges(const Scene& scene, const edgetree::
     if (!clip(c0, c1, Vec3(1, 0, tf.x()), 0, pe.ta, pe.tb)) return;
     if (!clip(c0, c1, Vec3(0, -1, tf.y()), 0, pe.ta, pe.tb)) return;
     if (!clip(c0, c1, Vec3(0, 1, tf.y()), 0, pe.ta, pe.tb)) return;
-    pe.a = project_to_film(cam, e.p0 + pe.ta * (e.p1 - e.p0), &pe.za);
-    pe.b = project_to_film(cam, e.p0 + pe.tb * (e.p1 - e.p0), &pe.zb);
+    pe.a = cam.project(e.p0 + pe.ta * (e.p1 - e.p0), &pe.za);
+    pe.b = cam.project(e.p0 + pe.tb * (e.p1 - e.p0), &pe.zb);
     pe.length = (pe.b - pe.a).norm();
     pe.weight = pe.length * (e.crease ? std::max(e.angle, 1e-3) / kPi : 1.0);
     if (pe.weight > 0 && pe.za > 0 && pe.zb > 0) out.push_back(pe);
   };
-  for (const auto& e : forest.edges()) consider(e);
-  for (const auto& e : forest.always_edges()) consider(e);
+  for (const auto& e : edges.edges()) consider(e);
+  for (const auto& e : edges.always_edges()) consider(e);
   return out;
 }
 
 void add_primary_boundary(Film& film, const PathContext& ctx, const SceneVelocities& velocities,
-                          const std::vector<PrimaryEdge>& edges, long long num_samples, int spp, uint64_t seed,
-                          int threads, PathStats& stats) {
+                          const std::vector<PrimaryEdge>& edges, int first_sample, int spp, uint64_t seed, int threads,
+                          PathStats& stats) {
+  const Camera& cam = ctx.scene->camera;
+  const long long per_index = (long long)cam.width * cam.height;  // primary samples per sample index
+  const long long num_samples = per_index * spp;
   if (edges.empty() || num_samples <= 0) return;
   std::vector<double> cdf(1, 0.0);
   for (const auto& e : edges) cdf.push_back(cdf.back() + e.weight);
   // Each sample estimates the whole image's primary term; a pixel's film mean divides by spp.
   const double per_sample = double(spp) / double(num_samples);
+  // ---- Global numbering: sample index s owns primary samples [s W H, (s + 1) W H); chunk c holds
+  // numbers [c 1024, (c + 1) 1024) and draws from stream (seed, c, 0, 2), whichever run draws it.
+  // A chunk cut by the start of this range draws its part from (seed, c, first_sample, 2).
   const long long chunk_size = 1024;
-  const long long chunks = (num_samples + chunk_size - 1) / chunk_size;
+  const long long g0 = per_index * first_sample, g1 = g0 + num_samples;
+  const long long c0 = g0 / chunk_size, chunks = (g1 + chunk_size - 1) / chunk_size - c0;
   std::vector<std::vector<Splat>> splats{static_cast<size_t>(chunks)};
   std::vector<PathStats> chunk_stats{static_cast<size_t>(chunks)};
   const int K = velocities.num_params;
-  auto body = [&](long long c) {
-    const long long first = c * chunk_size, count = std::min(chunk_size, num_samples - first);
-    auto& out = splats[size_t(c)];
-    auto& st = chunk_stats[size_t(c)];
-    if (K == 1) run_chunk<1>(ctx, velocities, edges, cdf, first, count, per_sample, seed, c, out, st);
-    else if (K == 2) run_chunk<2>(ctx, velocities, edges, cdf, first, count, per_sample, seed, c, out, st);
-    else if (K <= 4) run_chunk<4>(ctx, velocities, edges, cdf, first, count, per_sample, seed, c, out, st);
-    else run_chunk<8>(ctx, velocities, edges, cdf, first, count, per_sample, seed, c, out, st);
+  auto body = [&](long long j) {
+    const long long c = c0 + j;
+    const long long begin = std::max(g0, c * chunk_size), end = std::min(g1, (c + 1) * chunk_size);
+    const int key = begin > c * chunk_size ? first_sample : 0;
+    auto& out = splats[size_t(j)];
+    auto& st = chunk_stats[size_t(j)];
+    with_dual_size(K, [&](auto n) {
+      run_chunk<decltype(n)::value>(ctx, velocities, edges, cdf, end - begin, per_sample, seed, c, key, out, st);
+    });
   };
   auto run = [&] { tbb::parallel_for(0LL, chunks, body); };
   if (threads > 0) tbb::task_arena(threads).execute(run);

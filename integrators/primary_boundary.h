@@ -17,7 +17,7 @@
 /// the density in t carries the perspective Jacobian ds/dt); each sample is splatted into the
 /// pixel it lands in.
 
-#include "qsil/edgetree/edge_forest.h"
+#include "qsil/edgetree/edge_set.h"
 #include "qsil/integrators/path_tracer.h"
 #include "qsil/film.h"
 #include "qsil/parameters.h"
@@ -37,19 +37,24 @@ struct PrimaryEdge {
   double weight = 0;
 };
 
-/// The discontinuity edges of moving shapes seen from the camera centre, clipped and projected.
-std::vector<PrimaryEdge> find_primary_edges(const Scene& scene, const edgetree::EdgeForest& forest,
+/// The discontinuity edges of moving shapes seen from the camera centre, clipped and projected
+/// (the edge set's tree and always-candidate edges; the edges point into `edges`).
+std::vector<PrimaryEdge> find_primary_edges(const Scene& scene, const edgetree::EdgeSet& edges,
                                             const std::vector<bool>& moving);
 
-/// Film position (pixels, (0,0) top-left) of world point x, and its camera-space depth z (> 0 in
-/// front). Inverse of Camera::direction.
-Vec2 project_to_film(const Camera& camera, const Vec3& x, double* depth = nullptr);
-
-/// Adds the primary boundary term to the derivative channels of `film` (layout of
-/// gradient_film_channels(K)) with `num_samples` edge samples (0: none), deterministic for a seed
-/// whatever the thread count. Counts rays and zero contributions in `stats`.
+/// Adds the primary boundary term of the sample range [first_sample, first_sample + spp) to the
+/// derivative channels of `film` (a gradient film of velocities.num_params parameters): W x H
+/// edge samples per sample index. The samples are numbered globally (sample index s owns numbers
+/// [s W H, (s + 1) W H)) and drawn in chunks of 1024 numbers, chunk c from the stream
+/// Sampler(seed, c, 0, 2) whichever run draws it, except that a chunk cut by the start of the
+/// range draws its part from Sampler(seed, c, first_sample, 2). So a run over [0, spp) draws what
+/// a single run of spp samples always drew; runs over disjoint ranges draw independent samples;
+/// and when W H is a multiple of 1024 (every power-of-two image of 32 x 32 or more), runs over
+/// ranges that partition [0, spp) draw exactly the samples of the run over [0, spp) (their films
+/// merge into its film up to the rounding of the sums). Deterministic for a seed whatever the
+/// thread count (chunks are merged in order). Counts rays and zero contributions in `stats`.
 void add_primary_boundary(Film& film, const PathContext& ctx, const SceneVelocities& velocities,
-                          const std::vector<PrimaryEdge>& edges, long long num_samples, int spp, uint64_t seed,
-                          int threads, PathStats& stats);
+                          const std::vector<PrimaryEdge>& edges, int first_sample, int spp, uint64_t seed, int threads,
+                          PathStats& stats);
 
 }  // namespace qsil

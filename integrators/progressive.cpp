@@ -1,5 +1,5 @@
 /// @file progressive.cpp
-/// See progressive.h.
+/// See qsil/integrators/progressive.h.
 
 #include "qsil/integrators/progressive.h"
 
@@ -11,8 +11,8 @@
 
 namespace qsil {
 
-uint64_t progressive_pass_seed(uint64_t base, int pass) {
-  uint64_t z = base + 0x9E3779B97F4A7C15ull * (uint64_t(pass) + 1);
+uint64_t derive_seed(uint64_t base, int index) {
+  uint64_t z = base + 0x9E3779B97F4A7C15ull * (uint64_t(index) + 1);
   z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
   z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
   return z ^ (z >> 31);
@@ -29,22 +29,16 @@ ProgressiveResult render_progressive(const PassFunction& pass, const Progressive
   long long total_spp = 0;
   int next_spp = options.fixed_pass_spp > 0 ? options.fixed_pass_spp : std::max(1, options.first_pass_spp);
   for (int i = 0;; ++i) {
-    // ---- one pass with its own seed; progress bars off (many short passes)
+    // ---- one pass over the next sample range; progress bars off (many short passes)
     RenderOptions ro;
     ro.spp = next_spp;
-    ro.seed = progressive_pass_seed(options.seed, i);
+    ro.first_sample = int(total_spp);
+    ro.seed = options.seed;
     ro.threads = options.threads;
     ro.progress = false;
     RenderResult r = pass(ro);
-    if (i == 0) {
-      out.result = std::move(r);
-    } else {
-      out.result.film.merge(r.film);
-      out.result.spp += r.spp;
-      out.result.seconds += r.seconds;
-      out.result.rays += r.rays;
-      out.result.nonfinite += r.nonfinite;
-    }
+    if (i == 0) out.result = std::move(r);
+    else out.result.merge(r);
     total_spp += next_spp;
     out.passes = i + 1;
 

@@ -11,6 +11,7 @@
 
 #include <cmath>
 #include <stdexcept>
+#include <string_view>
 
 namespace qsil {
 
@@ -21,9 +22,10 @@ double deg_to_rad(double d) { return d * kPi / 180.0; }
 Vec2 Camera::tan_half_fov() const {
   // Mitsuba 3 parse_fov(): convert the field of view along fov_axis into the horizontal one.
   const double aspect = double(width) / double(height);
-  std::string axis = fov_axis;
-  if (axis == "smaller") axis = aspect > 1 ? "y" : "x";
-  else if (axis == "larger") axis = aspect > 1 ? "x" : "y";
+  const bool wide = aspect > 1;
+  const std::string_view axis = fov_axis == "smaller"  ? (wide ? "y" : "x")
+                                : fov_axis == "larger" ? (wide ? "x" : "y")
+                                                       : std::string_view(fov_axis);
   const double t = std::tan(0.5 * deg_to_rad(fov_deg));
   double tan_x;
   if (axis == "x") {
@@ -54,6 +56,15 @@ Vec3 Camera::direction(double fx, double fy) const {
   const Vec2 t = tan_half_fov();
   const Vec3 local((1.0 - 2.0 * fx / width) * t.x(), (1.0 - 2.0 * fy / height) * t.y(), 1.0);
   return (to_world.block<3, 3>(0, 0) * local).normalized();
+}
+
+Vec3 Camera::to_camera(const Vec3& x) const { return to_world.block<3, 3>(0, 0).transpose() * (x - origin()); }
+
+Vec2 Camera::project(const Vec3& x, double* depth) const {
+  const Vec3 c = to_camera(x);
+  const Vec2 t = tan_half_fov();
+  if (depth) *depth = c.z();
+  return Vec2(0.5 * width * (1.0 - c.x() / (c.z() * t.x())), 0.5 * height * (1.0 - c.y() / (c.z() * t.y())));
 }
 
 Box3 Scene::bounds() const {

@@ -13,9 +13,6 @@ namespace qsil {
 
 namespace {
 constexpr double kOneMinusEpsilon = 1.0 - std::numeric_limits<double>::epsilon() / 2;
-
-/// Rec. 709 / sRGB luminance of linear RGB (the weight Mitsuba 3 and pbrt-v4 use for env maps).
-double luminance(const Color& c) { return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]; }
 }  // namespace
 
 Vec2 EnvironmentLight::direction_to_uv(const Vec3& d) {

@@ -1,19 +1,48 @@
 /// @file film.cpp
-/// Film accumulation; see qsil/film.h.
+/// Film accumulation and channel layout; see qsil/film.h.
 
 #include "qsil/film.h"
+
+#include "qsil/dual.h"
 
 #include <cmath>
 
 namespace qsil {
 
-Film::Film(int width, int height, int channels)
-    : width_(width), height_(height), channels_(channels),
-      sum_(size_t(width) * height * channels, 0.0), sum_sq_(size_t(width) * height * channels, 0.0),
-      splat_sum_(size_t(width) * height * channels, 0.0), splat_sq_(size_t(width) * height * channels, 0.0),
-      count_(size_t(width) * height, 0) {}
+FilmLayout::FilmLayout(int num_params) : num_params_(num_params) {
+  QSIL_CHECK(num_params >= 0 && num_params <= kMaxParameters);
+}
+
+std::string FilmLayout::derivative_prefix(int k) { return "dtheta" + std::to_string(k); }
+
+std::string FilmLayout::derivative_name(int k, int c) {
+  QSIL_DCHECK(c >= 0 && c < 3);
+  return derivative_prefix(k) + "." + "RGB"[c];
+}
+
+std::vector<std::string> FilmLayout::names() const {
+  std::vector<std::string> names{"R", "G", "B"};
+  for (int k = 0; k < num_params_; ++k)
+    for (int c = 0; c < 3; ++c) names.push_back(derivative_name(k, c));
+  return names;
+}
+
+std::vector<std::string> FilmLayout::standard_error_names() const {
+  std::vector<std::string> names = this->names();
+  for (std::string& n : names) n += ".se";
+  return names;
+}
+
+Film::Film(int width, int height, const FilmLayout& layout)
+    : width_(width), height_(height), channels_(layout.channels()), layout_(layout),
+      sum_(size_t(width) * height * channels_, 0.0), sum_sq_(size_t(width) * height * channels_, 0.0),
+      splat_sum_(size_t(width) * height * channels_, 0.0), splat_sq_(size_t(width) * height * channels_, 0.0),
+      count_(size_t(width) * height, 0) {
+  QSIL_CHECK(width > 0 && height > 0);
+}
 
 void Film::add_sample(int x, int y, const double* values) {
+  QSIL_DCHECK(x >= 0 && x < width_ && y >= 0 && y < height_);
   const size_t p = size_t(y) * width_ + x;
   double* s = &sum_[p * channels_];
   double* q = &sum_sq_[p * channels_];
@@ -25,18 +54,21 @@ void Film::add_sample(int x, int y, const double* values) {
 }
 
 void Film::splat(int x, int y, int channel, double value) {
+  QSIL_DCHECK(x >= 0 && x < width_ && y >= 0 && y < height_ && channel >= 0 && channel < channels_);
   const size_t i = (size_t(y) * width_ + x) * channels_ + channel;
   splat_sum_[i] += value;
   splat_sq_[i] += value * value;
 }
 
 double Film::mean(int c, int x, int y) const {
+  QSIL_DCHECK(c >= 0 && c < channels_);
   const size_t p = size_t(y) * width_ + x;
   const size_t i = p * channels_ + c;
   return count_[p] > 0 ? (sum_[i] + splat_sum_[i]) / double(count_[p]) : 0.0;
 }
 
 double Film::standard_error(int c, int x, int y) const {
+  QSIL_DCHECK(c >= 0 && c < channels_);
   const size_t p = size_t(y) * width_ + x;
   const double n = double(count_[p]);
   if (n < 2) return 0.0;
@@ -46,6 +78,7 @@ double Film::standard_error(int c, int x, int y) const {
 }
 
 void Film::merge(const Film& other) {
+  QSIL_CHECK(other.width_ == width_ && other.height_ == height_ && other.channels_ == channels_);
   for (size_t i = 0; i < sum_.size(); ++i) {
     sum_[i] += other.sum_[i];
     sum_sq_[i] += other.sum_sq_[i];
@@ -55,23 +88,41 @@ void Film::merge(const Film& other) {
   for (size_t i = 0; i < count_.size(); ++i) count_[i] += other.count_[i];
 }
 
-Image Film::to_image(const std::vector<std::string>& names) const {
+ImageSum Film::derivative_sum(int k) const {
+  const int c = layout_.derivative_mean(k);
+  ImageSum s;
+  double var = 0;
+  for (int y = 0; y < height_; ++y)
+    for (int x = 0; x < width_; ++x) {
+      s.sum += mean(c, x, y);
+      const double se = standard_error(c, x, y);
+      var += se * se;
+    }
+  s.standard_error = std::sqrt(var);
+  return s;
+}
+
+Image Film::to_image() const {
   Image img;
   img.width = width_;
   img.height = height_;
-  img.channel_names = names;
-  img.planes.assign(names.size(), std::vector<float>(size_t(width_) * height_));
-  for (int c = 0; c < int(names.size()) && c < channels_; ++c)
+  img.channel_names = layout_.names();
+  img.planes.assign(img.channel_names.size(), std::vector<float>(size_t(width_) * height_));
+  for (int c = 0; c < int(img.channel_names.size()); ++c)
     for (int y = 0; y < height_; ++y)
       for (int x = 0; x < width_; ++x) img.at(c, x, y) = float(mean(c, x, y));
   return img;
 }
 
-Image Film::standard_error_image(const std::vector<std::string>& names) const {
-  Image img = to_image(names);
-  for (int c = 0; c < int(names.size()) && c < channels_; ++c)
+Image Film::to_image_with_standard_errors() const {
+  Image img = to_image();
+  const std::vector<std::string> se_names = layout_.standard_error_names();
+  for (int c = 0; c < int(se_names.size()); ++c) {
+    img.channel_names.push_back(se_names[size_t(c)]);
+    img.planes.emplace_back(size_t(width_) * height_);
     for (int y = 0; y < height_; ++y)
-      for (int x = 0; x < width_; ++x) img.at(c, x, y) = float(standard_error(c, x, y));
+      for (int x = 0; x < width_; ++x) img.planes.back()[size_t(y) * width_ + x] = float(standard_error(c, x, y));
+  }
   return img;
 }
 

@@ -3,8 +3,11 @@
 /// PNG through stb_image_write. The only file that includes OpenEXR or stb (docs/architecture.md §1).
 /// Writes go to a temporary name beside the target and are renamed, so outputs are whole or absent.
 
-#include "qsil/error.h"
 #include "qsil/image.h"
+
+#include "qsil/error.h"
+#include "qsil/files.h"
+#include "qsil/math.h"
 
 #include <OpenEXR/ImfChannelList.h>
 #include <OpenEXR/ImfFrameBuffer.h>
@@ -19,8 +22,7 @@
 
 #include <algorithm>
 #include <cmath>
-#include <random>
-#include <unistd.h>
+#include <cstdint>
 
 namespace qsil {
 
@@ -65,67 +67,70 @@ Image read_exr(const std::filesystem::path& path) {
   }
 }
 
-namespace {
-/// A temporary file name beside `path` (same directory, so rename is atomic).
-std::filesystem::path temporary_beside(const std::filesystem::path& path) {
-  std::random_device rd;
-  auto tmp = path;
-  tmp += ".tmp" + std::to_string(::getpid()) + "_" + std::to_string(rd() % 1000000);
-  return tmp;
-}
-
-void commit_file(const std::filesystem::path& tmp, const std::filesystem::path& path) {
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    std::filesystem::remove(tmp, ec);
-    throw Error(path.string() + ": cannot write file: " + ec.message());
-  }
-}
-}  // namespace
-
 void write_exr(const std::filesystem::path& path, const Image& image) {
   const std::string name = path.string();
   if (image.width <= 0 || image.height <= 0 || image.planes.size() != image.channel_names.size())
     throw Error(name + ": internal: malformed image");
-  const auto tmp = temporary_beside(path);
-  try {
-    Imf::Header header(image.width, image.height);
-    header.compression() = Imf::ZIP_COMPRESSION;
-    for (const auto& [k, v] : image.attributes) header.insert(k, Imf::StringAttribute(v));
-    Imf::FrameBuffer fb;
-    for (size_t c = 0; c < image.planes.size(); ++c) {
-      header.channels().insert(image.channel_names[c], Imf::Channel(Imf::FLOAT));
-      fb.insert(image.channel_names[c],
-                Imf::Slice(Imf::FLOAT, const_cast<char*>(reinterpret_cast<const char*>(image.planes[c].data())),
-                           sizeof(float), sizeof(float) * size_t(image.width)));
-    }
-    {
+  write_atomically(path, [&](const std::filesystem::path& tmp) {
+    try {
+      Imf::Header header(image.width, image.height);
+      header.compression() = Imf::ZIP_COMPRESSION;
+      for (const auto& [k, v] : image.attributes) header.insert(k, Imf::StringAttribute(v));
+      Imf::FrameBuffer fb;
+      for (size_t c = 0; c < image.planes.size(); ++c) {
+        header.channels().insert(image.channel_names[c], Imf::Channel(Imf::FLOAT));
+        fb.insert(image.channel_names[c],
+                  Imf::Slice(Imf::FLOAT, const_cast<char*>(reinterpret_cast<const char*>(image.planes[c].data())),
+                             sizeof(float), sizeof(float) * size_t(image.width)));
+      }
       Imf::OutputFile file(tmp.string().c_str(), header);
       file.setFrameBuffer(fb);
       file.writePixels(image.height);
+    } catch (const std::exception& e) {
+      std::string msg = e.what();
+      if (auto nl = msg.find('\n'); nl != std::string::npos) msg = msg.substr(0, nl);
+      throw Error(name + ": cannot write OpenEXR: " + msg);
     }
-  } catch (const std::exception& e) {
-    std::error_code ec;
-    std::filesystem::remove(tmp, ec);
-    std::string msg = e.what();
-    if (auto nl = msg.find('\n'); nl != std::string::npos) msg = msg.substr(0, nl);
-    throw Error(name + ": cannot write OpenEXR: " + msg);
-  }
-  commit_file(tmp, path);
+  });
 }
 
 void write_png(const std::filesystem::path& path, int width, int height,
                const std::vector<unsigned char>& rgb) {
   if (width <= 0 || height <= 0 || rgb.size() != size_t(width) * height * 3)
     throw Error(path.string() + ": internal: malformed PNG data");
-  const auto tmp = temporary_beside(path);
-  if (!stbi_write_png(tmp.string().c_str(), width, height, 3, rgb.data(), width * 3)) {
-    std::error_code ec;
-    std::filesystem::remove(tmp, ec);
-    throw Error(path.string() + ": cannot write PNG");
-  }
-  commit_file(tmp, path);
+  write_atomically(path, [&](const std::filesystem::path& tmp) {
+    if (!stbi_write_png(tmp.string().c_str(), width, height, 3, rgb.data(), width * 3))
+      throw Error(path.string() + ": cannot write PNG");
+  });
+}
+
+void write_npy(const std::filesystem::path& path, int height, int width, const std::vector<float>& data) {
+  if (height <= 0 || width <= 0 || data.size() != size_t(height) * size_t(width))
+    throw Error(path.string() + ": internal: malformed array");
+  std::string header = "{'descr': '<f4', 'fortran_order': False, 'shape': (" + std::to_string(height) + ", " +
+                       std::to_string(width) + "), }";
+  // Magic (6) + version (2) + header length (2) + header, padded with spaces to a multiple of 64
+  // and ended by a newline.
+  const size_t total = 10 + header.size() + 1;
+  header.append((64 - total % 64) % 64, ' ');
+  header.push_back('\n');
+  std::string bytes("\x93NUMPY\x01\x00", 8);
+  const uint16_t len = uint16_t(header.size());
+  bytes.push_back(char(len & 0xff));
+  bytes.push_back(char(len >> 8));
+  bytes += header;
+  bytes.append(reinterpret_cast<const char*>(data.data()), data.size() * sizeof(float));
+  write_file(path, bytes);
+}
+
+std::vector<float> luminance_plane(const Image& image, const std::string& prefix) {
+  const std::string p = prefix.empty() ? "" : prefix + ".";
+  const int r = image.channel_index(p + "R"), g = image.channel_index(p + "G"), b = image.channel_index(p + "B");
+  if (r < 0 || g < 0 || b < 0) throw Error("image has no " + (prefix.empty() ? std::string("R,G,B") : prefix) + " channels");
+  std::vector<float> out(size_t(image.width) * image.height);
+  for (size_t i = 0; i < out.size(); ++i)
+    out[i] = float(luminance(image.planes[size_t(r)][i], image.planes[size_t(g)][i], image.planes[size_t(b)][i]));
+  return out;
 }
 
 double linear_to_srgb(double v) {

@@ -112,10 +112,21 @@ bool SceneVelocities::any_moving() const {
   return false;
 }
 
+void check_parameter_count(size_t count) {
+  if (count < 1 || count > size_t(kMaxParameters))
+    throw Error("--param: 1 to " + std::to_string(kMaxParameters) + " parameters per run (got " +
+                std::to_string(count) + ")");
+}
+
+std::vector<ParameterSpec> parse_parameters(const std::vector<std::string>& specs, const Scene& scene) {
+  check_parameter_count(specs.size());
+  std::vector<ParameterSpec> params;
+  for (const auto& s : specs) params.push_back(parse_parameter(s, scene));
+  return params;
+}
+
 SceneVelocities compute_velocities(const Scene& scene, const std::vector<ParameterSpec>& params) {
-  if (params.size() > size_t(kMaxParameters))
-    throw Error("at most " + std::to_string(kMaxParameters) + " parameters per run (got " +
-                std::to_string(params.size()) + ")");
+  check_parameter_count(params.size());
   SceneVelocities v;
   v.num_params = int(params.size());
   v.position.resize(scene.shapes.size());

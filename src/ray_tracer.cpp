@@ -3,6 +3,7 @@
 
 #include "qsil/ray_tracer.h"
 
+#include "qsil/check.h"
 #include "qsil/error.h"
 
 #include <embree3/rtcore.h>
@@ -73,7 +74,8 @@ struct RayTracer::Impl {
   std::vector<char> one_sided;  ///< per geometry (= shape index)
 };
 
-void RayTracer::build_impl(Impl& impl, const Scene& scene, const std::vector<std::vector<Vec3>>* positions) {
+RayTracer::RayTracer(const Scene& scene) : impl_(std::make_unique<Impl>()) {
+  Impl& impl = *impl_;
   impl.device = rtcNewDevice(nullptr);
   if (!impl.device) throw Error("Embree: cannot create device");
   rtcSetDeviceErrorFunction(impl.device, embree_error, nullptr);
@@ -85,7 +87,7 @@ void RayTracer::build_impl(Impl& impl, const Scene& scene, const std::vector<std
     const int b = scene.shapes[s].bsdf;
     if (b >= 0 && b < int(scene.bsdfs.size()) && scene.bsdfs[size_t(b)].twosided) impl.one_sided[s] = 0;
     const TriangleMesh& mesh = scene.shapes[s].mesh;
-    const auto& pos = positions ? (*positions)[s] : mesh.positions;
+    const auto& pos = mesh.positions;
     RTCGeometry geom = rtcNewGeometry(impl.device, RTC_GEOMETRY_TYPE_TRIANGLE);
     auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
                                                            3 * sizeof(float), pos.size()));
@@ -103,13 +105,6 @@ void RayTracer::build_impl(Impl& impl, const Scene& scene, const std::vector<std
   if (rtcGetDeviceError(impl.device) != RTC_ERROR_NONE) throw Error("Embree: scene build failed");
 }
 
-RayTracer::RayTracer(const Scene& scene) : impl_(std::make_unique<Impl>()) { build_impl(*impl_, scene, nullptr); }
-
-RayTracer::RayTracer(const Scene& scene, const std::vector<std::vector<Vec3>>& positions)
-    : impl_(std::make_unique<Impl>()) {
-  build_impl(*impl_, scene, &positions);
-}
-
 RayTracer::~RayTracer() {
   if (impl_->scene) rtcReleaseScene(impl_->scene);
   if (impl_->device) rtcReleaseDevice(impl_->device);
@@ -119,28 +114,42 @@ uint64_t RayTracer::invalid_rays() const { return impl_->invalid_rays.load(std::
 
 uint64_t RayTracer::total_invalid_rays() { return g_invalid_rays.load(std::memory_order_relaxed); }
 
+namespace {
+/// The Embree ray of a ray that passed ray_is_valid (checked again in debug builds: Embree aborts
+/// on invalid rays).
+void embree_ray(const Vec3& origin, const Vec3& dir, double tmax, RTCRay& ray) {
+  QSIL_DCHECK_MSG(ray_is_valid(origin, dir, tmax), "ray " << origin.transpose() << " -> " << dir.transpose());
+  ray.org_x = float(origin.x());
+  ray.org_y = float(origin.y());
+  ray.org_z = float(origin.z());
+  ray.dir_x = float(dir.x());
+  ray.dir_y = float(dir.y());
+  ray.dir_z = float(dir.z());
+  ray.tnear = 0.0f;
+  ray.tfar = std::isfinite(tmax) ? float(tmax) : std::numeric_limits<float>::infinity();
+  ray.mask = 0xFFFFFFFFu;
+  ray.flags = 0;
+  ray.time = 0.0f;
+}
+
+/// The intersection context that filters what `ignore` names (no filter when it names nothing).
+void filter_context(const IgnoreSet& ignore, const std::vector<char>& one_sided, FilterContext& ctx) {
+  rtcInitIntersectContext(&ctx.context);
+  ctx.context.filter = ignore.empty() ? nullptr : ignore_filter;
+  ctx.ignore = &ignore;
+  ctx.one_sided = &one_sided;
+}
+}  // namespace
+
 Hit RayTracer::intersect(const Vec3& origin, const Vec3& dir, double tmax, const IgnoreSet& ignore) const {
   if (!ray_is_valid(origin, dir, tmax)) {
     impl_->refuse();
     return Hit{};
   }
   FilterContext ctx;
-  rtcInitIntersectContext(&ctx.context);
-  ctx.context.filter = ignore.empty() ? nullptr : ignore_filter;
-  ctx.ignore = &ignore;
-  ctx.one_sided = &impl_->one_sided;
+  filter_context(ignore, impl_->one_sided, ctx);
   RTCRayHit rh;
-  rh.ray.org_x = float(origin.x());
-  rh.ray.org_y = float(origin.y());
-  rh.ray.org_z = float(origin.z());
-  rh.ray.dir_x = float(dir.x());
-  rh.ray.dir_y = float(dir.y());
-  rh.ray.dir_z = float(dir.z());
-  rh.ray.tnear = 0.0f;
-  rh.ray.tfar = std::isfinite(tmax) ? float(tmax) : std::numeric_limits<float>::infinity();
-  rh.ray.mask = 0xFFFFFFFFu;
-  rh.ray.flags = 0;
-  rh.ray.time = 0.0f;
+  embree_ray(origin, dir, tmax, rh.ray);
   rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
   rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
   rtcIntersect1(impl_->scene, &ctx.context, &rh);
@@ -160,22 +169,9 @@ bool RayTracer::occluded(const Vec3& origin, const Vec3& dir, double tmax, const
     return false;
   }
   FilterContext ctx;
-  rtcInitIntersectContext(&ctx.context);
-  ctx.context.filter = ignore.empty() ? nullptr : ignore_filter;
-  ctx.ignore = &ignore;
-  ctx.one_sided = &impl_->one_sided;
+  filter_context(ignore, impl_->one_sided, ctx);
   RTCRay ray;
-  ray.org_x = float(origin.x());
-  ray.org_y = float(origin.y());
-  ray.org_z = float(origin.z());
-  ray.dir_x = float(dir.x());
-  ray.dir_y = float(dir.y());
-  ray.dir_z = float(dir.z());
-  ray.tnear = 0.0f;
-  ray.tfar = std::isfinite(tmax) ? float(tmax) : std::numeric_limits<float>::infinity();
-  ray.mask = 0xFFFFFFFFu;
-  ray.flags = 0;
-  ray.time = 0.0f;
+  embree_ray(origin, dir, tmax, ray);
   rtcOccluded1(impl_->scene, &ctx.context, &ray);
   return ray.tfar < 0.0f;  // Embree sets tfar = -inf on a hit
 }

@@ -1,5 +1,5 @@
 /// @file scene_loader.cpp
-/// load_scene(): the Mitsuba 3 XML subset of qsil (issue "Foundation"; docs/architecture.md §2, §8).
+/// load_scene(): the Mitsuba 3 XML subset of qsil (docs/architecture.md §2, §8).
 ///
 /// Supported plugins (Mitsuba 3 names, defaults and units):
 ///
@@ -582,6 +582,16 @@ void Loader::load() {
 }
 
 }  // namespace
+
+std::map<std::string, std::string> parse_defines(const std::vector<std::string>& defines) {
+  std::map<std::string, std::string> out;
+  for (const std::string& d : defines) {
+    const auto eq = d.find('=');
+    if (eq == std::string::npos || eq == 0) throw Error("-D '" + d + "': expected name=value");
+    out[d.substr(0, eq)] = d.substr(eq + 1);
+  }
+  return out;
+}
 
 Scene load_scene(const std::filesystem::path& file, const std::map<std::string, std::string>& defaults,
                  std::vector<std::string>* warnings) {

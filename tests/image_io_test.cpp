@@ -1,4 +1,4 @@
-// EXR write/read round trip and atomic output (issue "Foundation": EXR round trip).
+// EXR write/read round trip and atomic output.
 #include "qsil/error.h"
 #include "qsil/image.h"
 

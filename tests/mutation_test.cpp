@@ -1,5 +1,5 @@
 /// @file mutation_test.cpp
-/// Mutated input never crashes `qsil` (issue 14): a few hundred mutated scene files, generated
+/// Mutated input never crashes `qsil`: a few hundred mutated scene files, generated
 /// from fixed seeds, each run through `qsil render` and `qsil grad --param spot:translate:0,1,0`
 /// at 16 x 16 pixels and 1 spp (`-D res=16 -D spp=1`, the defaults of scenes/spot-mirror.xml).
 /// Every run must end with
@@ -18,7 +18,7 @@
 ///   vertices, 80 faces) with 1 to 3 line-level edits (delete, duplicate or swap a line, replace a
 ///   number by nan, inf, -inf, 1e30, -1e30, 1e300, 1e13, an empty or a garbage word, truncate the
 ///   file at a line or a byte);
-/// - explicit: the real Spot with its first vertex at `1e30 1e30 -1e30` (the abort of issue 14),
+/// - explicit: the real Spot with its first vertex at `1e30 1e30 -1e30` (which once made Embree abort on a ray),
 ///   at -1e30, at 1e13 (beyond the 1e12 bound: an error) and at 1e11 (within it: a render).
 
 #include "qsil/image.h"

@@ -1,10 +1,25 @@
 // Path tracer: white furnace, closed-form albedo, determinism across thread counts.
-#include "qsil/integrators/render.h"
+#include "qsil/integrators/estimator.h"
 #include "test_scenes.h"
 
 #include <gtest/gtest.h>
 
 namespace qsil {
+
+/// Renders a 4 x 4 furnace scene and returns the largest |pixel / L - 1| over pixels and channels
+/// (every sample must be finite).
+double furnace_worst_error(const Scene& scene, uint64_t seed, double L) {
+  RenderOptions o;
+  o.seed = seed;
+  o.progress = false;
+  const RenderResult r = Estimator(scene, EstimatorConfig::primal()).run(o);
+  EXPECT_EQ(r.nonfinite, 0u);
+  double worst = 0;
+  for (int y = 0; y < 4; ++y)
+    for (int x = 0; x < 4; ++x)
+      for (int c = 0; c < 3; ++c) worst = std::max(worst, std::abs(r.film.mean(c, x, y) / L - 1.0));
+  return worst;
+}
 
 // White furnace: a closed diffuse sphere of albedo 1 in a constant environment of radiance L
 // renders L in every pixel. Per-sample values vary through the MIS weights between BSDF and
@@ -15,16 +30,7 @@ TEST(PathTracer, WhiteFurnaceRendersTheEnvironmentRadianceEverywhere) {
   const double L = 2.5;
   Scene scene = test::furnace_scene(1.0, L, 4, 65536);
   scene.camera.fov_deg = 20;
-  RenderOptions o;
-  o.seed = 7;
-  o.progress = false;
-  const RenderResult r = render_primal(scene, o);
-  double worst = 0;
-  for (int y = 0; y < 4; ++y)
-    for (int x = 0; x < 4; ++x)
-      for (int c = 0; c < 3; ++c) worst = std::max(worst, std::abs(r.film.mean(c, x, y) / L - 1.0));
-  EXPECT_LT(worst, 0.005);
-  EXPECT_EQ(r.nonfinite, 0u);
+  EXPECT_LT(furnace_worst_error(scene, 7, L), 0.005);
 }
 
 // White furnace with smooth shading on a coarse mesh: an icosphere with 80 faces and area-weighted
@@ -41,15 +47,7 @@ TEST(PathTracer, WhiteFurnaceWithCoarseSmoothShadedSphereRendersTheEnvironmentRa
   scene.shapes[0].mesh = test::icosphere(1);
   scene.shapes[0].face_normals = false;
   scene.camera.fov_deg = 20;
-  RenderOptions o;
-  o.seed = 9;
-  o.progress = false;
-  const RenderResult r = render_primal(scene, o);
-  double worst = 0;
-  for (int y = 0; y < 4; ++y)
-    for (int x = 0; x < 4; ++x)
-      for (int c = 0; c < 3; ++c) worst = std::max(worst, std::abs(r.film.mean(c, x, y) / L - 1.0));
-  EXPECT_LT(worst, 0.005);
+  EXPECT_LT(furnace_worst_error(scene, 9, L), 0.005);
 }
 
 // Albedo 0.5: a convex object in a constant environment reflects albedo * L (every reflected ray
@@ -60,7 +58,7 @@ TEST(PathTracer, FurnaceWithHalfAlbedoConvergesToTheClosedForm) {
   RenderOptions o;
   o.seed = 3;
   o.progress = false;
-  const RenderResult r = render_primal(scene, o);
+  const RenderResult r = Estimator(scene, EstimatorConfig::primal()).run(o);
   // Centre pixels see the sphere (radius 1 at distance 4 with 40 deg fov covers the middle).
   double sum = 0, var = 0;
   int n = 0;
@@ -83,11 +81,11 @@ TEST(PathTracer, SameSeedGivesIdenticalBytesForAnyThreadCount) {
   o.seed = 11;
   o.progress = false;
   o.threads = 1;
-  const RenderResult a = render_primal(scene, o);
+  const RenderResult a = Estimator(scene, EstimatorConfig::primal()).run(o);
   o.threads = 2;
-  const RenderResult b = render_primal(scene, o);
+  const RenderResult b = Estimator(scene, EstimatorConfig::primal()).run(o);
   o.seed = 12;
-  const RenderResult c = render_primal(scene, o);
+  const RenderResult c = Estimator(scene, EstimatorConfig::primal()).run(o);
   bool any_diff_seed = false;
   for (int y = 0; y < 24; ++y)
     for (int x = 0; x < 24; ++x)

@@ -1,12 +1,12 @@
 /// @file ray_tracer_test.cpp
-/// The Embree wrapper never hands Embree an invalid ray (issue 14): non-finite or huge origins or
+/// The Embree wrapper never hands Embree an invalid ray: non-finite or huge origins or
 /// directions, zero directions and NaN lengths are misses ("not occluded") and are counted, where
 /// Embree would abort the process on its `ray.valid()` assertion. And the gradient of the scene
 /// that aborted (spot-mirror with one Spot vertex at 1e30, placed in memory past the loader that
 /// now refuses it) completes. And rays that pass through back faces (IgnoreSet::through_back_faces,
-/// the smooth-shading fix of issue 13) skip exactly the back sides of one-sided surfaces.
+/// which keep the radiance of smooth-shaded meshes continuous across edges) skip exactly the back sides of one-sided surfaces.
 
-#include "qsil/integrators/render.h"
+#include "qsil/integrators/estimator.h"
 #include "qsil/ray_tracer.h"
 #include "qsil/scene.h"
 #include "test_data.h"
@@ -56,7 +56,7 @@ TEST(RayTracer, InvalidRaysAreCountedMisses) {
     double tmax;
   };
   const Ray bad[] = {
-      {Vec3(1e30, 1e30, -1e30), Vec3(-1, -1, 1).normalized(), kInf},  // the issue's vertex as an origin
+      {Vec3(1e30, 1e30, -1e30), Vec3(-1, -1, 1).normalized(), kInf},  // a vertex at 1e30 as an origin
       {Vec3(0, 0, 2e18), toward, kInf},                               // just beyond Embree's 1.844e18
       {Vec3(0, 0, 4), Vec3(0, 0, -1e19), kInf},                       // an unnormalised huge direction
       {Vec3(0, 0, kInf), toward, kInf},
@@ -76,7 +76,7 @@ TEST(RayTracer, InvalidRaysAreCountedMisses) {
   EXPECT_EQ(RayTracer::total_invalid_rays() - total_before, uint64_t(n));
 }
 
-// The abort of issue 14: grad of spot-mirror with Spot's first OBJ vertex (0.348799, -0.334989,
+// A vertex far out once aborted the process: grad of spot-mirror with Spot's first OBJ vertex (0.348799, -0.334989,
 // -0.0832331) at (1e30, 1e30, -1e30) made Embree assert on a ray leaving that vertex's triangles.
 // The loader now refuses such a mesh, so the scene is loaded intact and the vertex moved in
 // memory as the old loader had it (Spot has no to_world; triangles that became zero-area dropped);
@@ -102,7 +102,7 @@ TEST(RayTracer, GradientWithAHugeVertexCompletes) {
   o.progress = false;
   o.threads = 1;
   const uint64_t before = RayTracer::total_invalid_rays();
-  const RenderResult r = render_gradient(scene, params, o);
+  const RenderResult r = Estimator(scene, EstimatorConfig::gradient(params)).run(o);
   EXPECT_EQ(r.film.width(), 16);
   EXPECT_GT(RayTracer::total_invalid_rays(), before) << "rays from the huge triangles were refused";
 }

@@ -4,21 +4,19 @@
 Usage: python3 tools/candidates_grid.py DIR/summary.json OUT.png
 Reads the summary written by `qsil candidates` and the PNGs next to it (Debian's python3-matplotlib).
 """
-import json
 import os
-import sys
 
 import matplotlib
 matplotlib.use("Agg")
 import matplotlib.image as mpimg  # noqa: E402
 import matplotlib.lines as mlines  # noqa: E402
 import matplotlib.pyplot as plt  # noqa: E402
+from chart_common import run  # noqa: E402
 
 
-def main(summary_path, out_path):
-    with open(summary_path) as f:
-        s = json.load(f)
-    base = os.path.dirname(summary_path)
+def draw(s, base):
+    """The grid of summary `s` (pictures in directory `base`): (figure, legend handles, legend
+    columns, title, top of the layout)."""
     methods = s["methods"]
     views = ["camera", "overview"]
     fig, axes = plt.subplots(len(views), len(methods), figsize=(3.4 * len(methods), 3.4 * len(views) + 1.0),
@@ -38,16 +36,11 @@ def main(summary_path, out_path):
     handles = [mlines.Line2D([], [], color=(0, 0.63, 0), lw=2, label="candidate, not a silhouette"),
                mlines.Line2D([], [], color=(0.86, 0.12, 0.12), lw=2, label="candidate, silhouette"),
                mlines.Line2D([], [], color="black", marker="o", lw=0, label="shading point")]
-    fig.legend(handles=handles, loc="lower center", ncol=3, fontsize=9, frameon=False)
     p = s["shading_point"]
-    fig.suptitle(f"{os.path.basename(s['scene'])}, {s['where']}: p = ({p[0]:.3f}, {p[1]:.3f}, {p[2]:.3f}), "
-                 f"{s['true_silhouettes']} true silhouettes ({s['true_silhouettes_upper']} upper)", fontsize=11)
-    fig.tight_layout(rect=(0, 0.05, 1, 0.94))
-    fig.savefig(out_path + ".tmp.png", dpi=100)
-    os.replace(out_path + ".tmp.png", out_path)
+    title = (f"{os.path.basename(s['scene'])}, {s['where']}: p = ({p[0]:.3f}, {p[1]:.3f}, {p[2]:.3f}), "
+             f"{s['true_silhouettes']} true silhouettes ({s['true_silhouettes_upper']} upper)")
+    return fig, handles, 3, title, 0.94
 
 
 if __name__ == "__main__":
-    if len(sys.argv) != 3:
-        sys.exit(__doc__)
-    main(sys.argv[1], sys.argv[2])
+    run(draw, __doc__)

@@ -4,6 +4,7 @@
 #include "cli_common.h"
 
 #include "qsil/error.h"
+#include "qsil/preview.h"
 #include "qsil/ray_tracer.h"
 
 #include <spawn.h>
@@ -23,10 +24,14 @@ extern char** environ;
 
 namespace qsil::cli {
 
+void add_scene_options(CLI::App& app, std::string& scene, std::vector<std::string>& defines) {
+  app.add_option("scene", scene, "Scene file (Mitsuba 3 XML subset)")->required();
+  app.add_option("-D", defines, "Override a scene <default>: -D name=value (repeatable)")->allow_extra_args(false);
+}
+
 void add_common_flags(CLI::App& app, CommonFlags& flags, const std::string& default_output) {
   flags.output = default_output;
-  app.add_option("scene", flags.scene, "Scene file (Mitsuba 3 XML subset)")->required();
-  app.add_option("-D", flags.defines, "Override a scene <default>: -D name=value (repeatable)")->allow_extra_args(false);
+  add_scene_options(app, flags.scene, flags.defines);
   app.add_option("--spp", flags.render.spp, "Samples per pixel (default: the scene's sampler sample_count)");
   app.add_option("--seed", flags.render.seed, "Random seed; a seed gives bit-identical output for any --threads");
   app.add_option("--threads", flags.render.threads, "Worker threads (0 = all cores)")->check(CLI::NonNegativeNumber);
@@ -36,63 +41,33 @@ void add_common_flags(CLI::App& app, CommonFlags& flags, const std::string& defa
   app.add_flag_callback("-q,--quiet", [&flags] { flags.render.progress = false; }, "No progress bar");
 }
 
-Scene load_scene_with_flags(const CommonFlags& flags) {
-  std::map<std::string, std::string> defaults;
-  for (const auto& d : flags.defines) {
-    const auto eq = d.find('=');
-    if (eq == std::string::npos || eq == 0) throw Error("-D '" + d + "': expected name=value");
-    defaults[d.substr(0, eq)] = d.substr(eq + 1);
-  }
+void add_param_option(CLI::App& app, std::vector<std::string>& params) {
+  app.add_option("--param", params,
+                 "Parameter (repeatable, 1-8): ID:translate:X,Y,Z | ID:rotate:X,Y,Z[@CX,CY,CZ] (radians) | "
+                 "ID:scale[@CX,CY,CZ] (relative) | ID:vertex:INDEX:X,Y,Z; ID is the shape's XML id")
+      ->required()
+      ->allow_extra_args(false);
+}
+
+void add_boundary_spp_option(CLI::App& app, int& boundary_spp) {
+  app.add_option("--boundary-spp", boundary_spp, "Discontinuity samples per shading point")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+}
+
+void add_fd_step_option(CLI::App& app, std::vector<double>& h) {
+  app.add_option("--h", h,
+                 "Finite-difference step per parameter (one value for all, or one per --param). Default: "
+                 "translate/vertex 1e-3 x scene bounding-box diagonal / |direction| (scene units of theta); "
+                 "rotate 1e-3 rad; scale 1e-3 (relative)")
+      ->allow_extra_args(false);
+}
+
+Scene load_scene_with_flags(const std::string& scene_path, const std::vector<std::string>& defines) {
   std::vector<std::string> warnings;
-  Scene scene = load_scene(flags.scene, defaults, &warnings);
+  Scene scene = load_scene(scene_path, parse_defines(defines), &warnings);
   for (const auto& w : warnings) std::cerr << "warning: " << w << "\n";
   return scene;
-}
-
-void write_preview_png(const std::string& path, const Image& image, double exposure) {
-  const int r = image.channel_index("R"), g = image.channel_index("G"), b = image.channel_index("B");
-  if (r < 0 || g < 0 || b < 0) throw Error(path + ": image has no R,G,B channels");
-  const double scale = std::pow(2.0, exposure);
-  std::vector<unsigned char> rgb(size_t(image.width) * image.height * 3);
-  for (int y = 0; y < image.height; ++y)
-    for (int x = 0; x < image.width; ++x) {
-      const size_t i = (size_t(y) * image.width + x) * 3;
-      const int ch[3] = {r, g, b};
-      for (int c = 0; c < 3; ++c)
-        rgb[i + c] = (unsigned char)std::lround(255.0 * linear_to_srgb(scale * image.at(ch[c], x, y)));
-    }
-  write_png(path, image.width, image.height, rgb);
-}
-
-double write_derivative_png(const std::string& path, const Image& image, const std::string& prefix) {
-  const int r = image.channel_index(prefix + ".R"), g = image.channel_index(prefix + ".G"),
-            b = image.channel_index(prefix + ".B");
-  if (r < 0 || g < 0 || b < 0) throw Error(path + ": image has no " + prefix + " channels");
-  const size_t n = size_t(image.width) * image.height;
-  std::vector<double> lum(n), mags;
-  mags.reserve(n);
-  for (size_t i = 0; i < n; ++i) {
-    lum[i] = 0.2126 * image.planes[r][i] + 0.7152 * image.planes[g][i] + 0.0722 * image.planes[b][i];
-    if (std::isfinite(lum[i])) mags.push_back(std::abs(lum[i]));
-  }
-  double range = 0;
-  if (!mags.empty()) {
-    const size_t k = std::min(mags.size() - 1, size_t(0.995 * double(mags.size())));
-    std::nth_element(mags.begin(), mags.begin() + k, mags.end());
-    range = mags[k];
-  }
-  if (!(range > 0)) range = 1.0;
-  std::vector<unsigned char> rgb(n * 3);
-  for (size_t i = 0; i < n; ++i) {
-    const double t = std::clamp(std::isfinite(lum[i]) ? lum[i] / range : 0.0, -1.0, 1.0);
-    // Diverging map: white at zero, toward red (positive) or blue (negative), in sRGB.
-    const double a = std::abs(t);
-    const double red[3] = {0.70, 0.09, 0.17}, blue[3] = {0.13, 0.40, 0.67};
-    const double* end = t >= 0 ? red : blue;
-    for (int c = 0; c < 3; ++c) rgb[3 * i + c] = (unsigned char)std::lround(255.0 * ((1 - a) * 1.0 + a * end[c]));
-  }
-  write_png(path, image.width, image.height, rgb);
-  return range;
 }
 
 void add_render_attributes(Image& image, const CommonFlags& flags, const RenderResult& r) {
@@ -113,13 +88,7 @@ void report_nonfinite(const RenderResult& r) {
               << "and were treated as misses\n";
 }
 
-std::string portable_path(const std::string& path) {
-  const std::filesystem::path p(path);
-  std::error_code ec;
-  const std::filesystem::path cwd = std::filesystem::current_path(ec);
-  if (!p.is_absolute() || ec) return p.lexically_normal().string();
-  return p.lexically_proximate(cwd).string();
-}
+double mrays_per_second(const RenderResult& r) { return r.seconds > 0 ? double(r.rays) / r.seconds * 1e-6 : 0.0; }
 
 void add_scripts_dir_option(CLI::App& app, std::string& scripts_dir) {
   app.add_option("--scripts-dir", scripts_dir,
@@ -173,41 +142,30 @@ int run_python_script(const std::string& who, const std::string& name, const std
   return code;
 }
 
-}  // namespace qsil::cli
 
-namespace qsil::cli {
-
-std::vector<ParameterSpec> parse_parameters(const std::vector<std::string>& specs, const Scene& scene) {
-  if (specs.empty()) throw Error("at least one --param is required");
-  if (specs.size() > size_t(kMaxParameters))
-    throw Error("at most " + std::to_string(kMaxParameters) + " --param per run (got " + std::to_string(specs.size()) + ")");
-  std::vector<ParameterSpec> params;
-  for (const auto& s : specs) params.push_back(parse_parameter(s, scene));
-  return params;
-}
 
 void write_gradient_outputs(const CommonFlags& flags, const std::vector<ParameterSpec>& params,
                             const RenderResult& r, const std::string& preview_dir, const std::string& method) {
   const int K = int(params.size());
-  Image img = r.film.to_image(gradient_channel_names(K));
+  Image img = r.film.to_image();
   add_render_attributes(img, flags, r);
   img.attributes["qsil:method"] = method;
-  for (int k = 0; k < K; ++k) img.attributes["qsil:param" + std::to_string(k)] = params[k].text;
+  for (int k = 0; k < K; ++k) img.attributes["qsil:param" + std::to_string(k)] = params[size_t(k)].text;
   write_exr(flags.output, img);
   if (!flags.preview.empty()) write_preview_png(flags.preview, img, flags.exposure);
   if (!preview_dir.empty()) std::filesystem::create_directories(preview_dir);
   for (int k = 0; k < K; ++k) {
-    const ImageSum s = derivative_image_sum(r.film, K, k);
-    std::printf("  dtheta%d (%s): image sum %.6g +- %.3g (1 s.e.)", k, params[k].text.c_str(), s.sum, s.standard_error);
+    const ImageSum s = r.film.derivative_sum(k);
+    std::printf("  dtheta%d (%s): image sum %.6g +- %.3g (1 s.e.)", k, params[size_t(k)].text.c_str(), s.sum,
+                s.standard_error);
     if (!preview_dir.empty()) {
-      const std::string png = (std::filesystem::path(preview_dir) / ("dtheta" + std::to_string(k) + ".png")).string();
-      const double range = write_derivative_png(png, img, "dtheta" + std::to_string(k));
+      const std::filesystem::path png = std::filesystem::path(preview_dir) / (FilmLayout::derivative_prefix(k) + ".png");
+      const double range = write_derivative_png(png, img, FilmLayout::derivative_prefix(k));
       std::printf(", preview %s range +-%.4g", png.c_str(), range);
     }
     std::printf("\n");
   }
-  if (!preview_dir.empty())
-    write_preview_png((std::filesystem::path(preview_dir) / "primal.png").string(), img, flags.exposure);
+  if (!preview_dir.empty()) write_preview_png(std::filesystem::path(preview_dir) / "primal.png", img, flags.exposure);
 }
 
 }  // namespace qsil::cli

@@ -1,17 +1,18 @@
 #pragma once
 /// @file cli_common.h
-/// Pieces shared by the subcommands: scene loading with -D overrides and warnings, common render
-/// flags, EXR/PNG output with metadata, and the one-line summary.
+/// Pieces shared by the subcommands of `qsil`: the common flags and options (CLI11), scene
+/// loading with -D overrides and warnings, EXR output with metadata, warnings, and running the
+/// chart scripts.
 
-#include "qsil/integrators/render.h"
-#include "qsil/parameters.h"
 #include "qsil/image.h"
+#include "qsil/integrators/estimator.h"
+#include "qsil/method.h"
+#include "qsil/parameters.h"
 #include "qsil/scene.h"
 
 #include <CLI/CLI.hpp>
 
 #include <filesystem>
-#include <map>
 #include <string>
 #include <vector>
 
@@ -30,28 +31,37 @@ struct CommonFlags {
 /// Adds SCENE, -D, --spp, --seed, --threads, -o, --preview, --exposure, --quiet to `app`.
 void add_common_flags(CLI::App& app, CommonFlags& flags, const std::string& default_output);
 
+/// Adds the positional SCENE and the repeatable -D name=value.
+void add_scene_options(CLI::App& app, std::string& scene, std::vector<std::string>& defines);
+
+/// Adds the repeatable --param SPEC (1 to 8), required.
+void add_param_option(CLI::App& app, std::vector<std::string>& params);
+
+/// Adds --boundary-spp N (discontinuity samples per shading point).
+void add_boundary_spp_option(CLI::App& app, int& boundary_spp);
+
+/// Adds --h H (finite-difference steps: one for all, or one per --param).
+void add_fd_step_option(CLI::App& app, std::vector<double>& h);
+
 /// Parses the -D list and loads the scene, printing counted warnings to stderr. Throws qsil::Error.
-Scene load_scene_with_flags(const CommonFlags& flags);
+Scene load_scene_with_flags(const std::string& scene, const std::vector<std::string>& defines);
 
-/// Writes a tonemapped sRGB preview of channels R,G,B of `image` (exposure in stops).
-void write_preview_png(const std::string& path, const Image& image, double exposure);
-
-/// Writes a diverging-colormap preview (blue negative, white zero, red positive) of the luminance
-/// of the RGB derivative channels prefix.R/G/B, with a symmetric range set by the 99.5th
-/// percentile of |value|. Returns that range.
-double write_derivative_png(const std::string& path, const Image& image, const std::string& prefix);
-
-/// Standard EXR attributes (qsil version, scene, spp, seed, seconds).
+/// Standard EXR attributes (scene, spp, seed, seconds, defines).
 void add_render_attributes(Image& image, const CommonFlags& flags, const RenderResult& r);
 
 /// Prints a warning line if samples were non-finite (they were replaced by 0), and one if rays
 /// were invalid for Embree (RayTracer::total_invalid_rays(): treated as misses).
 void report_nonfinite(const RenderResult& r);
 
-/// A path as written into generated CSV/JSON files: an absolute path becomes relative to the
-/// working directory (the repository root when run from there; `..` steps where needed), a
-/// relative one is kept (normalised), so the files do not carry one machine's absolute paths.
-std::string portable_path(const std::string& path);
+/// Mrays/s of a run (0 for a run without time).
+double mrays_per_second(const RenderResult& r);
+
+/// Writes a gradient EXR (R,G,B + dtheta<k>.R/G/B, each parameter spec as attribute
+/// qsil:param<k>, `method` as qsil:method), and with a preview directory one diverging PNG per
+/// parameter plus the primal PNG; prints each parameter's image sum +- standard error and
+/// preview range.
+void write_gradient_outputs(const CommonFlags& flags, const std::vector<ParameterSpec>& params,
+                            const RenderResult& r, const std::string& preview_dir, const std::string& method);
 
 /// Adds `--scripts-dir DIR` (where the chart scripts are, see find_script) to `app`.
 void add_scripts_dir_option(CLI::App& app, std::string& scripts_dir);
@@ -67,23 +77,9 @@ std::filesystem::path find_script(const std::string& name, const std::string& sc
 /// Runs `PYTHON SCRIPT ARGS...` with the script located by find_script and waits for it. PYTHON is
 /// the environment variable QSIL_PYTHON if set (e.g. /usr/bin/python3 when another python3 without
 /// matplotlib shadows Debian's on PATH), else `python3` found on PATH; arguments are passed
-/// without a shell. Returns its exit code; -1 with a warning
-/// line on stderr (prefixed by `who`) when the script is not found, python3 cannot be started or
-/// the script fails.
+/// without a shell. Returns its exit code; -1 with a warning line on stderr (prefixed by `who`)
+/// when the script is not found, python3 cannot be started or the script fails.
 int run_python_script(const std::string& who, const std::string& name, const std::vector<std::string>& args,
                       const std::string& scripts_dir);
-
-}  // namespace qsil::cli
-
-namespace qsil::cli {
-
-/// Parses every --param spec against the scene (1 to 8). Throws qsil::Error.
-std::vector<ParameterSpec> parse_parameters(const std::vector<std::string>& specs, const Scene& scene);
-
-/// Writes a gradient EXR (R,G,B + dtheta<k>.R/G/B, each parameter spec as attribute
-/// qsil:param<k>), and with a preview directory one diverging PNG per parameter plus the primal
-/// PNG; prints each parameter's preview range and image sum +- standard error.
-void write_gradient_outputs(const CommonFlags& flags, const std::vector<ParameterSpec>& params,
-                            const RenderResult& r, const std::string& preview_dir, const std::string& method);
 
 }  // namespace qsil::cli

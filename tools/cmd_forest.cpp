@@ -80,8 +80,9 @@ int run_forest(const ForestFlags& f) {
                   st.edges_kept, st.edges_always, st.creases, st.always_nodes);
       std::printf("  nodes: %d (%d inner, %d leaves, %d roots), depth %d\n", st.nodes,
                   st.inner_nodes, st.leaves, st.roots, st.depth);
-      std::printf("  inner nodes: %d unrejectable, %d box-only, %d inherited quadric, %d LP\n",
-                  st.unrejectable, st.box_only, st.inherited, st.used_lp);
+      std::printf("  inner nodes: %d fitted, %d with quadrics, %d unrejectable, %d box-only, %d inherited quadric, "
+                  "%d LP\n",
+                  st.fitted, st.quadrics, st.unrejectable, st.box_only, st.inherited, st.used_lp);
       std::printf("  build time: %.4f s\n", st.build_seconds);
     }
   }

@@ -4,9 +4,9 @@
 /// stored beside it (channel NAME.se), so that comparisons can state the reference's own noise.
 
 #include "cli_common.h"
-#include "cli_compare.h"
 #include "commands.h"
-#include "qsil/error.h"
+#include "qsil/integrators/reference.h"
+#include "qsil/preview.h"
 
 #include <cstdio>
 
@@ -23,51 +23,44 @@ const CommandRegistrar registrar{{"reference", "Render a high-spp reference grad
     };
     auto flags = std::make_shared<Flags>();
     add_common_flags(app, *flags, "reference.exr");
-    app.add_option("--param", flags->params, "Parameter (repeatable, 1-8), as for `qsil grad`")
-        ->required()
-        ->allow_extra_args(false);
+    add_param_option(app, flags->params);
     app.add_option("--method", flags->method,
                    "Unbiased estimator: quadric, quadric-box, vsphere, vsphere-solid, uniform (boundary term "
                    "of `qsil grad`), or fd (central finite differences; biased by O(h^2))")
         ->capture_default_str();
-    app.add_option("--h", flags->h, "FD step per parameter (one for all, or one per --param); default as `qsil fd`")
-        ->allow_extra_args(false);
-    app.add_option("--boundary-spp", flags->boundary_spp, "Discontinuity samples per shading point")
-        ->capture_default_str()
-        ->check(CLI::PositiveNumber);
+    add_fd_step_option(app, flags->h);
+    add_boundary_spp_option(app, flags->boundary_spp);
     return [flags]() {
-      const GradientMethod method = parse_gradient_method(flags->method);
-      if (!method.fd && method.boundary == BoundaryMethod::None)
-        throw Error("--method none omits the boundary term: not a reference");
-      const Scene scene = load_scene_with_flags(*flags);
+      const Method method = parse_method(flags->method, "--method", kReferenceMethods);
+      const Scene scene = load_scene_with_flags(flags->scene, flags->defines);
       const auto params = parse_parameters(flags->params, scene);
-      const std::vector<double> steps = fd_steps(scene, params, flags->h);
-      auto totals = std::make_shared<PassTotals>();
-      // One render with the progress bar (a reference is one long run, not passes).
-      const RenderResult r = make_gradient_pass(scene, params, method, steps, flags->boundary_spp, totals)(flags->render);
-      report_nonfinite(r);
       const int K = int(params.size());
-      Image img = reference_image(r, K);
-      add_render_attributes(img, *flags, r);
-      img.attributes["qsil:method"] = "reference/" + flags->method;
-      for (int k = 0; k < K; ++k) img.attributes["qsil:param" + std::to_string(k)] = params[k].text;
-      if (method.fd)
-        for (int k = 0; k < K; ++k) img.attributes["qsil:h" + std::to_string(k)] = std::to_string(steps[k]);
-      write_exr(flags->output, img);
-      if (!flags->preview.empty()) write_preview_png(flags->preview, img, flags->exposure);
-
+      const EstimatorConfig config = method == Method::FiniteDifferences
+                                         ? EstimatorConfig::finite_differences(params, fd_steps(scene, params, flags->h))
+                                         : EstimatorConfig::gradient(params, method, flags->boundary_spp);
+      const Estimator estimator(scene, config);
+      // One run with the progress bar (a reference is one long run, not passes).
+      const RenderResult r = estimator.run(flags->render);
+      report_nonfinite(r);
       Reference ref;
-      ref.image = img;
+      ref.image = reference_image(r);
       ref.num_params = K;
+      add_render_attributes(ref.image, *flags, r);
+      ref.image.attributes["qsil:method"] = "reference/" + flags->method;
+      for (int k = 0; k < K; ++k) ref.image.attributes["qsil:param" + std::to_string(k)] = params[size_t(k)].text;
+      for (size_t k = 0; k < estimator.fd_steps().size(); ++k)
+        ref.image.attributes["qsil:h" + std::to_string(k)] = std::to_string(estimator.fd_steps()[k]);
+      write_exr(flags->output, ref.image);
+      if (!flags->preview.empty()) write_preview_png(flags->preview, ref.image, flags->exposure);
       summarize_reference(ref);
-      std::printf("reference: %s %dx%d, %d spp, %zu parameter(s), method %s, %.3f s, %.2f Mrays/s, "
+      std::printf("reference: %s %dx%d, %d spp, %d parameter(s), method %s, %.3f s, %.2f Mrays/s, "
                   "noise floor (mean se^2) %.4g = %.3g x mean(ref^2) -> %s\n",
-                  flags->scene.c_str(), r.film.width(), r.film.height(), r.spp, params.size(), flags->method.c_str(),
-                  r.seconds + totals->report.forest_seconds, r.seconds > 0 ? double(r.rays) / r.seconds * 1e-6 : 0.0,
-                  ref.noise_floor, ref.mean_sq > 0 ? ref.noise_floor / ref.mean_sq : 0.0, flags->output.c_str());
+                  flags->scene.c_str(), r.film.width(), r.film.height(), r.spp, K, flags->method.c_str(),
+                  r.seconds + estimator.setup().seconds, mrays_per_second(r), ref.noise_floor,
+                  ref.mean_sq > 0 ? ref.noise_floor / ref.mean_sq : 0.0, flags->output.c_str());
       for (int k = 0; k < K; ++k)
-        std::printf("  dtheta%d (%s): image sum %.6g +- %.3g (1 s.e.)\n", k, params[k].text.c_str(), ref.sum[k],
-                    ref.sum_se[k]);
+        std::printf("  dtheta%d (%s): image sum %.6g +- %.3g (1 s.e.)\n", k, params[size_t(k)].text.c_str(),
+                    ref.sum[size_t(k)], ref.sum_se[size_t(k)]);
       return 0;
     };
   }}};

@@ -4,6 +4,7 @@
 
 #include "cli_common.h"
 #include "commands.h"
+#include "qsil/preview.h"
 
 #include <cstdio>
 
@@ -15,16 +16,16 @@ const CommandRegistrar registrar{{"render", "Render the primal image of a scene 
     auto flags = std::make_shared<CommonFlags>();
     add_common_flags(app, *flags, "render.exr");
     return [flags]() {
-      const Scene scene = load_scene_with_flags(*flags);
-      const RenderResult r = render_primal(scene, flags->render);
-      Image img = r.film.to_image({"R", "G", "B"});
+      const Scene scene = load_scene_with_flags(flags->scene, flags->defines);
+      const Estimator estimator(scene, EstimatorConfig::primal());
+      const RenderResult r = estimator.run(flags->render);
+      Image img = r.film.to_image();
       add_render_attributes(img, *flags, r);
       write_exr(flags->output, img);
       if (!flags->preview.empty()) write_preview_png(flags->preview, img, flags->exposure);
       report_nonfinite(r);
       std::printf("render: %s %dx%d, %d spp, %.3f s, %.2f Mrays/s -> %s\n", flags->scene.c_str(), img.width,
-                  img.height, r.spp, r.seconds, r.seconds > 0 ? double(r.rays) / r.seconds * 1e-6 : 0.0,
-                  flags->output.c_str());
+                  img.height, r.spp, r.seconds, mrays_per_second(r), flags->output.c_str());
       return 0;
     };
   }}};

@@ -6,7 +6,7 @@ packages=(
   build-essential cmake pkg-config
   libembree-dev libeigen3-dev coinor-libclp-dev libopenexr-dev libimath-dev
   libtinyobjloader-dev libtbb-dev libcli11-dev libpugixml-dev
-  libgtest-dev libgmock-dev libbenchmark-dev libstb-dev libpcg-cpp-dev
+  libgtest-dev libgmock-dev libbenchmark-dev libstb-dev libpcg-cpp-dev nlohmann-json3-dev
   python3 python3-matplotlib python3-numpy
 )
 missing=()

@@ -2,6 +2,7 @@
 /// The `qsil` command-line program: dispatches to the subcommands registered in tools/cmd_*.cpp.
 /// Errors are one line on stderr; exit code 2 for bad input (qsil::Error), 1 for internal errors.
 
+#include "cli_parse.h"
 #include "commands.h"
 #include "qsil/error.h"
 
@@ -28,12 +29,7 @@ int main(int argc, char** argv) {
     CLI::App* sub = app.add_subcommand(c.name, c.description);
     runners.emplace_back(sub, c.setup(*sub));
   }
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    const int code = app.exit(e);
-    return code == 0 ? 0 : 2;
-  }
+  if (const auto code = qsil::cli::parse_arguments(app, argc, argv)) return *code;
   try {
     for (auto& [sub, run] : runners)
       if (sub->parsed()) return run();

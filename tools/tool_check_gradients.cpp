@@ -12,87 +12,88 @@
 /// --csv writes DIR/NAME.csv with every pixel-channel (x,y,c,primal,grad,grad_se,fd,fd_se,interior).
 /// Exit code 1 when a criterion fails (sums within 3 SE, >= 98% of pixel-channels within 4 SE).
 
+#include "cli_parse.h"
 #include "qsil/integrators/gradient_check.h"
+#include "qsil/scene.h"
 
 #include <cstdio>
-#include <cstdlib>
-#include <cstring>
 #include <filesystem>
 #include <string>
 #include <vector>
 
 using namespace qsil;
 
-int main(int argc, char** argv) {
+namespace {
+
+struct Flags {
   std::vector<std::string> names;
   int res = 32, spp = 1024, fd_spp = 4096, threads = 0;
   double h = 0;
   std::string csv, root = ".";
-  gradcheck::Case custom;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto next = [&]() -> std::string {
-      if (i + 1 >= argc) {
-        std::fprintf(stderr, "%s needs a value\n", a.c_str());
-        std::exit(2);
-      }
-      return argv[++i];
-    };
-    if (a == "--case") names.push_back(next());
-    else if (a == "--res") res = std::atoi(next().c_str());
-    else if (a == "--spp") spp = std::atoi(next().c_str());
-    else if (a == "--fd-spp") fd_spp = std::atoi(next().c_str());
-    else if (a == "--h") h = std::atof(next().c_str());
-    else if (a == "--threads") threads = std::atoi(next().c_str());
-    else if (a == "--csv") csv = next();
-    else if (a == "--root") root = next();
-    else if (a == "--scene") custom.file = next();
-    else if (a == "--param") custom.param = next();
-    else if (a == "-D") {
-      const std::string kv = next();
-      const auto eq = kv.find('=');
-      if (eq == std::string::npos) {
-        std::fprintf(stderr, "-D expects name=value\n");
-        return 2;
-      }
-      custom.defaults[kv.substr(0, eq)] = kv.substr(eq + 1);
-    }
-    else if (a == "--help" || a == "-h") {
-      std::printf("usage: qsil-check_gradients [--case NAME]... [--res N] [--spp N] [--fd-spp N] [--h H] "
-                  "[--threads T] [--csv DIR] [--root REPOSITORY] [--scene FILE --param SPEC [-D k=v]...]\ncases "
-                  "(scenes under --root):");
-      for (const auto& c : gradcheck::cases()) std::printf(" %s", c.name.c_str());
-      std::printf("\n");
-      return 0;
-    } else {
-      std::fprintf(stderr, "unknown argument %s (see --help)\n", a.c_str());
-      return 2;
-    }
-  }
-  if (!custom.file.empty()) {
-    custom.name = std::filesystem::path(custom.file).stem().string();
-    custom.h = 1e-2;
-  } else if (names.empty())
+  std::string scene, param;
+  std::vector<std::string> defines;
+};
+
+/// The cases to run: --case names (or every case), plus the --scene case.
+std::vector<gradcheck::Case> selected_cases(const Flags& f) {
+  std::vector<gradcheck::Case> out;
+  std::vector<std::string> names = f.names;
+  if (f.scene.empty() && names.empty())
     for (const auto& c : gradcheck::cases()) names.push_back(c.name);
+  for (const auto& name : names) out.push_back(gradcheck::find_case(name).resolved(f.root));
+  if (!f.scene.empty()) {
+    gradcheck::Case custom;
+    custom.file = f.scene;
+    custom.param = f.param;
+    custom.defaults = parse_defines(f.defines);
+    custom.name = std::filesystem::path(f.scene).stem().string();
+    custom.h = 1e-2;
+    out.push_back(custom);
+  }
+  return out;
+}
+
+/// Runs and prints every case; true when all pass.
+bool run_cases(const Flags& f) {
   bool ok = true;
+  for (const gradcheck::Case& c : selected_cases(f)) {
+    gradcheck::Films films;
+    const gradcheck::Agreement a = gradcheck::run(c, f.res, f.spp, f.fd_spp, f.h > 0 ? f.h : c.h, true, f.threads,
+                                                  f.csv.empty() ? nullptr : &films);
+    std::printf("%s", gradcheck::describe(c.name + " (" + c.param + ")", a).c_str());
+    std::printf("  boundary: %llu traversals, %.1f%% zero\n", (unsigned long long)a.traversals,
+                a.traversals ? 100.0 * double(a.zero_traversals) / double(a.traversals) : 0.0);
+    std::fflush(stdout);
+    if (!f.csv.empty()) gradcheck::write_csv(f.csv + "/" + c.name + ".csv", films);
+    ok = ok && a.sums_agree() && a.pixels_agree() && a.nonfinite == 0;
+  }
+  return ok;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Flags f;
+  std::string case_list;
+  for (const auto& c : gradcheck::cases()) case_list += " " + c.name;
+  CLI::App app{"qsil-check_gradients: image-level gradient checks (grad vs finite differences). Cases (scenes "
+               "under --root):" + case_list};
+  app.add_option("--case", f.names, "A gradient case (repeatable; default: every case)")->allow_extra_args(false);
+  app.add_option("--res", f.res, "Image side in pixels")->capture_default_str()->check(CLI::PositiveNumber);
+  app.add_option("--spp", f.spp, "Samples per pixel of grad")->capture_default_str()->check(CLI::PositiveNumber);
+  app.add_option("--fd-spp", f.fd_spp, "Samples per pixel of FD")->capture_default_str()->check(CLI::PositiveNumber);
+  app.add_option("--h", f.h, "FD step (default: the case's)")->check(CLI::NonNegativeNumber);
+  app.add_option("--threads", f.threads, "Worker threads (0 = all cores)")->check(CLI::NonNegativeNumber);
+  app.add_option("--csv", f.csv, "Write DIR/NAME.csv with every pixel-channel");
+  app.add_option("--root", f.root, "The repository whose scenes the cases use")->capture_default_str();
+  app.add_option("--scene", f.scene, "Any scene instead of the cases (with --param)");
+  app.add_option("--param", f.param, "The parameter of --scene");
+  app.add_option("-D", f.defines, "Override a <default> of --scene: -D name=value (repeatable)")->allow_extra_args(false);
+  if (const auto code = qsil::cli::parse_arguments(app, argc, argv)) return *code;
   try {
-    std::vector<gradcheck::Case> run_cases;
-    for (const auto& name : names) run_cases.push_back(gradcheck::find_case(name).resolved(root));
-    if (!custom.file.empty()) run_cases.push_back(custom);
-    for (const gradcheck::Case& c : run_cases) {
-      gradcheck::Films films;
-      const gradcheck::Agreement a =
-          gradcheck::run(c, res, spp, fd_spp, h > 0 ? h : c.h, true, threads, csv.empty() ? nullptr : &films);
-      std::printf("%s", gradcheck::describe(c.name + " (" + c.param + ")", a).c_str());
-      std::printf("  boundary: %llu traversals, %.1f%% zero\n", (unsigned long long)a.report.traversals,
-                  a.report.traversals ? 100.0 * double(a.report.zero_traversals) / double(a.report.traversals) : 0.0);
-      std::fflush(stdout);
-      if (!csv.empty()) gradcheck::write_csv(csv + "/" + c.name + ".csv", films);
-      ok = ok && a.sums_agree() && a.pixels_agree() && a.nonfinite == 0;
-    }
+    return run_cases(f) ? 0 : 1;
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "%s\n", e.what());
+    std::fprintf(stderr, "qsil-check_gradients: %s\n", e.what());
     return 2;
   }
-  return ok ? 0 : 1;
 }

@@ -6,12 +6,16 @@
 /// expression templates avoid temporaries, it works inside Eigen vectors (Vec3T<Dual<N>>), and a
 /// fixed size keeps every derivative vector on the stack.
 ///
-/// `value()` and `derivatives()` read a scalar whether it is a double (primal rendering) or a
-/// dual; `detach()` drops the derivative: used for every sampled direction, pdf and MIS weight.
+/// `value()` reads the value of a scalar, vector or colour whether it holds doubles (primal
+/// rendering) or duals: it drops the derivatives, which is how every sampled direction, pdf and
+/// MIS weight is detached (docs/architecture.md §4). `lift()` goes the other way.
 
+#include "qsil/check.h"
 #include "qsil/math.h"
 
 #include <unsupported/Eigen/AutoDiff>
+
+#include <type_traits>
 
 namespace qsil {
 
@@ -21,12 +25,17 @@ template <int N> using Dual = Eigen::AutoDiffScalar<Eigen::Matrix<double, N, 1>>
 /// Largest number of parameters differentiated in one run.
 inline constexpr int kMaxParameters = 8;
 
-template <class T> struct DualTraits {
-  static constexpr int size = 0;
-};
-template <int N> struct DualTraits<Dual<N>> {
-  static constexpr int size = N;
-};
+/// Calls `f(std::integral_constant<int, N>{})` with N the dual size for `num_params` parameters:
+/// the smallest of 1, 2, 4, 8 that is >= num_params. The one dispatch from a run-time parameter
+/// count to the compile-time derivative size. num_params must be in 1..kMaxParameters (checked:
+/// parameter lists are validated by check_parameter_count first).
+template <class F> decltype(auto) with_dual_size(int num_params, F&& f) {
+  QSIL_CHECK(num_params >= 1 && num_params <= kMaxParameters);
+  if (num_params == 1) return f(std::integral_constant<int, 1>{});
+  if (num_params == 2) return f(std::integral_constant<int, 2>{});
+  if (num_params <= 4) return f(std::integral_constant<int, 4>{});
+  return f(std::integral_constant<int, 8>{});
+}
 
 inline double value(double x) { return x; }
 template <int N> inline double value(const Dual<N>& x) { return x.value(); }
@@ -35,9 +44,6 @@ template <class T> inline Vec3 value(const Vec3T<T>& v) { return Vec3(value(v.x(
 inline const Vec3& value(const Vec3& v) { return v; }
 template <class T> inline Color value(const ColorT<T>& c) { return Color(value(c.x()), value(c.y()), value(c.z())); }
 inline const Color& value(const Color& c) { return c; }
-
-/// A double or dual with the given value and zero derivatives.
-template <class T> inline T constant(double x) { return T(x); }
 
 /// Lifts a double vector to scalar type T with zero derivatives.
 template <class T> inline Vec3T<T> lift(const Vec3& v) { return Vec3T<T>(T(v.x()), T(v.y()), T(v.z())); }

@@ -1,9 +1,11 @@
 #pragma once
 /// @file film.h
-/// Per-pixel accumulation of C channels (primal RGB, then RGB per derivative) with the running
-/// sum and sum of squares of each channel, so that every output pixel carries its sample mean and
-/// the standard error of that mean. Box pixel filter: a sample counts for the pixel it lies in.
+/// Per-pixel accumulation of a film's channels with the running sum and sum of squares of each,
+/// so that every output pixel carries its sample mean and the standard error of that mean. Box
+/// pixel filter: a sample counts for the pixel it lies in. FilmLayout is the one place that knows
+/// which channel holds what.
 
+#include "qsil/check.h"
 #include "qsil/image.h"
 
 #include <string>
@@ -11,15 +13,72 @@
 
 namespace qsil {
 
+/// The channel layout of a film and of the images written from it (docs/architecture.md §2):
+/// - primal R, G, B: channels 0, 1, 2 (names R, G, B);
+/// - per parameter k (0 <= k < K): the derivative dI/dtheta_k R, G, B at 3(1+k) + c
+///   (names dtheta<k>.R/G/B);
+/// - per parameter k, hidden: the per-sample mean of its three derivative channels at
+///   3(1+K) + k (never written to an image: it gives the image sum an exact standard error,
+///   because R, G, B are correlated within a sample).
+/// A primal film has K = 0 (three channels). Reference images add, for every named channel NAME,
+/// its per-pixel standard error as NAME.se.
+class FilmLayout {
+ public:
+  /// The layout for `num_params` parameters (0 for a primal image, at most kMaxParameters = 8;
+  /// a larger count is a bug: parameter lists are checked by check_parameter_count).
+  explicit FilmLayout(int num_params = 0);
+
+  int num_params() const { return num_params_; }
+  /// Stored channels: 3(1+K) + K.
+  int channels() const { return 3 * (1 + num_params_) + num_params_; }
+  /// Channels written to images (primal and derivatives): 3(1+K).
+  int image_channels() const { return 3 * (1 + num_params_); }
+  /// Primal colour channel c (0 R, 1 G, 2 B).
+  int primal(int c) const {
+    QSIL_DCHECK(c >= 0 && c < 3);
+    return c;
+  }
+  /// Derivative channel c (0 R, 1 G, 2 B) of parameter k.
+  int derivative(int k, int c) const {
+    QSIL_DCHECK(k >= 0 && k < num_params_ && c >= 0 && c < 3);
+    return 3 * (1 + k) + c;
+  }
+  /// The hidden per-sample mean of parameter k's three derivative channels.
+  int derivative_mean(int k) const {
+    QSIL_DCHECK(k >= 0 && k < num_params_);
+    return 3 * (1 + num_params_) + k;
+  }
+  /// Names of the image channels: R, G, B, then dtheta<k>.R/G/B.
+  std::vector<std::string> names() const;
+  /// NAME.se for every image channel NAME.
+  std::vector<std::string> standard_error_names() const;
+  /// "dtheta<k>": the prefix of parameter k's derivative channels.
+  static std::string derivative_prefix(int k);
+  /// "dtheta<k>.R" (c = 0), ".G" (1), ".B" (2).
+  static std::string derivative_name(int k, int c);
+
+ private:
+  int num_params_ = 0;
+};
+
+/// Image sum over pixels of the mean of a parameter's R, G, B derivative, and its standard error
+/// (pixels are independent: the variances add).
+struct ImageSum {
+  double sum = 0;
+  double standard_error = 0;
+};
+
+/// A width x height film of FilmLayout::channels() channels.
 class Film {
  public:
-  Film(int width, int height, int channels);
+  Film(int width, int height, const FilmLayout& layout);
   int width() const { return width_; }
   int height() const { return height_; }
   int channels() const { return channels_; }
+  const FilmLayout& layout() const { return layout_; }
 
-  /// Adds one sample (C values) to pixel (x, y). Not thread-safe for the same pixel; the renderer
-  /// gives each pixel to one thread.
+  /// Adds one sample (channels() values) to pixel (x, y). Not thread-safe for the same pixel;
+  /// the renderer gives each pixel to one thread.
   void add_sample(int x, int y, const double* values);
   /// Adds a splatted estimate to pixel (x, y) without counting a sample (primary-edge boundary
   /// samples land in pixels other than the one being sampled). `value` is in the units of one
@@ -28,22 +87,27 @@ class Film {
   /// the negligible mean-square correction). Not thread-safe: merge per-thread buffers in a
   /// fixed order (determinism).
   void splat(int x, int y, int channel, double value);
-  /// Number of samples per pixel (the same for all pixels after a full pass).
+  /// Number of samples of pixel (x, y) (the same for all pixels after a full run).
   long long samples(int x, int y) const { return count_[size_t(y) * width_ + x]; }
   /// Sample mean of channel c at (x, y), splats included (divided by the pixel's sample count).
   double mean(int c, int x, int y) const;
   /// Standard error of the mean of channel c at (x, y): sqrt(sample variance / n).
   double standard_error(int c, int x, int y) const;
-  /// Adds another film's sums (same size): combining passes of progressive rendering.
+  /// Adds another film's sums (same size and layout): the films of disjoint sample ranges of the
+  /// same estimator merge into the film of their union (sums add, so the result equals one run
+  /// over the union up to the rounding of the additions).
   void merge(const Film& other);
+  /// Image sum of parameter k's derivative (its hidden mean channel) and its standard error.
+  ImageSum derivative_sum(int k) const;
 
-  /// The means as an Image with the given channel names (size C).
-  Image to_image(const std::vector<std::string>& names) const;
-  /// The standard errors as an Image with the given channel names.
-  Image standard_error_image(const std::vector<std::string>& names) const;
+  /// The means of the image channels, named by the layout (R, G, B, dtheta<k>.R/G/B).
+  Image to_image() const;
+  /// to_image() followed by the standard error of every image channel as NAME.se (a reference).
+  Image to_image_with_standard_errors() const;
 
  private:
   int width_, height_, channels_;
+  FilmLayout layout_;
   std::vector<double> sum_, sum_sq_;
   std::vector<double> splat_sum_, splat_sq_;
   std::vector<long long> count_;

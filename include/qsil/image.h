@@ -38,6 +38,14 @@ void write_exr(const std::filesystem::path& path, const Image& image);
 void write_png(const std::filesystem::path& path, int width, int height,
                const std::vector<unsigned char>& rgb);
 
+/// Writes a float32 2D array (height x width, row-major, top row first) as a NumPy .npy file
+/// (format version 1.0, C order), atomically. Throws qsil::Error on failure.
+void write_npy(const std::filesystem::path& path, int height, int width, const std::vector<float>& data);
+
+/// The luminance (math.h) of channels prefix.R, prefix.G, prefix.B (prefix "" for R, G, B) of
+/// every pixel, row-major, top row first. Throws qsil::Error "image has no PREFIX channels".
+std::vector<float> luminance_plane(const Image& image, const std::string& prefix);
+
 /// sRGB transfer function of a linear value, clamped to [0,1] (IEC 61966-2-1).
 double linear_to_srgb(double v);
 

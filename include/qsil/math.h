@@ -20,9 +20,17 @@ using Mat4 = Eigen::Matrix4d;
 /// Linear RGB radiance or reflectance, in the scene's RGB units.
 using Color = Eigen::Array3d;
 
+/// Rec. 709 / sRGB luminance of linear RGB r, g, b: 0.2126 r + 0.7152 g + 0.0722 b (the weight
+/// Mitsuba 3 and pbrt-v4 use for env maps). The one luminance of qsil: env-map sampling weights,
+/// light weights of the boundary term's importance, previews and comparison maps.
+inline double luminance(double r, double g, double b) { return 0.2126 * r + 0.7152 * g + 0.0722 * b; }
+
 /// Generic 3-vector and colour over a scalar type T (double, or a dual number in forward mode).
 template <class T> using Vec3T = Eigen::Matrix<T, 3, 1>;
 template <class T> using ColorT = Eigen::Array<T, 3, 1>;
+
+/// luminance(r, g, b) of a colour.
+inline double luminance(const Color& c) { return luminance(c[0], c[1], c[2]); }
 
 inline constexpr double kPi = 3.14159265358979323846;
 inline constexpr double kInvPi = 1.0 / kPi;

@@ -36,6 +36,14 @@ struct ParameterSpec {
 /// direction/axis, a centre beyond kMaxCoordinate (scene.h), or a malformed spec.
 ParameterSpec parse_parameter(const std::string& text, const Scene& scene);
 
+/// Checks that a run has 1 to kMaxParameters (8) parameters: the one place that does. Throws
+/// qsil::Error "--param: 1 to 8 parameters per run (got N)" otherwise.
+void check_parameter_count(size_t count);
+
+/// Parses every `--param` spec against the scene (check_parameter_count, then parse_parameter).
+/// Throws qsil::Error.
+std::vector<ParameterSpec> parse_parameters(const std::vector<std::string>& specs, const Scene& scene);
+
 /// Per-vertex velocities of all parameters, packed per vertex as a 3 x kMaxParameters matrix
 /// (column k = dx/dtheta_k; columns >= num_params are zero).
 struct SceneVelocities {
@@ -47,8 +55,7 @@ struct SceneVelocities {
   bool any_moving() const;
 };
 
-/// Velocities at theta = 0 of the given parameters (1 to kMaxParameters). Throws qsil::Error
-/// when there are too many parameters.
+/// Velocities at theta = 0 of the given parameters (check_parameter_count). Throws qsil::Error.
 SceneVelocities compute_velocities(const Scene& scene, const std::vector<ParameterSpec>& params);
 
 /// The scene's vertex positions with parameter `k` set to `theta` (exact motion: a rotation by

@@ -56,9 +56,6 @@ class RayTracer {
   /// Builds the acceleration structure over `scene.shapes` (positions converted to float).
   /// Throws qsil::Error if Embree cannot be initialised.
   explicit RayTracer(const Scene& scene);
-  /// Same, with replaced vertex positions per shape (used by finite differences); positions[s]
-  /// must have as many vertices as scene.shapes[s].
-  RayTracer(const Scene& scene, const std::vector<std::vector<Vec3>>& positions);
   ~RayTracer();
   RayTracer(const RayTracer&) = delete;
   RayTracer& operator=(const RayTracer&) = delete;
@@ -79,7 +76,6 @@ class RayTracer {
 
  private:
   struct Impl;
-  static void build_impl(Impl& impl, const Scene& scene, const std::vector<std::vector<Vec3>>* positions);
   std::unique_ptr<Impl> impl_;
 };
 

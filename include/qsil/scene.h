@@ -115,8 +115,16 @@ struct Camera {
   /// tan of half the horizontal and vertical field of view.
   Vec2 tan_half_fov() const;
   /// World-space unit direction through film position (fx, fy) in pixels, (0,0) the top-left
-  /// corner of the image, (width,height) the bottom-right.
+  /// corner of the image, (width,height) the bottom-right: film -> world.
   Vec3 direction(double fx, double fy) const;
+  /// Camera-space position of world point x (camera space looks along +z, +x is the image's
+  /// left, +y its top; docs/architecture.md §3 "Frames").
+  Vec3 to_camera(const Vec3& x) const;
+  /// Film position (pixels, (0,0) top-left) of world point x, the inverse of direction(): world
+  /// -> film. `depth` (optional) receives its camera-space z, > 0 in front of the camera. Points
+  /// behind or at the camera's plane give meaningless (possibly non-finite) positions: callers
+  /// clip first (depth > 0).
+  Vec2 project(const Vec3& x, double* depth = nullptr) const;
 };
 
 /// A loaded scene. Shapes' geometry is in world space.
@@ -131,7 +139,12 @@ struct Scene {
   int find_shape(const std::string& id) const;  ///< index, or -1
 };
 
-/// Loads a scene in the Mitsuba 3 XML subset (docs/architecture.md; issue "Foundation").
+/// The `-D name=value` overrides of a command line as a map for load_scene(). Throws qsil::Error
+/// "-D 'TEXT': expected name=value" for an entry without '=' or with an empty name; a later
+/// entry for the same name wins.
+std::map<std::string, std::string> parse_defines(const std::vector<std::string>& defines);
+
+/// Loads a scene in the Mitsuba 3 XML subset (docs/architecture.md §2 "Scene").
 /// `defaults` override `<default name value>` entries (the CLI's -D name=value).
 /// Throws qsil::Error "scene.xml:LINE: message" for every unsupported or malformed input.
 /// `warnings` receives counted, non-fatal warnings (one line each).

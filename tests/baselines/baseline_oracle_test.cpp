@@ -23,8 +23,7 @@ using namespace oracle;
 /// The black closed box of this oracle (z in [0.9, 1.1]).
 Shape occluder_box() { return closed_box("occluder", Vec3(0.0, -0.2, 0.9), Vec3(0.6, 0.3, 1.1), 1); }
 
-const BoundaryMethod kMethods[] = {BoundaryMethod::Quadric, BoundaryMethod::VSphere, BoundaryMethod::VSphereSolid,
-                                   BoundaryMethod::Uniform};
+const Method kMethods[] = {Method::Quadric, Method::VSphere, Method::VSphereSolid, Method::Uniform};
 const char* kNames[] = {"quadric", "vsphere", "vsphere-solid", "uniform"};
 
 }  // namespace

@@ -52,18 +52,19 @@ std::unique_ptr<World> make_world() {
   return w;
 }
 
-struct Method {
+struct TestedSampler {
   std::string name;
   std::unique_ptr<EdgeSampler> sampler;
   std::function<std::vector<EdgeProbability>(const SilhouetteQuery&)> probabilities;
 };
 
-std::vector<Method> methods(const EdgeForest& f, const Vec3& o) {
-  std::vector<Method> m;
-  for (VSphereTest t : {VSphereTest::Hollow, VSphereTest::Solid}) {
+std::vector<TestedSampler> methods(const EdgeSet& f, const Vec3& o) {
+  std::vector<TestedSampler> m;
+  for (Method t : {Method::VSphere, Method::VSphereSolid}) {
     auto s = std::make_unique<VSphereEdgeSampler>(f, o, t);
     const VSphereEdgeSampler* raw = s.get();
-    m.push_back({s->name(), std::move(s), [raw](const SilhouetteQuery& q) { return raw->edge_probabilities(q); }});
+    m.push_back({std::string(method_name(s->method())), std::move(s),
+                 [raw](const SilhouetteQuery& q) { return raw->edge_probabilities(q); }});
   }
   auto u = std::make_unique<UniformEdgeSampler>(f);
   const UniformEdgeSampler* raw = u.get();
@@ -105,7 +106,7 @@ TEST(BaselinePdf, SumsToAtMostOneAndEverySilhouetteHasProbability) {
   const Vec3 o = camera_like_origin(w->meshes[0]);
   auto ms = methods(w->forest, o);
   auto qs = queries(*w, 150, 31);
-  for (const Method& m : ms) {
+  for (const TestedSampler& m : ms) {
     int missing = 0, ineligible = 0, over = 0;
     for (const QueryCase& c : qs) {
       const auto probs = m.probabilities(c.q);
@@ -136,7 +137,7 @@ TEST(BaselinePdf, HistogramMatchesProbabilities) {
   auto qs = queries(*w, 6, 32);
   const int n = 40000;
   const double alpha = sidak(0.01, int(ms.size() * qs.size()));
-  for (const Method& m : ms) {
+  for (const TestedSampler& m : ms) {
     for (size_t qi = 0; qi < qs.size(); ++qi) {
       const QueryCase& c = qs[qi];
       const auto probs = m.probabilities(c.q);

@@ -1,7 +1,7 @@
 #pragma once
 /// @file baseline_test_util.h
 /// Test meshes and shading points shared by the baseline tests (the soundness set of the
-/// edge-forest issue: spot, torus, bunny, a subdivided cube; points uniform around the mesh, near
+/// edge forest: spot, torus, bunny, a subdivided cube; points uniform around the mesh, near
 /// the surface and on triangle planes: tests/soundness_set.h).
 
 #include "qsil/scene.h"

@@ -22,7 +22,8 @@ namespace qsil::edgetree {
 namespace {
 
 struct Rates {
-  long long no_sil = 0, fa[kSliceTests] = {}, fr[kSliceTests] = {}, q_not_box = 0, hollow_not_solid = 0;
+  static constexpr int kTests = int(kRejectionMethods.size());
+  long long no_sil = 0, fa[kTests] = {}, fr[kTests] = {}, q_not_box = 0, hollow_not_solid = 0;
 };
 
 Rates slice(const PatchTests& t, const Vec3& centre, double h, double extent, int n) {
@@ -32,12 +33,12 @@ Rates slice(const PatchTests& t, const Vec3& centre, double h, double extent, in
       const Vec3 p(centre.x() + ((x + 0.5) / n - 0.5) * extent, centre.y() + ((y + 0.5) / n - 0.5) * extent, h);
       const SliceVerdict v = t.evaluate(p);
       r.no_sil += !v.truth;
-      for (int k = 0; k < kSliceTests; ++k) {
-        r.fa[k] += !v.truth && v.accept[k];
-        r.fr[k] += v.truth && !v.accept[k];
+      for (int k = 0; k < Rates::kTests; ++k) {
+        r.fa[k] += !v.truth && v.accept[size_t(k)];
+        r.fr[k] += v.truth && !v.accept[size_t(k)];
       }
-      r.q_not_box += v.accept[int(SliceTest::Quadric)] && !v.accept[int(SliceTest::QuadricBox)];
-      r.hollow_not_solid += v.accept[int(SliceTest::VSphere)] && !v.accept[int(SliceTest::VSphereSolid)];
+      r.q_not_box += v.accepts(Method::Quadric) && !v.accepts(Method::QuadricBox);
+      r.hollow_not_solid += v.accepts(Method::VSphere) && !v.accepts(Method::VSphereSolid);
     }
   return r;
 }
@@ -51,8 +52,8 @@ void check_patch(PatchKind kind, const Vec3& centre, std::initializer_list<doubl
   EXPECT_GT(t.num_edges(), 300);
   for (double h : heights) {
     const Rates r = slice(t, centre, h, 4.0, 96);
-    for (int k = 0; k < kSliceTests; ++k)
-      EXPECT_EQ(r.fr[k], 0) << slice_test_name(SliceTest(k)) << " at h = " << h;
+    for (int k = 0; k < Rates::kTests; ++k)
+      EXPECT_EQ(r.fr[k], 0) << method_name(kRejectionMethods[size_t(k)]) << " at h = " << h;
     EXPECT_EQ(r.q_not_box, 0) << "quadric accepts what quadric-box rejects, h = " << h;
     EXPECT_EQ(r.hollow_not_solid, 0) << "hollow accepts what solid rejects, h = " << h;
     std::printf("[%s h=%.2f] false-accept rates: quadric %.3f quadric-box %.3f vsphere %.3f vsphere-solid %.3f\n",

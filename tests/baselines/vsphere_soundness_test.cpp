@@ -42,8 +42,8 @@ Counts check_tree(const VSphereTree& t, const std::vector<Vec3>& pts) {
         has[size_t(i)] = n.is_leaf() ? edge_is_silhouette(*t.edges()[size_t(n.edge)], p)
                                      : (has[size_t(n.child[0])] || has[size_t(n.child[1])]);
         if (!n.hough) continue;
-        const bool h = t.may_have_silhouette(i, p, VSphereTest::Hollow);
-        const bool s = t.may_have_silhouette(i, p, VSphereTest::Solid);
+        const bool h = t.may_have_silhouette(i, p, Method::VSphere);
+        const bool s = t.may_have_silhouette(i, p, Method::VSphereSolid);
         c.hollow_not_solid += h && !s;
         if (has[size_t(i)]) {
           ++c.with_sil;
@@ -81,7 +81,9 @@ void expect_sound(const TriangleMesh& mesh, int npoints, unsigned seed, const st
     EXPECT_EQ(c.fr_hollow, 0) << name << ": hollow v-sphere false rejects of " << c.with_sil;
     EXPECT_EQ(c.fr_solid, 0) << name << ": solid v-sphere false rejects of " << c.with_sil;
     EXPECT_EQ(c.hollow_not_solid, 0) << name << ": hollow accepts that solid rejects";
-    if (rejects_some) EXPECT_LT(c.fa_hollow, c.no_sil) << name;  // it rejects something at all
+    if (rejects_some) {
+      EXPECT_LT(c.fa_hollow, c.no_sil) << name;  // it rejects something at all
+    }
     std::printf("[%s, o=(%.2f,%.2f,%.2f)] plain %d / hough %d edges; %lld (node, point) pairs with a silhouette; "
                 "false-accept rate hollow %.3f solid %.3f\n",
                 name.c_str(), o.x(), o.y(), o.z(), t.plain_edges(), t.hough_edges(), c.with_sil,

@@ -1,4 +1,5 @@
-// Progressive rendering (integrators/progressive.h) and `qsil compare` output (tools/cmd_compare.cpp).
+// Progressive rendering (qsil/integrators/progressive.h) and `qsil compare` output (run_compare,
+// qsil/integrators/compare.h, through tools/cmd_compare.cpp).
 #include "qsil/integrators/progressive.h"
 
 #include "qsil/scene.h"
@@ -24,12 +25,13 @@ Scene tiny_shadow_quad() {
                     {{"res", "12"}, {"spp", "1"}, {"max_depth", "2"}});
 }
 
-// Fixed passes: the merged film equals merging render_gradient passes with the documented seeds,
-// and its spp is the sum of the passes'.
-TEST(Progressive, FixedPassesMergeLikeSeparateRenders) {
+// Fixed passes cover consecutive sample ranges of one seed: the merged film equals merging
+// Estimator::run over [0, 2), [2, 4), [4, 6) by hand, bit for bit, and its spp is the sum.
+TEST(Progressive, FixedPassesMergeLikeSeparateRanges) {
   const Scene scene = tiny_shadow_quad();
   const std::vector<ParameterSpec> params{parse_parameter("object:translate:0,1,0", scene)};
-  const PassFunction pass = [&](const RenderOptions& o) { return render_gradient(scene, params, o); };
+  const Estimator estimator(scene, EstimatorConfig::gradient(params));
+  const PassFunction pass = [&](const RenderOptions& o) { return estimator.run(o); };
   ProgressiveOptions po;
   po.budget_seconds = 0;
   po.fixed_pass_spp = 2;
@@ -39,27 +41,29 @@ TEST(Progressive, FixedPassesMergeLikeSeparateRenders) {
   const ProgressiveResult pr = render_progressive(pass, po);
   EXPECT_EQ(pr.passes, 3);
   EXPECT_EQ(pr.result.spp, 6);
+  EXPECT_EQ(pr.result.first_sample, 0);
 
   RenderOptions o;
   o.spp = 2;
   o.threads = 1;  // results are thread-count independent
   o.progress = false;
-  o.seed = progressive_pass_seed(17, 0);
-  RenderResult manual = render_gradient(scene, params, o);
+  o.seed = 17;
+  RenderResult manual = estimator.run(o);
   for (int i = 1; i < 3; ++i) {
-    o.seed = progressive_pass_seed(17, i);
-    manual.film.merge(render_gradient(scene, params, o).film);
+    o.first_sample = 2 * i;
+    manual.merge(estimator.run(o));
   }
   ASSERT_EQ(manual.film.channels(), pr.result.film.channels());
   for (int c = 0; c < manual.film.channels(); ++c)
     for (int y = 0; y < 12; ++y)
       for (int x = 0; x < 12; ++x) {
         ASSERT_EQ(pr.result.film.samples(x, y), 6);
-        ASSERT_DOUBLE_EQ(pr.result.film.mean(c, x, y), manual.film.mean(c, x, y)) << c << " " << x << " " << y;
-        ASSERT_DOUBLE_EQ(pr.result.film.standard_error(c, x, y), manual.film.standard_error(c, x, y));
+        ASSERT_EQ(pr.result.film.mean(c, x, y), manual.film.mean(c, x, y)) << c << " " << x << " " << y;
+        ASSERT_EQ(pr.result.film.standard_error(c, x, y), manual.film.standard_error(c, x, y));
       }
-  // Different passes use different seeds: the merged film is not three copies of pass 0.
-  EXPECT_NE(progressive_pass_seed(17, 0), progressive_pass_seed(17, 1));
+  EXPECT_EQ(pr.result.traversals, manual.traversals);
+  // Different seeds per method and budget: derived seeds differ.
+  EXPECT_NE(derive_seed(17, 0), derive_seed(17, 1));
 }
 
 // A budget: passes continue while samples fit and stop near the budget (one predicted pass of
@@ -67,12 +71,13 @@ TEST(Progressive, FixedPassesMergeLikeSeparateRenders) {
 TEST(Progressive, StopsAtTheBudget) {
   const Scene scene = tiny_shadow_quad();
   const std::vector<ParameterSpec> params{parse_parameter("object:translate:0,1,0", scene)};
+  const Estimator estimator(scene, EstimatorConfig::gradient(params));
   int calls = 0;
   double longest = 0;
   const PassFunction pass = [&](const RenderOptions& o) {
     const auto t0 = std::chrono::steady_clock::now();
     ++calls;
-    RenderResult r = render_gradient(scene, params, o);
+    RenderResult r = estimator.run(o);
     longest = std::max(longest, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
     return r;
   };

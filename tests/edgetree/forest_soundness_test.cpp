@@ -11,7 +11,7 @@
 
 #include "qsil/edgetree/edge_forest.h"
 #include "qsil/edgetree/node_fit.h"
-#include "qsil/edgetree/rejection_test.h"
+#include "qsil/edgetree/node_rejection.h"
 #include "qsil/scene.h"
 
 #include <gtest/gtest.h>
@@ -82,8 +82,8 @@ SoundnessResult check_forest(const EdgeForest& f, const std::vector<Vec3>& pts) 
           bool h = false;
           for (int c = n.first; c < n.first + n.count; ++c) h = h || has[c];
           has[i] = h;
-          const bool q = may_have_silhouette(f, i, p, RejectionMode::Quadric);
-          const bool b = may_have_silhouette(f, i, p, RejectionMode::Box);
+          const bool q = may_have_silhouette(f, i, p, Method::Quadric);
+          const bool b = may_have_silhouette(f, i, p, Method::QuadricBox);
           if (h) {
             ++lt;
             lq += !q;

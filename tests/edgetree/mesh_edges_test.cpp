@@ -137,7 +137,9 @@ TEST(EdgeClassificationSpecial, DihedralAngleOfCubeEdges) {
   EXPECT_EQ(s.count(EdgeClass::Convex), 12);
   EXPECT_EQ(s.count(EdgeClass::Flat), 6);
   for (const auto& e : s.edges)
-    if (e.cls == EdgeClass::Convex) EXPECT_NEAR(e.angle, kPi / 2, 1e-14);
+    if (e.cls == EdgeClass::Convex) {
+      EXPECT_NEAR(e.angle, kPi / 2, 1e-14);
+    }
 }
 
 }  // namespace

@@ -27,7 +27,7 @@ double min_dot(const std::vector<Vec3>& ns, const Vec3& d) {
 double brute_force_best(const std::vector<Vec3>& ns, std::mt19937_64& rng) {
   const int n = 200000;
   const double golden = kPi * (3.0 - std::sqrt(5.0));
-  Vec3 best_d;
+  Vec3 best_d = Vec3::Zero();
   double best = -kInf;
   for (int i = 0; i < n; ++i) {
     const double z = 1.0 - (i + 0.5) * 2.0 / n, r = std::sqrt(1 - z * z);

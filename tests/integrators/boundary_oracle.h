@@ -12,8 +12,8 @@
 #include "qsil/edgetree/edge_forest.h"
 #include "qsil/edgetree/ltc.h"
 #include "qsil/integrators/boundary_term.h"
-#include "integrators/edge_sampler_factory.h"
-#include "qsil/integrators/render.h"
+#include "integrators/boundary_setup.h"
+#include "qsil/integrators/estimator.h"
 
 #include <algorithm>
 
@@ -137,7 +137,7 @@ struct Estimate {
 
 /// The boundary estimator of `method` at p (normal +z, viewed from above) with dp/dtheta = dp,
 /// n samples, fixed seed.
-inline Estimate boundary_estimate(const Scene& scene, BoundaryMethod method, const std::string& param, const Vec3& p,
+inline Estimate boundary_estimate(const Scene& scene, Method method, const std::string& param, const Vec3& p,
                                   const Vec3& dp, int n) {
   const std::vector<ParameterSpec> params{parse_parameter(param, scene)};
   const SceneVelocities vel = compute_velocities(scene, params);
@@ -150,8 +150,8 @@ inline Estimate boundary_estimate(const Scene& scene, BoundaryMethod method, con
   ctx.environment = &env;
   ctx.area_lights = &lights;
   ctx.max_depth = scene.max_depth;
-  const edgetree::EdgeForest forest = edgetree::EdgeForest::build(edgetree::forest_inputs(scene));
-  const auto edge_sampler = make_edge_sampler(method, scene, forest);
+  const BoundarySetup setup = build_boundary_setup(scene, method);
+  const edgetree::EdgeSampler* edge_sampler = setup.sampler.get();
   const std::vector<bool> all(scene.shapes.size(), true);
   edgetree::SilhouetteQuery q;
   q.p = p;

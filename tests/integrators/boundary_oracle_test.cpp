@@ -1,4 +1,4 @@
-// The boundary term against analytic oracles (issue "boundary term"; tests/integrators/
+// The boundary term against analytic oracles (tests/integrators/
 // boundary_oracle.h states the oracle): within 3 standard errors at 1e6 samples (two-sided,
 // ~99.7% confidence for a correct estimator; fixed seeds). The baselines run the same oracle in
 // tests/baselines/baseline_oracle_test.cpp.
@@ -18,7 +18,7 @@ constexpr double kH = 1e-5;    // step of the central difference of the formula
 void expect_moving_occluder(const Shape& occluder) {
   const Scene scene = oracle_scene(occluder);
   const double exact = (radiance(occluder, kP, kH) - radiance(occluder, kP, -kH)) / (2 * kH);
-  const Estimate e = boundary_estimate(scene, BoundaryMethod::Quadric, "occluder:translate:1,0,0", kP, Vec3::Zero(), 1000000);
+  const Estimate e = boundary_estimate(scene, Method::Quadric, "occluder:translate:1,0,0", kP, Vec3::Zero(), 1000000);
   ASSERT_GT(std::abs(exact), 0.05);  // a clearly non-zero derivative
   EXPECT_NEAR(e.mean, exact, 3 * e.se) << "exact " << exact << " estimate " << e.mean << " +- " << e.se;
   EXPECT_LT(e.se, 0.05 * std::abs(exact));  // and a useful estimator
@@ -45,7 +45,7 @@ TEST(BoundaryOracle, MovingReceiverSeesStaticOccluderAndLightOutlinesMove) {
   const Scene scene = oracle_scene(occluder);
   auto moved = [&](double x) { return radiance(occluder, kP + Vec3(x, 0, 0), 0.0); };
   const double exact = (moved(kH) - moved(-kH)) / (2 * kH);
-  const Estimate e = boundary_estimate(scene, BoundaryMethod::Quadric, "floor:translate:1,0,0", kP, Vec3(1, 0, 0), 1000000);
+  const Estimate e = boundary_estimate(scene, Method::Quadric, "floor:translate:1,0,0", kP, Vec3(1, 0, 0), 1000000);
   ASSERT_GT(std::abs(exact), 0.05);
   EXPECT_NEAR(e.mean, exact, 3 * e.se) << "exact " << exact << " estimate " << e.mean << " +- " << e.se;
   EXPECT_LT(e.se, 0.05 * std::abs(exact));

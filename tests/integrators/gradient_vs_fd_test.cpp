@@ -1,8 +1,7 @@
 // Image-level correctness of `qsil grad` (interior + quadric boundary term) against central finite
-// differences with common random numbers (issue "boundary term"), on small images with fixed
-// seeds. Criteria (issue): the image sums agree within 3 combined standard errors (two-sided,
-// 99.7% for a correct estimator) and at least 98% of pixel-channels lie within 4 combined standard
-// errors (a correct estimator fails 0.006% of Gaussian pixel-channels; the slack is for
+// differences with common random numbers, on small images with fixed seeds. Criteria: the image
+// sums agree within 3 combined standard errors (two-sided, 99.7% for a correct estimator) and at
+// least 98% of pixel-channels lie within 4 combined standard errors (a correct estimator fails 0.006% of Gaussian pixel-channels; the slack is for
 // heavy-tailed pixels whose SE is itself noisy). The scenes and the statistics are shared with
 // `qsil-check_gradients` (tools/tool_check_gradients.cpp), which runs them at higher spp and
 // resolution; its output is docs/gradient-checks.md. The whole file runs in a few seconds.
@@ -20,7 +19,7 @@ using gradcheck::Agreement;
 /// Which criteria a case checks: both (image sum and per pixel), or the image sum alone.
 enum class Pixels { Checked, SumOnly };
 
-/// Runs a case and checks the issue's criteria, printing the statistics.
+/// Runs a case and checks the criteria above, printing the statistics.
 void expect_agreement(const std::string& name, int res, int grad_spp, int fd_spp, double h = 0,
                       Pixels pixels = Pixels::Checked) {
   const gradcheck::Case c = gradcheck::find_case(name).resolved(QSIL_SOURCE_DIR);
@@ -28,7 +27,9 @@ void expect_agreement(const std::string& name, int res, int grad_spp, int fd_spp
   const std::string text = gradcheck::describe(name, a);
   std::printf("%s", text.c_str());
   EXPECT_NEAR(a.grad.sum, a.fd.sum, 3 * a.sum_se) << text;
-  if (pixels == Pixels::Checked) EXPECT_GE(a.pixel_fraction_within_4se, 0.98) << text;
+  if (pixels == Pixels::Checked) {
+    EXPECT_GE(a.pixel_fraction_within_4se, 0.98) << text;
+  }
   // Not vacuous: the image sum, or at least 5% of the pixel-channels, clearly non-zero in FD.
   EXPECT_TRUE(std::abs(a.fd.sum) > 3 * a.fd.standard_error || a.fd_signal_fraction >= 0.05)
       << text << "the derivative must be clearly non-zero (signal fraction " << a.fd_signal_fraction << ")";
@@ -124,8 +125,8 @@ TEST(GradientSign, OccluderMovedTowardTheLightsSideDarkensThePenumbraOnThatSide)
   RenderOptions o;
   o.progress = false;
   o.seed = 31;
-  const RenderResult g = render_gradient(scene, params, o);
-  const RenderResult interior = render_gradient(scene, params, o, GradientOptions{BoundaryMethod::None, 1});
+  const RenderResult g = Estimator(scene, EstimatorConfig::gradient(params)).run(o);
+  const RenderResult interior = Estimator(scene, EstimatorConfig::gradient(params, Method::None)).run(o);
   // Inner parts of the penumbrae (a margin of 0.05 inside 0.35 .. 0.85), well inside |z| < 0.35.
   const RegionSum plus = floor_region_sum(scene, g.film, 0.40, 0.80, 0.30);
   const RegionSum minus = floor_region_sum(scene, g.film, -0.80, -0.40, 0.30);
@@ -141,7 +142,7 @@ TEST(GradientSign, OccluderMovedTowardTheLightsSideDarkensThePenumbraOnThatSide)
   EXPECT_EQ(plus_interior.sum, 0.0) << "the interior term has no part in a static floor's penumbra";
   // Finite differences agree in sign (the reference).
   o.seed = 32;
-  const RenderResult f = render_finite_differences(scene, params, {1e-2}, o);
+  const RenderResult f = Estimator(scene, EstimatorConfig::finite_differences(params, {1e-2})).run(o);
   EXPECT_LT(floor_region_sum(scene, f.film, 0.40, 0.80, 0.30).sum, 0.0);
   EXPECT_GT(floor_region_sum(scene, f.film, -0.80, -0.40, 0.30).sum, 0.0);
 }

@@ -1,9 +1,9 @@
-// Interior term (issue "Geometry parameters, the interior term in forward mode"): the
+// Interior term (forward mode over geometry parameters, docs/architecture.md §4): the
 // differentiable pieces against central differences of the same function in double, the
 // detachment of sampled quantities, and exact zeros for unmoving geometry.
 #include "qsil/integrators/geometry_view.h"
 #include "qsil/integrators/path_tracer.h"
-#include "qsil/integrators/render.h"
+#include "qsil/integrators/estimator.h"
 #include "qsil/integrators/surface_interaction.h"
 #include "qsil/bsdf.h"
 #include "qsil/parameters.h"
@@ -147,8 +147,8 @@ TEST(InteriorTerm, SampledDirectionsPdfsAndMisWeightsAreDetachedTypes) {
   RenderOptions o;
   o.progress = false;
   o.seed = 4;
-  const RenderResult g = render_gradient(scene, params, o);
-  const RenderResult p = render_primal(scene, o);
+  const RenderResult g = Estimator(scene, EstimatorConfig::gradient(params)).run(o);
+  const RenderResult p = Estimator(scene, EstimatorConfig::primal()).run(o);
   for (int y = 0; y < 8; ++y)
     for (int x = 0; x < 8; ++x)
       for (int c = 0; c < 3; ++c) EXPECT_NEAR(g.film.mean(c, x, y), p.film.mean(c, x, y), 1e-9 * p.film.mean(c, x, y));
@@ -171,7 +171,7 @@ TEST(InteriorTerm, UnmovingSceneHasExactlyZeroDerivative) {
   const auto params = std::vector<ParameterSpec>{parse_parameter("far:translate:1,0,0", scene)};
   RenderOptions o;
   o.progress = false;
-  const RenderResult g = render_gradient(scene, params, o, GradientOptions{BoundaryMethod::None});
+  const RenderResult g = Estimator(scene, EstimatorConfig::gradient(params, Method::None)).run(o);
   for (int y = 0; y < 8; ++y)
     for (int x = 0; x < 8; ++x)
       for (int c = 3; c < 6; ++c) EXPECT_EQ(g.film.mean(c, x, y), 0.0);

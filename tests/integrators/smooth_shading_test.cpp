@@ -1,4 +1,5 @@
-// Smooth shading and the boundary term (issue 13, "the derivative is low on smooth-shaded meshes").
+// Smooth shading and the boundary term: on smooth-shaded meshes the derivative must not be low
+// (docs/design-notes.md "Shading-normal adaptation", "Smooth shading").
 //
 // On a smooth-shaded mesh the shading normal is continuous across edges but the geometric normal
 // jumps. Whatever the radiance at a surface point takes from the geometric normal therefore jumps
@@ -210,7 +211,7 @@ TEST(SmoothShading, CubeGradientMatchesFiniteDifferencesWithinOnePercent) {
 
 // One mirror point of spot-mirror whose GGX lobe sees Spot's silhouette (mirror-point.xml): the
 // boundary term of Spot's silhouette through a near-specular lobe, at alpha 0.005, 0.01 and 0.05.
-// Criterion of the issue: the combined standard error at most 3 % of |FD| and agreement within 2
+// Criterion: the combined standard error at most 3 % of |FD| and agreement within 2
 // combined standard errors (two-sided 95 % for a correct estimator; the seeds are fixed). FD uses
 // h = 0.002: at alpha 0.01, h = 0.01 is 8 % off (the radiance varies on the scale of the lobe's
 // footprint on Spot), h = 0.003 and 0.001 agree within their 1 % standard errors. About 10 s each.

@@ -8,8 +8,9 @@
 /// and the false-accept rate (fraction of accepted inner nodes whose patch has no silhouette) of
 /// the quadric test vs the dual box alone.
 
+#include "cli_parse.h"
 #include "qsil/edgetree/edge_forest.h"
-#include "qsil/edgetree/rejection_test.h"
+#include "qsil/edgetree/node_rejection.h"
 #include "qsil/scene.h"
 
 #include <tbb/global_control.h>
@@ -41,7 +42,9 @@ double best_build(const TriangleMesh& m, int threads, EdgeForest* out) {
 
 int main(int argc, char** argv) {
   std::vector<std::string> meshes;
-  for (int i = 1; i < argc; ++i) meshes.emplace_back(argv[i]);
+  CLI::App app{"bench_forest: edge-forest statistics, build times and rejection-test rates per mesh"};
+  app.add_option("meshes", meshes, "OBJ files (default: the six test meshes, paths relative to the repository root)");
+  if (const auto code = qsil::cli::parse_arguments(app, argc, argv)) return *code;
   if (meshes.empty())
     meshes = {"scenes/meshes/spot.obj",          "tests/data/meshes/bob.obj",
               "scenes/meshes/bunny.obj",         "tests/data/meshes/torus.obj",
@@ -77,7 +80,7 @@ int main(int argc, char** argv) {
     long long acc[2] = {0, 0}, fa[2] = {0, 0};
     double secs[2] = {0, 0};
     for (int mode = 0; mode < 2; ++mode) {
-      const RejectionMode rm = mode == 0 ? RejectionMode::Quadric : RejectionMode::Box;
+      const Method rm = mode == 0 ? Method::Quadric : Method::QuadricBox;
       const auto t0 = std::chrono::steady_clock::now();
       for (const Vec3& p : pts)
         for (int i : inner) acc[mode] += may_have_silhouette(f, i, p, rm);
@@ -86,8 +89,8 @@ int main(int argc, char** argv) {
     for (const Vec3& p : pts)
       for (int i : inner) {
         if (node_has_silhouette(f, i, p)) continue;
-        fa[0] += may_have_silhouette(f, i, p, RejectionMode::Quadric);
-        fa[1] += may_have_silhouette(f, i, p, RejectionMode::Box);
+        fa[0] += may_have_silhouette(f, i, p, Method::Quadric);
+        fa[1] += may_have_silhouette(f, i, p, Method::QuadricBox);
       }
     const double ntests = double(pts.size()) * double(inner.size());
     std::printf("%-8s %6d %6d %6d %6d %5d %5d %8.4f %8.4f %7.1f %9.3g %9.3g %7.3f %7.3f\n", name,

@@ -17,7 +17,10 @@
 #include "qsil/edgetree/node_fit.h"
 #include "qsil/edgetree/vsphere_tree.h"
 #include "qsil/math.h"
+#include "qsil/method.h"
 #include "qsil/scene.h"
+
+#include <array>
 
 #include <string>
 #include <vector>
@@ -33,16 +36,13 @@ PatchKind parse_patch_kind(const std::string& name);
 /// The patch mesh (see the file comment).
 TriangleMesh make_canonical_patch(PatchKind kind);
 
-/// The four rejection tests of Fig. 7, in display order.
-enum class SliceTest { Quadric, QuadricBox, VSphere, VSphereSolid };
-inline constexpr int kSliceTests = 4;
-/// "quadric", "quadric-box", "vsphere", "vsphere-solid".
-const char* slice_test_name(SliceTest t);
-
-/// Ground truth and the four verdicts at one point.
+/// Ground truth and the verdicts of the four rejection tests of Fig. 7 (kRejectionMethods:
+/// quadric, quadric-box, vsphere, vsphere-solid) at one point.
 struct SliceVerdict {
-  bool truth = false;                  ///< some edge of the patch is a silhouette for p
-  bool accept[kSliceTests] = {};       ///< indexed by SliceTest
+  bool truth = false;                           ///< some edge of the patch is a silhouette for p
+  std::array<bool, kRejectionMethods.size()> accept{};  ///< in kRejectionMethods order
+  /// The verdict of `method` (one of kRejectionMethods).
+  bool accepts(Method method) const;
 };
 
 /// One node (a set of wedges) and its four tests.
@@ -67,7 +67,6 @@ class PatchTests {
   /// Edges that are silhouettes from o: they would sit in Li's plain tree, so whenever there is
   /// one the v-sphere methods accept every point (reported; 0 for the canonical defaults).
   int origin_silhouettes() const { return origin_sil_; }
-  const Box3& primal_box() const { return bp_; }
   const Box3& hough_box() const { return bh_; }
   std::uint16_t flags() const { return flags_; }  ///< NodeFlags of the fit (unrejectable, box-only)
 

@@ -30,9 +30,6 @@ namespace qsil::edgetree {
 ///   counted and treated as boundary (always a candidate), which is conservative.
 enum class EdgeClass : std::uint8_t { Convex, Concave, Flat, Boundary, NonManifold, Inconsistent };
 
-/// Short lowercase name of an edge class ("convex", ...), for reports.
-const char* edge_class_name(EdgeClass c);
-
 /// Exterior bend angle (radians) below which an interior edge is flat (meshes README criterion).
 inline constexpr double kFlatAngle = 1e-4;
 

@@ -4,6 +4,7 @@
 /// dual box B_q, fitted quadric Q_f, offsets lambda0/lambda1 and the stored pair
 /// A^T Q0 A, A^T Q1 A [QSS 3.2-3.3, 4.2-4.4; docs/architecture.md §5 "Per node"].
 
+#include "qsil/edgetree/edge_set.h"
 #include "qsil/edgetree/local_frame.h"
 #include "qsil/math.h"
 
@@ -11,16 +12,6 @@
 #include <span>
 
 namespace qsil::edgetree {
-
-/// Flags of a forest node (bit set).
-enum NodeFlags : std::uint16_t {
-  kNodeLeaf = 1,          ///< leaf: holds up to 4 edges, tested exactly per edge
-  kNodeUnrejectable = 2,  ///< no offset direction: a silhouette for every point [QSS App. B]
-  kNodeBoxOnly = 4,       ///< no usable quadric: the rejection test stops after the dual box
-  kNodeInherited = 8,     ///< Q_f inherited from the parent (too few planes or failed fit)
-  kNodeUsedLp = 16,       ///< D came from the LP [QSS Eq. 6] (a point, not a direction)
-  kNodeAlways = 32,       ///< a node of an always-candidate tree: no rejection test, no dual bound
-};
 
 /// Relative padding of every fitted bound (dual box, lambda range): 1e-9 of the magnitude of the
 /// bounded quantities, ~10^7 times double rounding, always widening (conservative).

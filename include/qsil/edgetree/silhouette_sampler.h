@@ -25,7 +25,7 @@
 
 #include "qsil/edgetree/edge_forest.h"
 #include "qsil/edgetree/ltc.h"
-#include "qsil/edgetree/rejection_test.h"
+#include "qsil/edgetree/node_rejection.h"
 #include "qsil/math.h"
 
 #include <array>
@@ -33,9 +33,6 @@
 #include <vector>
 
 namespace qsil::edgetree {
-
-/// Defensive share eps of node and leaf-edge choices.
-inline constexpr double kNodeDefensiveShare = 0.1;
 
 /// A polygonal (quad) area light for the light-aware importance I_light [QSS 3.6].
 struct LightPolygon {
@@ -50,14 +47,19 @@ struct SilhouetteQuery {
   Frame frame;                 ///< local shading frame (z = shading normal), world -> local
   LTC ltc;                     ///< the BSDF's LTC in that frame (norm = albedo weight)
   /// eligible[s]: edges of shape s may contribute (their velocity relative to p is non-zero).
+  /// Null: every shape is eligible.
   const std::vector<bool>* eligible = nullptr;
-  RejectionMode mode = RejectionMode::Quadric;
   /// Light-aware importance [QSS 3.6]: fbar = env_weight * fbar(Omega(B_p)) + sum over lights of
   /// weight * (integral of f_s cos over Omega(B_p) ∩ Omega(light)) / |Omega(B_p)|, summed over
   /// ALL lights (the paper supports one). Without lights: env_weight * fbar (env_weight 1 by
   /// default, so plain [QSS 3.5] importance).
   const std::vector<LightPolygon>* lights = nullptr;
   double env_weight = 1.0;
+
+  /// True when edges of shape `shape` may contribute (see `eligible`).
+  bool is_eligible(int shape) const {
+    return !eligible || (shape < int(eligible->size()) && (*eligible)[size_t(shape)]);
+  }
 };
 
 /// A sampled edge point and its probability.
@@ -68,16 +70,19 @@ struct SilhouetteSample {
   int rejection_tests = 0;           ///< number of node tests performed
 };
 
-/// Samples one discontinuity edge and a point on it for the query. `next` returns a fresh
+/// Samples one discontinuity edge and a point on it for the query, with the rejection test of
+/// `method` (Method::Quadric or Method::QuadricBox, node_rejection.h). `next` returns a fresh
 /// uniform number in [0,1) each call.
 SilhouetteSample sample_silhouette(const EdgeForest& forest, const SilhouetteQuery& query,
-                                   const std::function<double()>& next);
+                                   const std::function<double()>& next, Method method = Method::Quadric);
 
 /// Completes a sample on a chosen edge e (chosen with discrete probability pmf): t from the
 /// EdgePointSampler of the query ([QSS Eq. 4] x LTC, defensive in angle) with u, pdf = pmf x
 /// pdf(t). Returns no edge when e is not a discontinuity for the query point (is_discontinuity):
 /// samplers without an exact leaf test (vsphere, uniform) land there, a zero-contribution sample.
-SilhouetteSample sample_on_edge(const ForestEdge& e, double pmf, const SilhouetteQuery& query, double u);
+/// `rejection_tests` (the tests the choice of e took) is stored in the result.
+SilhouetteSample sample_on_edge(const ForestEdge& e, double pmf, const SilhouetteQuery& query, double u,
+                                int rejection_tests = 0);
 
 /// Importance I and defensive weight G of a node for the query (see the file comment).
 struct NodeWeight {
@@ -86,9 +91,10 @@ struct NodeWeight {
 };
 NodeWeight node_weight(const ForestNode& node, const SilhouetteQuery& query);
 
-/// Probability with which sample_silhouette picks `edge` (an element of forest.edges() or
-/// forest.always_edges()) for the query, by walking the same choices (for tests: the sampling
-/// probabilities of all edges sum to at most 1, and match the histogram).
-double silhouette_edge_probability(const EdgeForest& forest, const SilhouetteQuery& query, const ForestEdge* edge);
+/// Probability with which sample_silhouette (with `method`) picks `edge` (an element of
+/// forest.edges() or forest.always_edges()) for the query, by walking the same choices (for
+/// tests: the sampling probabilities of all edges sum to at most 1, and match the histogram).
+double silhouette_edge_probability(const EdgeForest& forest, const SilhouetteQuery& query, const ForestEdge* edge,
+                                   Method method = Method::Quadric);
 
 }  // namespace qsil::edgetree

@@ -1,7 +1,7 @@
 #pragma once
 /// @file uniform_sampler.h
 /// The `uniform` edge sampler (docs/architecture.md §7): a floor for the comparisons. No hierarchy and no
-/// rejection: among the edges of the eligible shapes (the quadric forest's tree edges and its
+/// rejection: among the edges of the eligible shapes (the edge set's tree edges and its
 /// always-candidate edges) an edge is chosen with probability proportional to
 ///   w_e = length * exterior dihedral angle   (tree edges; redner's secondary_edge_weight idea)
 ///   w_e = length * pi                        (always-candidate, i.e. boundary, edges)
@@ -13,7 +13,7 @@
 /// (a loop over shapes) and then the edge by binary search. No per-query allocation.
 
 #include "qsil/edgetree/edge_sampler.h"
-#include "qsil/edgetree/vsphere_sampler.h"
+#include "qsil/edgetree/edge_set.h"
 
 #include <functional>
 #include <string>
@@ -23,11 +23,11 @@ namespace qsil::edgetree {
 
 class UniformEdgeSampler final : public EdgeSampler {
  public:
-  /// Tables over the forest's edges (the forest must outlive the sampler).
-  explicit UniformEdgeSampler(const EdgeForest& forest);
+  /// Tables over the edge set's edges (the set must outlive the sampler).
+  explicit UniformEdgeSampler(const EdgeSet& edges);
 
   SilhouetteSample sample(const SilhouetteQuery& query, const std::function<double()>& next) const override;
-  std::string name() const override { return "uniform"; }
+  Method method() const override { return Method::Uniform; }
 
   /// Every edge of the eligible shapes with its probability (they sum to 1 unless no shape is
   /// eligible).

@@ -31,12 +31,6 @@
 
 namespace qsil::edgetree {
 
-/// An edge and its probability of being chosen (the discrete part of a sampler's pdf).
-struct EdgeProbability {
-  const ForestEdge* edge = nullptr;
-  double probability = 0;
-};
-
 /// Li's max f_s bound of the LTC over the directions of a box seen from p (see the file comment):
 /// norm / pi times the largest z of the unit directions M_inv w over the box's outline (1 when
 /// the LTC's z axis is inside the transformed outline or p is inside the box), 0 if the box lies
@@ -46,11 +40,12 @@ double vsphere_max_bsdf(const Box3& box, const Vec3& p, const Frame& frame, cons
 /// The `vsphere` / `vsphere-solid` sampler over a VSphereTree built for `hough_origin`.
 class VSphereEdgeSampler final : public EdgeSampler {
  public:
-  /// Builds the tree from the forest's tree edges (the forest must outlive the sampler).
-  VSphereEdgeSampler(const EdgeForest& forest, const Vec3& hough_origin, VSphereTest test);
+  /// Builds the tree from the edge set's tree edges and creases (the set must outlive the
+  /// sampler). `method`: Method::VSphere (hollow test) or Method::VSphereSolid (solid test).
+  VSphereEdgeSampler(const EdgeSet& edges, const Vec3& hough_origin, Method method);
 
   SilhouetteSample sample(const SilhouetteQuery& query, const std::function<double()>& next) const override;
-  std::string name() const override { return test_ == VSphereTest::Hollow ? "vsphere" : "vsphere-solid"; }
+  Method method() const override { return method_; }
 
   /// Exhaustive traversal (every accepted child down to the leaves): every edge with non-zero
   /// probability of being chosen, silhouette or not, with that probability. The probabilities
@@ -58,7 +53,6 @@ class VSphereEdgeSampler final : public EdgeSampler {
   std::vector<EdgeProbability> edge_probabilities(const SilhouetteQuery& query) const;
 
   const VSphereTree& tree() const { return tree_; }
-  VSphereTest test() const { return test_; }
 
  private:
   /// A candidate of a choice: a node (>= 0) or an always-candidate edge, with its weights.
@@ -71,9 +65,9 @@ class VSphereEdgeSampler final : public EdgeSampler {
   /// Accepted children of inner node n with their weights (returns their number, 0..2).
   int child_candidates(int n, const SilhouetteQuery& q, Cand* out, int& tests) const;
 
-  const EdgeForest& forest_;
+  const EdgeSet& edges_;
   VSphereTree tree_;
-  VSphereTest test_;
+  Method method_;
 };
 
 }  // namespace qsil::edgetree

@@ -29,19 +29,14 @@
 ///
 /// Units: positions in scene units (world frame), Hough points in scene units relative to o.
 
-#include "qsil/edgetree/edge_forest.h"
+#include "qsil/edgetree/edge_set.h"
 #include "qsil/math.h"
+#include "qsil/method.h"
 
 #include <cstdint>
 #include <vector>
 
 namespace qsil::edgetree {
-
-/// Which v-sphere test a node uses.
-enum class VSphereTest {
-  Hollow,  ///< hollow v-sphere vs solid box ([QSS] App. F, the corrected test; `vsphere`)
-  Solid,   ///< solid v-sphere vs solid box (redner's original; `vsphere-solid`)
-};
 
 /// Relative tolerance of the v-sphere test: a margin of kVSphereTol times the magnitude of the
 /// compared quantities counts as touching, i.e. accept (soundness under rounding).
@@ -51,13 +46,15 @@ inline constexpr double kVSphereTol = 1e-9;
 /// (scene units, relative to o).
 Vec3 hough_point(const Vec4& q, const Vec3& o);
 
-/// The v-sphere test of a Hough box for the shading point p (world) and the Hough origin o.
+/// The v-sphere test of a Hough box for the shading point p (world) and the Hough origin o, with
+/// the test of `method`: Method::VSphere (the hollow v-sphere vs the solid box, [QSS] App. F, the
+/// corrected test) or Method::VSphereSolid (the solid v-sphere, redner's original).
 /// `world_scale` is the largest absolute world coordinate of the edges the box bounds (it scales
 /// the rounding tolerance, together with |p|, |o| and the box). Returns false only when no plane
 /// pair with Hough points in the box (and d0 d1 > 0) can be a silhouette for p: see the file
 /// comment. An empty box is rejected.
 bool vsphere_box_may_have_silhouette(const Box3& hough_box, double world_scale, const Vec3& p, const Vec3& o,
-                                     VSphereTest test);
+                                     Method method);
 
 /// A node of the v-sphere tree. Inner nodes have two children; leaves hold one edge.
 struct VSphereNode {
@@ -78,7 +75,7 @@ struct VSphereRoot {
   bool hough = false;  ///< a 6D root (edges that are not silhouettes from o)
 };
 
-/// Li's (2019) Hough-space edge tree over the tree edges of a quadric edge forest (the same
+/// Li's (2019) Hough-space edge tree over the tree edges of an edge set (the same
 /// candidate edges: convex, plus concave ones where the forest keeps them) and its creases (in
 /// the plain, untested part: a crease is a candidate for every point). The other
 /// always-candidate (boundary) edges are not in it: samplers handle them at the top level.
@@ -86,23 +83,24 @@ class VSphereTree {
  public:
   VSphereTree() = default;
 
-  /// Builds the trees of every shape of `forest` for the Hough origin `o` (world). The tree
-  /// references forest's edges: the forest must outlive it.
-  static VSphereTree build(const EdgeForest& forest, const Vec3& o);
+  /// Builds the trees of every shape of `edges` for the Hough origin `o` (world). The tree
+  /// references the set's edges: the set must outlive it.
+  static VSphereTree build(const EdgeSet& edges, const Vec3& o);
 
   const Vec3& origin() const { return origin_; }
   const std::vector<VSphereNode>& nodes() const { return nodes_; }
   const VSphereNode& node(int i) const { return nodes_[size_t(i)]; }
   const std::vector<VSphereRoot>& roots() const { return roots_; }
-  /// Edges in leaf order (pointers into the forest's tree edges).
+  /// Edges in leaf order (pointers into the edge set's edges).
   const std::vector<const ForestEdge*>& edges() const { return edges_; }
   /// Number of edges in plain (o-silhouette) trees and in 6D trees.
   int plain_edges() const { return plain_edges_; }
   int hough_edges() const { return int(edges_.size()) - plain_edges_; }
 
   /// Rejection test of node i for the shading point p: plain nodes always accept; 6D nodes
-  /// (leaves included: the box of their one edge's two Hough points) run the v-sphere test.
-  bool may_have_silhouette(int i, const Vec3& p, VSphereTest test) const;
+  /// (leaves included: the box of their one edge's two Hough points) run the v-sphere test of
+  /// `method` (VSphere or VSphereSolid).
+  bool may_have_silhouette(int i, const Vec3& p, Method method) const;
 
   /// Bytes of the arrays.
   size_t memory_bytes() const;

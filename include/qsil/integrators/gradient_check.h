@@ -18,7 +18,7 @@
 /// Case files are relative to the repository root; resolve them with Case::resolved() (the test
 /// passes the source tree, the tool its --root).
 
-#include "qsil/integrators/render.h"
+#include "qsil/integrators/estimator.h"
 #include "qsil/parameters.h"
 #include "qsil/scene.h"
 
@@ -40,7 +40,7 @@ struct Case {
   Case resolved(const std::filesystem::path& root) const;
 };
 
-/// The five scenes of the boundary-term issue, in the order it lists them, a flat-shaded
+/// The gradient-check cases: three bundled scenes, two boundary-term scenes, a flat-shaded
 /// (face_normals) case and two smooth-shading cases: spot-mirror, shadow-quad, direct (scenes/),
 /// plane-light, spot-selfshadow, faceted-cube, smooth-cube, mirror-point (tests/data/gradient/).
 std::vector<Case> cases();
@@ -76,7 +76,7 @@ struct Agreement {
   double fd_signal_fraction = 0;
   std::vector<Outlier> worst;    ///< the largest |z| first (up to 8)
   double grad_seconds = 0, fd_seconds = 0, interior_seconds = 0;
-  GradientReport report;
+  uint64_t traversals = 0, zero_traversals = 0;  ///< boundary-term samples of grad, and the zero ones
   uint64_t nonfinite = 0;
   /// (sum_grad - sum_fd) / sum_se.
   double sum_z() const;

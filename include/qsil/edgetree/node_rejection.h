@@ -1,5 +1,5 @@
 #pragma once
-/// @file rejection_test.h
+/// @file node_rejection.h
 /// The rejection test of a forest node for a shading point [QSS 3.4, Appendix C; docs/architecture.md §5
 /// "Rejection test"], the exact per-edge test of leaves and a brute-force reference.
 ///
@@ -10,40 +10,36 @@
 
 #include "qsil/edgetree/edge_forest.h"
 #include "qsil/math.h"
+#include "qsil/method.h"
 
 namespace qsil::edgetree {
-
-/// Which bound of an inner node the test uses.
-enum class RejectionMode {
-  Quadric,  ///< dual box, then the bounding quadric pair ([QSS 3.4], "ours")
-  Box,      ///< dual box only ("quadric-box", docs/architecture.md §7)
-};
 
 /// Relative tolerance of the rejection test's sign decisions: a value within kRejectTol times
 /// the magnitude of its terms (plus the rounding of the world coordinates, see
 /// may_have_silhouette) counts as zero, i.e. as touching, i.e. accept.
 inline constexpr double kRejectTol = 1e-9;
 
-/// Rejection test of node `node` of `forest` for the shading point p (world frame).
-/// - Leaves: exact per-edge test (leaf_has_silhouette), in both modes.
+/// Rejection test of node `node` of `forest` for the shading point p (world frame), with the
+/// bound of `method`: Method::Quadric (dual box, then the bounding quadric pair, [QSS 3.4]) or
+/// Method::QuadricBox (dual box only, docs/architecture.md §7); no other method has this test.
+/// - Leaves: exact per-edge test (leaf_has_silhouette), for both methods.
 /// - Unrejectable inner nodes: true.
 /// - Inner nodes [QSS 3.4]: 1. the polygon C = B_q ∩ {r : [r,1].(A^T x') = 0} with x' the local
-///   point [(p-c)/s, 1]; empty -> false. Box mode and box-only nodes: true otherwise.
+///   point [(p-c)/s, 1]; empty -> false. QuadricBox and box-only nodes: true otherwise.
 ///   2. a vertex with Q~0 <= 0 <= Q~1 -> true; 3. Q~0 or Q~1 has a root on a polygon edge
 ///   (sign change at the ends or interior extremum of the other sign) -> true; 4. a real point
 ///   of either conic (found on a line or its polar line, [QSS App. C]) inside C -> true;
 ///   5. false. Q~k(r) = [r,1]^T (A^T Qk A) [r,1].
-bool may_have_silhouette(const EdgeForest& forest, int node, const Vec3& p,
-                         RejectionMode mode = RejectionMode::Quadric);
+bool may_have_silhouette(const EdgeForest& forest, int node, const Vec3& p, Method method = Method::Quadric);
 
 /// The dual-space part of the test on a bound directly (steps 1-5 above; `box_only` stops after
 /// step 1). Exposed for tests of degenerate patches fitted with fit_node().
 bool bound_may_have_silhouette(const NodeBound& bound, bool box_only, const Vec3& p);
 
 /// Exact test of a leaf: true iff one of its edges is a silhouette for p (edge_is_silhouette).
-bool leaf_has_silhouette(const EdgeForest& forest, int leaf, const Vec3& p);
+bool leaf_has_silhouette(const EdgeSet& edges, int leaf, const Vec3& p);
 
 /// Brute force: true iff some edge of the node's subtree is a silhouette for p. O(edges).
-bool node_has_silhouette(const EdgeForest& forest, int node, const Vec3& p);
+bool node_has_silhouette(const EdgeSet& edges, int node, const Vec3& p);
 
 }  // namespace qsil::edgetree

@@ -1,30 +1,25 @@
-/// @file cli_wireframe.cpp
-/// See cli_wireframe.h.
+/// @file wireframe.cpp
+/// See qsil/wireframe.h.
 
-#include "cli_wireframe.h"
+#include "qsil/wireframe.h"
 
 #include "qsil/image.h"
 
 #include <algorithm>
 #include <cmath>
 
-namespace qsil::cli {
+namespace qsil {
 
 WireframeCanvas::WireframeCanvas(const Camera& camera, const Rgb& background) : cam_(camera) {
-  const Mat3 R = camera.to_world.block<3, 3>(0, 0);
-  to_local_ = R.transpose();
-  origin_ = camera.origin();
-  tan_half_ = camera.tan_half_fov();
   rgb_.resize(size_t(camera.width) * camera.height * 3);
   for (size_t i = 0; i < rgb_.size(); i += 3)
     for (int c = 0; c < 3; ++c) rgb_[i + size_t(c)] = background[size_t(c)];
 }
 
 bool WireframeCanvas::project(const Vec3& p, Vec2& film) const {
-  const Vec3 l = to_local_ * (p - origin_);
-  if (!(l.z() > 0)) return false;
-  film = Vec2(0.5 * cam_.width * (1.0 - l.x() / (l.z() * tan_half_.x())),
-              0.5 * cam_.height * (1.0 - l.y() / (l.z() * tan_half_.y())));
+  double depth = 0;
+  film = cam_.project(p, &depth);
+  if (!(depth > 0)) return false;
   return std::isfinite(film.x()) && std::isfinite(film.y());
 }
 
@@ -41,7 +36,7 @@ void WireframeCanvas::plot(int x, int y, const Rgb& c, int thickness) {
 
 void WireframeCanvas::line(const Vec3& a, const Vec3& b, const Rgb& color, int thickness) {
   // ---- Clip against the near plane (camera z = near_clip).
-  Vec3 la = to_local_ * (a - origin_), lb = to_local_ * (b - origin_);
+  const Vec3 la = cam_.to_camera(a), lb = cam_.to_camera(b);
   const double zn = cam_.near_clip;
   if (la.z() < zn && lb.z() < zn) return;
   Vec3 A = a, B = b;
@@ -112,4 +107,4 @@ Camera overview_camera(const Scene& scene) {
   return c;
 }
 
-}  // namespace qsil::cli
+}  // namespace qsil

@@ -1,7 +1,7 @@
-/// @file rejection_test.cpp
+/// @file node_rejection.cpp
 /// Node rejection test [QSS 3.4, Appendix C].
 
-#include "qsil/edgetree/rejection_test.h"
+#include "qsil/edgetree/node_rejection.h"
 
 #include "edgetree/conic.h"
 
@@ -155,23 +155,23 @@ bool bound_may_have_silhouette(const NodeBound& b, bool box_only, const Vec3& p)
   return false;
 }
 
-bool leaf_has_silhouette(const EdgeForest& forest, int leaf, const Vec3& p) {
-  for (const ForestEdge& e : forest.leaf_edges(leaf))
+bool leaf_has_silhouette(const EdgeSet& edges, int leaf, const Vec3& p) {
+  for (const ForestEdge& e : edges.leaf_edges(leaf))
     if (edge_is_silhouette(e, p)) return true;
   return false;
 }
 
-bool may_have_silhouette(const EdgeForest& forest, int node, const Vec3& p, RejectionMode mode) {
+bool may_have_silhouette(const EdgeForest& forest, int node, const Vec3& p, Method method) {
+  QSIL_DCHECK(uses_edge_forest(method));
   const ForestNode& n = forest.node(node);
   if (n.always()) return true;  // an always-candidate tree: no rejection
   if (n.is_leaf()) return leaf_has_silhouette(forest, node, p);
   if (n.unrejectable() || n.bound < 0) return true;
-  return bound_may_have_silhouette(forest.bounds()[n.bound],
-                                   mode == RejectionMode::Box || n.box_only(), p);
+  return bound_may_have_silhouette(forest.bounds()[size_t(n.bound)], method == Method::QuadricBox || n.box_only(), p);
 }
 
-bool node_has_silhouette(const EdgeForest& forest, int node, const Vec3& p) {
-  for (const ForestEdge& e : forest.node_edges(node))
+bool node_has_silhouette(const EdgeSet& edges, int node, const Vec3& p) {
+  for (const ForestEdge& e : edges.node_edges(node))
     if (edge_is_silhouette(e, p)) return true;
   return false;
 }

@@ -1,9 +1,9 @@
 #pragma once
-/// @file cli_wireframe.h
+/// @file wireframe.h
 /// A tiny line rasteriser for `qsil candidates` ([QSS] Fig. 8): world-space segments projected
-/// through a pinhole Camera (qsil::Camera conventions: looks along +z of to_world, +x left, +y
-/// up; film coordinates (0,0) top-left), clipped against the near plane, drawn with a DDA into an
-/// 8-bit RGB canvas. No text: labels are drawn by the Python chart scripts.
+/// through a pinhole Camera (Camera::project: looks along +z of to_world, +x left, +y up; film
+/// coordinates (0,0) top-left), clipped against the near plane, drawn with a DDA into an 8-bit
+/// RGB canvas. No text: labels are drawn by the Python chart scripts.
 
 #include "qsil/scene.h"
 
@@ -11,7 +11,7 @@
 #include <filesystem>
 #include <vector>
 
-namespace qsil::cli {
+namespace qsil {
 
 using Rgb = std::array<unsigned char, 3>;
 
@@ -33,9 +33,6 @@ class WireframeCanvas {
  private:
   void plot(int x, int y, const Rgb& c, int thickness);
   Camera cam_;
-  Mat3 to_local_;  ///< world -> camera rotation
-  Vec3 origin_;
-  Vec2 tan_half_;
   std::vector<unsigned char> rgb_;
 };
 
@@ -45,4 +42,4 @@ class WireframeCanvas {
 /// (spot-mirror sees Spot only in the mirror).
 Camera overview_camera(const Scene& scene);
 
-}  // namespace qsil::cli
+}  // namespace qsil

@@ -1,0 +1,18 @@
+/// @file quadric_sampler.cpp
+/// See qsil/edgetree/quadric_sampler.h.
+
+#include "qsil/edgetree/quadric_sampler.h"
+
+#include "qsil/check.h"
+
+namespace qsil::edgetree {
+
+QuadricEdgeSampler::QuadricEdgeSampler(const EdgeForest& forest, Method method) : forest_(forest), method_(method) {
+  QSIL_CHECK(uses_edge_forest(method));
+}
+
+SilhouetteSample QuadricEdgeSampler::sample(const SilhouetteQuery& query, const std::function<double()>& next) const {
+  return sample_silhouette(forest_, query, next, method_);
+}
+
+}  // namespace qsil::edgetree

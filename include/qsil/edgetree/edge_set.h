@@ -1,0 +1,223 @@
+#pragma once
+/// @file edge_set.h
+/// The scene's candidate edges [QSS 4.1; docs/architecture.md §5 "Edges", "Tree"]: per shape,
+/// its edges extracted and classified (mesh_edges.h), split into silhouette-tree candidates
+/// (convex, optionally concave) and always-candidates (boundary, non-manifold, inconsistent,
+/// creases), each group ordered by a top-down 4-wide SAH hierarchy (binned SAH splits, three
+/// binary splits per level; each shape's root is discarded so it contributes up to four roots).
+/// Nodes carry the primal box B_p and the weighted length L_w only: no dual bound.
+///
+/// Every boundary method starts from the edge set: the baselines (vsphere, uniform) use its edges
+/// as they are (their order is the hierarchy's leaf order, so their sampling tables and sorts see
+/// the same edges in the same order as the forest's), and EdgeForest (edge_forest.h) fits dual
+/// bounds to its inner nodes for the quadric methods. Building an edge set fits nothing.
+/// Nodes live in one flat array; children of a node are contiguous.
+
+#include "qsil/check.h"
+#include "qsil/edgetree/mesh_edges.h"
+#include "qsil/math.h"
+#include "qsil/scene.h"
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <utility>
+#include <vector>
+
+namespace qsil::edgetree {
+
+/// Flags of a hierarchy node (bit set). kNodeLeaf and kNodeAlways describe the topology (set by
+/// EdgeSet::build); the others are set by fitting (node_fit.h).
+enum NodeFlags : std::uint16_t {
+  kNodeLeaf = 1,          ///< leaf: holds up to 4 edges, tested exactly per edge
+  kNodeUnrejectable = 2,  ///< no offset direction: a silhouette for every point [QSS App. B]
+  kNodeBoxOnly = 4,       ///< no usable quadric: the rejection test stops after the dual box
+  kNodeInherited = 8,     ///< Q_f inherited from the parent (too few planes or failed fit)
+  kNodeUsedLp = 16,       ///< D came from the LP [QSS Eq. 6] (a point, not a direction)
+  kNodeAlways = 32,       ///< a node of an always-candidate tree: no rejection test, no dual bound
+};
+
+/// An edge stored in the forest: the mesh edge (vertex and face indices into its shape's mesh,
+/// world planes q0/q1, length, exterior angle, class, shape index) plus its endpoint positions
+/// (world frame, scene units).
+struct ForestEdge : MeshEdge {
+  Vec3 p0 = Vec3::Zero();  ///< position of v0
+  Vec3 p1 = Vec3::Zero();  ///< position of v1
+  /// A shading crease: the radiance may jump across it where both of its faces face the viewer
+  /// (every non-flat edge of a flat-shaded shape; the concave edges of a smooth-shaded one, see
+  /// CreaseSet).
+  bool crease = false;
+};
+
+/// True iff the radiance seen from p can jump across edge e: a silhouette or boundary edge
+/// (edge_is_silhouette), or a crease (its shading jumps there whether or not it is a
+/// silhouette). Edge samplers return only such edges.
+inline bool is_discontinuity(const ForestEdge& e, const Vec3& p) { return e.crease || edge_is_silhouette(e, p); }
+
+/// Weight of an always-candidate edge in its tree's L_w (units * rad): a crease bounds a jump
+/// that grows with its bend angle (length * angle, as tree edges); a boundary, non-manifold or
+/// inconsistent edge bounds a jump of the full radiance, like a silhouette of angle pi.
+inline double always_edge_weight(const ForestEdge& e) { return e.length * (e.crease ? e.angle : kPi); }
+
+/// A node of the edge set's hierarchy (and of the forest fitted over it). Inner nodes: children are nodes [first, first + count) (1..4 of them).
+/// Leaves (kNodeLeaf): edges [first, first + count) (1..4 of them) of EdgeSet::edges(), or
+/// of EdgeSet::always_edges() for a node of an always-candidate tree (kNodeAlways). Every node
+/// covers the contiguous edge range [edge_begin, edge_end) of the same array.
+struct ForestNode {
+  Box3 bp;                  ///< primal box B_p of the patch's edge endpoints (world, scene units)
+  double lw = 0.0;          ///< L_w = sum of edge length * exterior dihedral angle (units * rad);
+                            ///< always_edge_weight() for always-candidate trees
+  int first = 0;            ///< first child (inner) or first edge (leaf)
+  int count = 0;            ///< number of children (inner) or edges (leaf)
+  int edge_begin = 0;       ///< first edge of the subtree in edges() (always_edges() if kNodeAlways)
+  int edge_end = 0;         ///< one past the last edge of the subtree
+  int bound = -1;           ///< index into EdgeForest::bounds() (fitted inner nodes), else -1
+  int parent = -1;          ///< parent node, -1 for forest roots
+  int shape = 0;            ///< shape index
+  std::uint16_t flags = 0;  ///< NodeFlags
+  std::uint16_t depth = 0;  ///< 0 for forest roots
+  bool is_leaf() const { return flags & kNodeLeaf; }
+  bool unrejectable() const { return flags & kNodeUnrejectable; }
+  bool box_only() const { return flags & kNodeBoxOnly; }
+  /// A node of an always-candidate tree: every edge below is a candidate for every shading point
+  /// (no rejection test); only its box and L_w steer the traversal.
+  bool always() const { return flags & kNodeAlways; }
+};
+
+/// Which non-flat edges of a shape are shading creases (ForestEdge::crease), i.e. where the
+/// radiance leaving the surface jumps although no silhouette is there:
+/// - All: every convex and concave edge. Flat shading (face_normals): the normal jumps; and a
+///   smooth-shaded twosided shape: a sliver ray from one face meets the back of its neighbour,
+///   which scatters, while from the neighbour the same direction leaves into the open.
+/// - Concave: the concave edges of a smooth-shaded one-sided shape. Sliver rays (above the
+///   shading horizon, below the face's plane) pass through back faces, which makes the radiance
+///   continuous across convex edges; at a concave edge the same direction seen from the other
+///   face meets this face from the front (docs/design-notes.md "Smooth shading").
+/// - None: no creases (tests of the silhouette tree alone).
+enum class CreaseSet { None, Concave, All };
+
+/// One input shape of the forest.
+struct ForestShapeInput {
+  const TriangleMesh* mesh = nullptr;  ///< welded mesh, world frame
+  int shape = 0;                       ///< the shape's index (kept in every edge and node)
+  /// Flat shading (Mitsuba's face_normals): every convex and concave edge is a crease, and the
+  /// shape has no silhouette tree (the crease branch of the boundary term covers silhouettes).
+  /// Implies creases = CreaseSet::All.
+  bool face_normals = false;
+  /// The creases of a smooth-shaded shape (see CreaseSet): always-candidates, not tree edges.
+  CreaseSet creases = CreaseSet::None;
+};
+
+/// The forest inputs of every shape of a scene, as the boundary term needs them: a shape with
+/// flat shading (face_normals, or no vertex normals) has every non-flat edge as a crease; a
+/// smooth-shaded shape its concave edges (CreaseSet::Concave), or all of them when its BSDF is
+/// twosided (CreaseSet::All). The inputs point into `scene`, which must outlive them.
+std::vector<ForestShapeInput> forest_inputs(const Scene& scene);
+
+/// Options of the edge set: edge culling and the hierarchy.
+struct EdgeSetOptions {
+  EdgeOptions edges;         ///< edge culling (keep_concave)
+  int leaf_size = 4;         ///< maximum edges per leaf (1..4)
+  int sah_buckets = 10;      ///< SAH buckets along the largest centroid axis [QSS 4.1]
+  /// A shape's always-candidate edges get a tree of their own (box-only nodes, no rejection)
+  /// when there are more than this many; fewer stay loose top-level candidates.
+  int always_tree_min_edges = 8;
+};
+
+/// Statistics of one shape's hierarchy (for `qsil forest --stats`, the benchmark and the
+/// estimators' set-up reports). The fit counters stay 0 in an edge set that was not fitted.
+struct ForestShapeStats {
+  int shape = 0;
+  std::array<int, 6> edge_counts{};  ///< per EdgeClass
+  int edges_total = 0;       ///< unique undirected edges of the mesh
+  int edges_kept = 0;        ///< tree candidates
+  int edges_always = 0;      ///< always-candidate edges (boundary, non-manifold, inconsistent, creases)
+  int creases = 0;           ///< of which creases
+  int always_nodes = 0;      ///< nodes of the shape's always-candidate tree (0: its edges are loose)
+  int nodes = 0;             ///< stored nodes (inner + leaves; the discarded root not counted)
+  int inner_nodes = 0;
+  int leaves = 0;
+  int roots = 0;             ///< forest roots contributed (<= 4)
+  int depth = 0;             ///< maximum node depth + 1 (levels below the discarded root)
+  int fitted = 0;            ///< inner nodes with a fitted dual bound (EdgeForest)
+  int quadrics = 0;          ///< ...of which carry a bounding quadric pair (neither unrejectable nor box-only)
+  int unrejectable = 0;      ///< inner nodes marked unrejectable
+  int box_only = 0;          ///< inner nodes without a quadric
+  int inherited = 0;         ///< inner nodes with the parent's Q_f
+  int used_lp = 0;           ///< inner nodes whose D came from the LP
+  double build_seconds = 0.0;///< wall time of edge extraction and topology (+ fitting in a forest)
+};
+
+/// The candidate edges of several shapes and their SAH hierarchy (see the file comment).
+class EdgeSet {
+ public:
+  EdgeSet() = default;
+
+  /// Builds the edge set: edge extraction and classification per shape, then the top-down 4-wide
+  /// SAH topology of its silhouette-tree edges and of its always-candidate edges (three binary
+  /// splits per level, `sah_buckets` buckets along the largest axis of the edge centroids' box,
+  /// cost = area * count), B_p and L_w of every node (in parallel with oneTBB). Fits nothing.
+  static EdgeSet build(std::span<const ForestShapeInput> shapes, const EdgeSetOptions& options = {});
+
+  /// Every node, flat (a node's children are contiguous), silhouette and always-candidate trees.
+  const std::vector<ForestNode>& nodes() const { return nodes_; }
+  /// Node i (checked in debug builds).
+  const ForestNode& node(int i) const {
+    QSIL_DCHECK(i >= 0 && i < int(nodes_.size()));
+    return nodes_[size_t(i)];
+  }
+  /// Roots of the silhouette trees (the children of each shape's discarded root), grouped by shape.
+  const std::vector<int>& roots() const { return roots_; }
+  /// Roots of the always-candidate trees (kNodeAlways; the children of each discarded root).
+  const std::vector<int>& always_roots() const { return always_roots_; }
+  /// Indices into always_edges() of the edges in no always-candidate tree (loose top-level
+  /// candidates, e.g. the four outline edges of a rectangle).
+  const std::vector<int>& loose_always() const { return loose_always_; }
+  /// Tree edges in leaf order (a leaf's edges are contiguous), grouped by shape.
+  const std::vector<ForestEdge>& edges() const { return edges_; }
+  /// Always-candidate edges (boundary, non-manifold, inconsistently oriented, creases): a
+  /// possible discontinuity for every shading point, never in a silhouette tree; those of a shape
+  /// with more than EdgeSetOptions::always_tree_min_edges are in its always-candidate tree (leaf
+  /// order), the others are loose_always().
+  const std::vector<ForestEdge>& always_edges() const { return always_; }
+  /// Children of an inner node as a node-index range [first, first+count); empty for a leaf.
+  std::span<const ForestNode> children(int i) const {
+    const ForestNode& n = node(i);
+    if (n.is_leaf()) return {};
+    return {nodes_.data() + n.first, size_t(n.count)};
+  }
+  /// Edges of a leaf (empty for an inner node), from edges() or, for an always-candidate tree's
+  /// leaf, from always_edges().
+  std::span<const ForestEdge> leaf_edges(int i) const {
+    const ForestNode& n = node(i);
+    if (!n.is_leaf()) return {};
+    return {(n.always() ? always_.data() : edges_.data()) + n.first, size_t(n.count)};
+  }
+  /// Edges below node i (its edge range in edges() or always_edges()).
+  std::span<const ForestEdge> node_edges(int i) const {
+    const ForestNode& n = node(i);
+    return {(n.always() ? always_.data() : edges_.data()) + n.edge_begin, size_t(n.edge_end - n.edge_begin)};
+  }
+  /// Per-shape statistics, in input order.
+  const std::vector<ForestShapeStats>& stats() const { return stats_; }
+  /// Bytes of the arrays (nodes, edges, roots).
+  size_t memory_bytes() const;
+
+ protected:
+  /// What fitting a shape's silhouette tree needs: its node levels, parents first (each a node
+  /// range [first, second)), and its face planes (indexed by face).
+  struct ShapeTree {
+    std::vector<std::pair<int, int>> levels;
+    std::vector<Vec4> face_planes;
+  };
+  std::vector<ForestNode> nodes_;
+  std::vector<int> roots_;
+  std::vector<int> always_roots_;
+  std::vector<int> loose_always_;
+  std::vector<ForestEdge> edges_;
+  std::vector<ForestEdge> always_;
+  std::vector<ForestShapeStats> stats_;
+  std::vector<ShapeTree> trees_;  ///< per input shape
+};
+
+}  // namespace qsil::edgetree

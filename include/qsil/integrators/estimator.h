@@ -1,0 +1,145 @@
+#pragma once
+/// @file estimator.h
+/// The estimator layer (the role of pbrt-v4's Integrator and of Mitsuba 3's integrator plugins):
+/// an Estimator is set up once for a scene and what it estimates — the primal image, its
+/// derivatives with a boundary method, or finite differences — and then run over ranges of sample
+/// indices. Set-up builds everything a run needs and nothing else: parameter velocities, the ray
+/// tracer (one per displaced scene for finite differences), the light samplers, and for an edge
+/// sampling method the scene's edge set, the structure its method samples from (the fitted edge
+/// forest for quadric and quadric-box, the v-sphere tree for vsphere and vsphere-solid, the tables
+/// of uniform; Method in method.h decides), the edge sampler, its importance inputs (rectangle
+/// lights, environment weight) and the primary edges. Every command (`render`, `grad`, `fd`,
+/// `reference`, `compare`), the progressive passes and the tools drive an Estimator.
+///
+/// Sample ranges: run() renders samples [first_sample, first_sample + spp) of every pixel. Sample
+/// s of pixel p draws from the streams (seed, p, s) (docs/architecture.md §3 "Randomness"), and
+/// the primary boundary term numbers its W x H samples per sample index globally
+/// (add_primary_boundary in integrators/primary_boundary.h), so that
+/// - a run over [0, spp) draws exactly what a single run of spp samples drew before sample ranges
+///   existed (bit-identical images);
+/// - runs over disjoint ranges draw independent samples, and their films merge
+///   (RenderResult::merge) into a film of the union;
+/// - for images whose pixel count is a multiple of 1024 (32 x 32, 64 x 64, ...), runs over ranges
+///   that partition [0, spp) draw exactly the samples of the run over [0, spp): the merged film
+///   equals its film up to the rounding of the sums (for the primal image, finite differences and
+///   the interior term this holds for every image size).
+
+#include "qsil/film.h"
+#include "qsil/method.h"
+#include "qsil/parameters.h"
+#include "qsil/scene.h"
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace qsil {
+
+/// What an estimator estimates.
+struct EstimatorConfig {
+  /// Parameters theta_k (1 to 8); empty: the primal image (method ignored).
+  std::vector<ParameterSpec> params;
+  /// With parameters: an edge-sampling method or Method::None (primal + interior term + boundary
+  /// term of that method), or Method::FiniteDifferences.
+  Method method = Method::Quadric;
+  int boundary_spp = 1;  ///< discontinuity samples per shading point (edge-sampling methods)
+  /// Finite differences: one step h per parameter (units of theta); empty: default_fd_step each.
+  std::vector<double> fd_steps;
+
+  /// The primal image.
+  static EstimatorConfig primal();
+  /// Primal + derivatives with `method` (an edge sampler or Method::None).
+  static EstimatorConfig gradient(std::vector<ParameterSpec> params, Method method = Method::Quadric,
+                                  int boundary_spp = 1);
+  /// Primal + central finite differences with steps `steps` (empty: defaults).
+  static EstimatorConfig finite_differences(std::vector<ParameterSpec> params, std::vector<double> steps = {});
+};
+
+/// One run: which samples, which seed, how many threads.
+struct RenderOptions {
+  int spp = -1;          ///< samples per pixel of the run (its range's length); <= 0: the scene's sample_count
+  int first_sample = 0;  ///< first sample index of the range [first_sample, first_sample + spp)
+  uint64_t seed = 0;     ///< PCG32 seed; results are bit-identical for any thread count
+  int threads = 0;       ///< 0 = all cores
+  bool progress = true;  ///< progress bar on stderr (runs > 1 s)
+};
+
+/// What a run produced and what it cost (set-up excluded: Estimator::setup()).
+struct RenderResult {
+  Film film{1, 1, FilmLayout()};
+  int first_sample = 0;      ///< first sample index of the run
+  int spp = 0;               ///< samples per pixel (summed over merged runs)
+  double seconds = 0;        ///< wall time of the pixel loop and the primary boundary term
+  uint64_t rays = 0;         ///< ray queries issued
+  uint64_t nonfinite = 0;    ///< samples with a NaN/inf value (replaced by 0 and reported)
+  double boundary_seconds = 0;  ///< wall time attributed to the boundary term (thread-time share)
+  uint64_t traversals = 0;      ///< boundary-term samples drawn (secondary and primary)
+  uint64_t zero_traversals = 0; ///< ...that contributed nothing
+
+  /// Adds the film and the counters of a run over a disjoint sample range of the same estimator
+  /// (first_sample becomes the smaller one). Throws nothing; films must have the same layout.
+  void merge(const RenderResult& other);
+};
+
+/// What set-up built and what it cost.
+struct SetupReport {
+  double seconds = 0;       ///< wall time of the whole set-up
+  double edge_seconds = 0;  ///< of which the edge structure: edge set, forest fit, v-sphere tree, tables
+  /// What was built for the derivatives: "none" (primal, interior term only, or nothing moves),
+  /// "edge set + uniform tables", "edge set + v-sphere tree", "edge forest (dual box)", "edge forest
+  /// (dual box + quadrics)", or "N scenes (primal and displaced), ..." for finite differences.
+  std::string structure = "none";
+  int edges = 0;          ///< edges of the edge set (tree and always-candidate edges)
+  int fitted_nodes = 0;   ///< forest nodes with a fitted dual bound (0 without a forest)
+  int quadric_nodes = 0;  ///< ...of which carry a bounding quadric pair (0 unless `quadric`)
+  int primary_edges = 0;  ///< discontinuity edges of moving shapes seen from the camera
+  /// One line: "STRUCTURE: E edges, F fitted nodes (Q with quadrics), P primary edges, T s".
+  std::string describe() const;
+};
+
+/// An estimator set up for one scene (see the file comment). Movable, not copyable; run() is
+/// const and may be called any number of times (not concurrently: it parallelises itself).
+class Estimator {
+ public:
+  /// Sets up `config` for `scene`, which must outlive the estimator. Throws qsil::Error for a
+  /// parameter count outside 1..8 (check_parameter_count), a method that cannot estimate
+  /// derivatives, or finite-difference steps that are not positive and finite or not one per
+  /// parameter. Uses the caller's TBB arena (forest fitting is parallel).
+  Estimator(const Scene& scene, EstimatorConfig config);
+  ~Estimator();
+  Estimator(Estimator&&) noexcept;
+  Estimator& operator=(Estimator&&) noexcept;
+
+  /// Renders samples [options.first_sample, options.first_sample + spp) of every pixel (spp =
+  /// options.spp, or the scene's sample_count when it is <= 0). Throws qsil::Error when the range
+  /// is empty or starts below 0.
+  RenderResult run(const RenderOptions& options) const;
+
+  /// The channel layout of every film this estimator renders (K = params.size()).
+  const FilmLayout& layout() const;
+  /// What it estimates (as given; fd_steps() holds the steps in use).
+  const EstimatorConfig& config() const;
+  /// What set-up built and its time.
+  const SetupReport& setup() const;
+  /// The finite-difference steps in use (FiniteDifferences only; empty otherwise).
+  const std::vector<double>& fd_steps() const;
+
+  /// The implementation of one kind of estimator (primal, gradient, finite differences).
+  class Impl;
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
+
+/// Default finite-difference step of a parameter: 1e-3 of the scene's bounding-box diagonal
+/// divided by |direction| for translate and vertex (so the displacement is 1e-3 diagonal),
+/// 1e-3 radians for rotate, 1e-3 (relative) for scale.
+double default_fd_step(const Scene& scene, const ParameterSpec& param);
+
+/// Finite-difference steps from a `--h` list: empty = default_fd_step per parameter, one value =
+/// that value for all, else one per parameter. Throws qsil::Error on a count mismatch.
+std::vector<double> fd_steps(const Scene& scene, const std::vector<ParameterSpec>& params,
+                             const std::vector<double>& h);
+
+}  // namespace qsil

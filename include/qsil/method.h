@@ -1,0 +1,67 @@
+#pragma once
+/// @file method.h
+/// The one method type of qsil: how a derivative image is estimated (docs/architecture.md §7).
+/// Every command names methods the same way (`--boundary`, `--method`, `--methods`), and this
+/// file is the only place that parses or prints them. Each command accepts a subset
+/// (kBoundaryMethods for `grad --boundary`, kEdgeSamplingMethods for `candidates`, ...);
+/// parse_method() names that subset when the value is not in it.
+///
+/// Which structure a method needs is decided here too (edge set, fitted forest, v-sphere tree),
+/// so that an estimator builds only that (integrators/estimator.cpp).
+
+#include <array>
+#include <span>
+#include <string>
+#include <string_view>
+
+namespace qsil {
+
+/// A derivative estimator: the boundary-term sampler of `qsil grad`, the interior term alone, or
+/// finite differences. The first four are also the four rejection tests of `qsil slices`.
+enum class Method {
+  Quadric,       ///< `quadric`: edge forest, dual box + bounding quadric pair test [QSS] (default)
+  QuadricBox,    ///< `quadric-box`: the same forest with the dual box test only (ablation)
+  VSphere,       ///< `vsphere`: Li 2019's Hough-space tree, hollow v-sphere test ([QSS] App. F)
+  VSphereSolid,  ///< `vsphere-solid`: redner's original solid v-sphere test
+  Uniform,       ///< `uniform`: no rejection, edges by length x dihedral angle (a floor)
+  None,          ///< `none`: the interior term only (misses silhouettes, shadows, outlines)
+  FiniteDifferences,  ///< `fd`: central finite differences with common random numbers
+};
+
+/// Every method, in the order above.
+inline constexpr std::array<Method, 7> kAllMethods = {Method::Quadric,      Method::QuadricBox, Method::VSphere,
+                                                       Method::VSphereSolid, Method::Uniform,    Method::None,
+                                                       Method::FiniteDifferences};
+/// The methods that sample edges (`qsil candidates`).
+inline constexpr std::array<Method, 5> kEdgeSamplingMethods = {Method::Quadric, Method::QuadricBox, Method::VSphere,
+                                                                Method::VSphereSolid, Method::Uniform};
+/// The methods with a rejection test ([QSS] Fig. 7, `qsil slices`), in display order.
+inline constexpr std::array<Method, 4> kRejectionMethods = {Method::Quadric, Method::QuadricBox, Method::VSphere,
+                                                             Method::VSphereSolid};
+/// The values of `qsil grad --boundary`: every edge sampler, and none.
+inline constexpr std::array<Method, 6> kBoundaryMethods = {Method::Quadric,      Method::QuadricBox, Method::VSphere,
+                                                            Method::VSphereSolid, Method::Uniform,    Method::None};
+/// Unbiased gradient methods (`qsil reference --method`): every edge sampler, and fd.
+inline constexpr std::array<Method, 6> kReferenceMethods = {Method::Quadric,      Method::QuadricBox,
+                                                             Method::VSphere,      Method::VSphereSolid,
+                                                             Method::Uniform,      Method::FiniteDifferences};
+
+/// The method's name on the command line and in outputs: "quadric", "quadric-box", "vsphere",
+/// "vsphere-solid", "uniform", "none", "fd".
+std::string_view method_name(Method method);
+
+/// The method named `name` among `allowed`. Throws qsil::Error
+/// "OPTION 'NAME': unsupported (supported: a, b, ...)" listing `allowed` otherwise.
+Method parse_method(std::string_view name, std::string_view option, std::span<const Method> allowed);
+
+/// `allowed` as "a, b, c" (for help texts).
+std::string method_list(std::span<const Method> allowed);
+
+/// True for the five edge samplers (a boundary term with a secondary edge sampler).
+bool samples_edges(Method method);
+/// True for quadric and quadric-box: sampling traverses the fitted edge forest.
+bool uses_edge_forest(Method method);
+/// True for quadric only: the forest's nodes carry fitted dual quadrics (the others need none).
+bool uses_quadrics(Method method);
+
+}  // namespace qsil

@@ -1,0 +1,56 @@
+/// @file boundary_setup.cpp
+/// See boundary_setup.h.
+
+#include "integrators/boundary_setup.h"
+
+#include "qsil/check.h"
+#include "qsil/edgetree/quadric_sampler.h"
+#include "qsil/edgetree/uniform_sampler.h"
+#include "qsil/edgetree/vsphere_sampler.h"
+
+#include <chrono>
+
+namespace qsil {
+
+BoundarySetup build_boundary_setup(const Scene& scene, Method method) {
+  QSIL_CHECK_MSG(samples_edges(method), "no edge sampler for method " << method_name(method));
+  const auto t0 = std::chrono::steady_clock::now();
+  BoundarySetup out;
+  const std::vector<edgetree::ForestShapeInput> inputs = edgetree::forest_inputs(scene);
+  if (uses_edge_forest(method)) {
+    // quadric-box uses the dual box only: its forest fits no quadric (the box test reads nothing
+    // of it, so the samples are the same).
+    edgetree::ForestOptions options;
+    options.fit.fit_quadrics = uses_quadrics(method);
+    auto forest = std::make_unique<edgetree::EdgeForest>(edgetree::EdgeForest::build(inputs, options));
+    out.forest = forest.get();
+    out.sampler = std::make_unique<edgetree::QuadricEdgeSampler>(*forest, method);
+    out.edges = std::move(forest);
+  } else {
+    out.edges = std::make_unique<edgetree::EdgeSet>(edgetree::EdgeSet::build(inputs));
+    if (method == Method::Uniform) {
+      out.sampler = std::make_unique<edgetree::UniformEdgeSampler>(*out.edges);
+    } else {
+      // Li 2019: the Hough origin is the camera centre (docs/architecture.md §7).
+      out.sampler = std::make_unique<edgetree::VSphereEdgeSampler>(*out.edges, scene.camera.origin(), method);
+    }
+  }
+  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return out;
+}
+
+void set_light_importance(const Scene& scene, const EnvironmentLight& environment, BoundaryContext& context) {
+  context.lights.clear();
+  for (const Shape& s : scene.shapes) {
+    if (!s.is_emitter || s.type != "rectangle" || s.mesh.positions.size() != 4) continue;
+    edgetree::LightPolygon light;
+    for (int i = 0; i < 4; ++i) light.corners[size_t(i)] = s.mesh.positions[size_t(i)];
+    light.normal = s.mesh.face_cross(0).normalized();
+    light.weight = luminance(s.radiance);
+    context.lights.push_back(light);
+  }
+  context.env_weight = environment.present() ? luminance(environment.average_radiance()) : 0.0;
+  if (context.lights.empty() && context.env_weight == 0) context.env_weight = 1.0;  // plain [QSS 3.5] importance
+}
+
+}  // namespace qsil

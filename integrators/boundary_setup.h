@@ -1,0 +1,39 @@
+#pragma once
+/// @file boundary_setup.h
+/// The set-up of a boundary method (docs/architecture.md §7): the edge structure its sampler
+/// needs and nothing else, the secondary edge sampler, and the importance inputs of the boundary
+/// term. Used by the gradient estimator (estimator.cpp) and by tests that drive the boundary
+/// term directly.
+
+#include "qsil/edgetree/edge_forest.h"
+#include "qsil/edgetree/edge_sampler.h"
+#include "qsil/integrators/boundary_term.h"
+#include "qsil/method.h"
+#include "qsil/scene.h"
+
+#include <memory>
+#include <vector>
+
+namespace qsil {
+
+/// A boundary method's structures: the scene's edge set (an EdgeForest for quadric and
+/// quadric-box, fitted with quadrics only for quadric; a plain EdgeSet for vsphere,
+/// vsphere-solid and uniform) and the sampler over it.
+struct BoundarySetup {
+  std::unique_ptr<edgetree::EdgeSet> edges;          ///< edge set or forest (the sampler points into it)
+  std::unique_ptr<edgetree::EdgeSampler> sampler;    ///< the method's secondary edge sampler
+  const edgetree::EdgeForest* forest = nullptr;      ///< `edges` as a forest (quadric methods), else null
+  double seconds = 0;                                ///< wall time of the build
+};
+
+/// Builds the structures of `method` (one of kEdgeSamplingMethods) over every shape of `scene`
+/// (a moving shading point sees static edges move too, docs/architecture.md §5). The v-sphere
+/// tree's Hough origin is the camera centre. The scene must outlive the result.
+BoundarySetup build_boundary_setup(const Scene& scene, Method method);
+
+/// The importance inputs of the boundary term [QSS 3.6]: every rectangle emitter as a light
+/// polygon weighted by the luminance of its radiance, and the environment's weight (luminance
+/// of its mean radiance; 1 when the scene has neither, i.e. plain [QSS 3.5] importance).
+void set_light_importance(const Scene& scene, const EnvironmentLight& environment, BoundaryContext& context);
+
+}  // namespace qsil

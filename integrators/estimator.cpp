@@ -1,0 +1,362 @@
+/// @file estimator.cpp
+/// The three kinds of estimator (primal, gradient, finite differences) behind Estimator; see
+/// qsil/integrators/estimator.h.
+
+#include "qsil/integrators/estimator.h"
+
+#include "integrators/boundary_setup.h"
+#include "integrators/pixel_loop.h"
+#include "integrators/primary_boundary.h"
+#include "qsil/check.h"
+#include "qsil/error.h"
+#include "qsil/integrators/boundary_term.h"
+#include "qsil/integrators/geometry_view.h"
+#include "qsil/integrators/path_tracer.h"
+
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+
+namespace qsil {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+/// Worker threads of a run: options.threads, or every core of the current arena.
+double thread_count(const RenderOptions& o) {
+  return double(o.threads > 0 ? o.threads : tbb::this_task_arena::max_concurrency());
+}
+
+/// The light samplers of a scene and the path context over them and a ray tracer.
+struct LightSetup {
+  EnvironmentLight environment;
+  AreaLights area_lights;
+  explicit LightSetup(const Scene& scene) : environment(scene.environment), area_lights(scene) {}
+  PathContext context(const Scene& scene, const RayTracer& tracer) const {
+    PathContext ctx;
+    ctx.scene = &scene;
+    ctx.tracer = &tracer;
+    ctx.environment = &environment;
+    ctx.area_lights = &area_lights;
+    ctx.max_depth = PathContext::resolve_depth(scene.max_depth);
+    const bool env = environment.present(), area = !area_lights.empty();
+    ctx.p_environment = env && area ? 0.5 : (env ? 1.0 : 0.0);
+    return ctx;
+  }
+};
+
+}  // namespace
+
+// ---- The interface of the three kinds
+
+class Estimator::Impl {
+ public:
+  Impl(const Scene& scene, EstimatorConfig config)
+      : scene(scene), config(std::move(config)), layout(int(this->config.params.size())) {}
+  virtual ~Impl() = default;
+  /// Renders samples [first, first + count) into `r` (film, counters).
+  virtual void run(const RenderOptions& options, int first, int count, RenderResult& r) const = 0;
+
+  const Scene& scene;
+  EstimatorConfig config;
+  FilmLayout layout;
+  SetupReport setup;
+  std::vector<double> steps;  ///< finite differences only
+};
+
+namespace {
+
+/// The primal image (`qsil render`): film channels R, G, B.
+class PrimalEstimator final : public Estimator::Impl {
+ public:
+  PrimalEstimator(const Scene& s, EstimatorConfig c) : Impl(s, std::move(c)), tracer(s), lights(s) {
+    ctx = lights.context(s, tracer);
+  }
+  void run(const RenderOptions& options, int first, int count, RenderResult& r) const override {
+    const Camera& cam = scene.camera;
+    const Vec3 origin = cam.origin();
+    const PrimalView view{&scene};
+    PathStats total;
+    run_pixels(cam, layout, options, first, count, "render",
+               [&](int x, int y, int, Sampler& sampler, PathStats& st, double* out) {
+      const Vec2 u = sampler.next2();
+      const Vec3 d = cam.direction(x + u.x(), y + u.y());
+      ++st.rays;
+      const Hit hit = tracer.intersect(origin, d);
+      const Color L = trace_path(ctx, view, origin, d, hit, 0, 0.0, sampler, st);
+      for (int c = 0; c < 3; ++c) out[layout.primal(c)] = L[c];
+    }, r, total);
+  }
+
+ private:
+  RayTracer tracer;
+  LightSetup lights;
+  PathContext ctx;
+};
+
+/// Primal + interior term in forward mode (duals of size N) + the boundary term of the method
+/// (`qsil grad`).
+template <int N> class GradientEstimator final : public Estimator::Impl {
+ public:
+  GradientEstimator(const Scene& s, EstimatorConfig c)
+      : Impl(s, std::move(c)), vel(compute_velocities(s, config.params)), tracer(s), lights(s) {
+    ctx = lights.context(s, tracer);
+    // ---- The boundary method's structures, only when something moves.
+    if (samples_edges(config.method) && vel.any_moving()) {
+      boundary = build_boundary_setup(s, config.method);
+      bctx.sampler = boundary.sampler.get();
+      bctx.velocities = &vel;
+      bctx.moving = vel.moving;
+      bctx.all.assign(s.shapes.size(), true);
+      bctx.samples_per_vertex = std::max(1, config.boundary_spp);
+      set_light_importance(s, lights.environment, bctx);
+      primary = find_primary_edges(s, *boundary.edges, vel.moving);
+      describe_structure();
+    }
+  }
+
+  void run(const RenderOptions& options, int first, int count, RenderResult& r) const override {
+    const Camera& cam = scene.camera;
+    const Vec3 origin = cam.origin();
+    const DualView<N> view{&scene, &vel};
+    const int K = layout.num_params();
+    const bool with_boundary = bool(boundary.sampler);
+    PathStats total;
+    run_pixels(cam, layout, options, first, count, "grad",
+               [&](int x, int y, int s, Sampler& sampler, PathStats& st, double* out) {
+      const Vec2 u = sampler.next2();
+      const Vec3 d = cam.direction(x + u.x(), y + u.y());
+      ++st.rays;
+      const Hit hit = tracer.intersect(origin, d);
+      ColorT<Dual<N>> L;
+      if (with_boundary) {
+        // The boundary term draws from a stream of its own, so the path itself is the primal's.
+        Sampler bsampler(options.seed, uint64_t(y) * cam.width + x, uint64_t(s), 1);
+        const BoundaryHook<N> hook{&ctx, &bctx, &bsampler};
+        L = trace_path(ctx, view, lift<Dual<N>>(origin), d, hit, 0, 0.0, sampler, st, hook);
+      } else {
+        L = trace_path(ctx, view, lift<Dual<N>>(origin), d, hit, 0, 0.0, sampler, st);
+      }
+      for (int c = 0; c < 3; ++c) out[layout.primal(c)] = L[c].value();
+      for (int k = 0; k < K; ++k) {
+        for (int c = 0; c < 3; ++c) out[layout.derivative(k, c)] = L[c].derivatives()[k];
+        out[layout.derivative_mean(k)] =
+            (out[layout.derivative(k, 0)] + out[layout.derivative(k, 1)] + out[layout.derivative(k, 2)]) / 3.0;
+      }
+    }, r, total);
+    // ---- Primary silhouettes: one edge sample per pixel sample, splatted where it lands.
+    if (with_boundary) {
+      const auto t0 = Clock::now();
+      PathStats primary_stats;
+      add_primary_boundary(r.film, ctx, vel, primary, first, count, options.seed, options.threads, primary_stats);
+      const double dt = seconds_since(t0);
+      r.seconds += dt;
+      r.rays += primary_stats.rays;
+      total.boundary_traversals += primary_stats.boundary_traversals;
+      total.boundary_zero += primary_stats.boundary_zero;
+      total.boundary_seconds += dt * thread_count(options);
+    }
+    r.traversals = total.boundary_traversals;
+    r.zero_traversals = total.boundary_zero;
+    // Thread time in the boundary term, as a share of the run's wall time.
+    r.boundary_seconds = std::min(r.seconds, total.boundary_seconds / thread_count(options));
+  }
+
+ private:
+  void describe_structure() {
+    setup.edge_seconds = boundary.seconds;
+    setup.edges = int(boundary.edges->edges().size() + boundary.edges->always_edges().size());
+    setup.primary_edges = int(primary.size());
+    if (boundary.forest) {
+      for (const auto& st : boundary.forest->stats()) {
+        setup.fitted_nodes += st.fitted;
+        setup.quadric_nodes += st.quadrics;
+      }
+      setup.structure = uses_quadrics(config.method) ? "edge forest (dual box + quadrics)" : "edge forest (dual box)";
+    } else {
+      setup.structure = config.method == Method::Uniform ? "edge set + uniform tables" : "edge set + v-sphere tree";
+    }
+  }
+
+  SceneVelocities vel;
+  RayTracer tracer;
+  LightSetup lights;
+  PathContext ctx;
+  BoundarySetup boundary;
+  BoundaryContext bctx;
+  std::vector<PrimaryEdge> primary;
+};
+
+/// Central finite differences with common random numbers (`qsil fd`): the primal scene and, per
+/// parameter, two displaced copies, each with its own ray tracer and lights (lights move with
+/// their shapes), set up once.
+class FiniteDifferenceEstimator final : public Estimator::Impl {
+ public:
+  FiniteDifferenceEstimator(const Scene& s, EstimatorConfig c) : Impl(s, std::move(c)) {
+    const int K = layout.num_params();
+    steps = config.fd_steps.empty() ? fd_steps(s, config.params, {}) : config.fd_steps;
+    if (int(steps.size()) != K) throw Error("fd: one step per parameter expected");
+    for (double h : steps)
+      if (!(h > 0) || !std::isfinite(h))
+        throw Error("fd: step h must be positive and finite (got " + std::to_string(h) + ")");
+    sides.push_back(std::make_unique<Side>(s));
+    for (int k = 0; k < K; ++k) {
+      sides.push_back(std::make_unique<Side>(displaced_scene(s, config.params, k, +steps[size_t(k)])));
+      sides.push_back(std::make_unique<Side>(displaced_scene(s, config.params, k, -steps[size_t(k)])));
+    }
+    setup.structure = std::to_string(sides.size()) + " scenes (primal and displaced), each with a ray tracer";
+  }
+
+  void run(const RenderOptions& options, int first, int count, RenderResult& r) const override {
+    const int K = layout.num_params();
+    const Camera& cam = scene.camera;
+    const Vec3 origin = cam.origin();
+    auto radiance = [&](const Side& side, Sampler sampler, PathStats& st, const Vec2& u, int x, int y) {
+      const Vec3 d = cam.direction(x + u.x(), y + u.y());
+      ++st.rays;
+      const Hit hit = side.tracer.intersect(origin, d);
+      return trace_path(side.ctx, PrimalView{&side.scene}, origin, d, hit, 0, 0.0, sampler, st);
+    };
+    PathStats total;
+    run_pixels(cam, layout, options, first, count, "fd",
+               [&](int x, int y, int, Sampler& sampler, PathStats& st, double* out) {
+      const Vec2 u = sampler.next2();
+      // Common random numbers: every side continues from a copy of the same sampler state.
+      const Color L0 = radiance(*sides[0], sampler, st, u, x, y);
+      for (int c = 0; c < 3; ++c) out[layout.primal(c)] = L0[c];
+      for (int k = 0; k < K; ++k) {
+        const Color Lp = radiance(*sides[size_t(1 + 2 * k)], sampler, st, u, x, y);
+        const Color Lm = radiance(*sides[size_t(2 + 2 * k)], sampler, st, u, x, y);
+        const Color dL = (Lp - Lm) / (2.0 * steps[size_t(k)]);
+        for (int c = 0; c < 3; ++c) out[layout.derivative(k, c)] = dL[c];
+        out[layout.derivative_mean(k)] = dL.mean();
+      }
+    }, r, total);
+  }
+
+ private:
+  /// One side of a difference: a scene, its tracer and lights.
+  struct Side {
+    explicit Side(Scene s) : scene(std::move(s)), tracer(scene), lights(scene), ctx(lights.context(scene, tracer)) {}
+    Scene scene;
+    RayTracer tracer;
+    LightSetup lights;
+    PathContext ctx;
+  };
+  std::vector<std::unique_ptr<Side>> sides;
+};
+
+/// The implementation of `config` (its kind, and for gradients the dual size N).
+std::unique_ptr<Estimator::Impl> make_impl(const Scene& scene, EstimatorConfig config) {
+  if (config.params.empty()) return std::make_unique<PrimalEstimator>(scene, std::move(config));
+  check_parameter_count(config.params.size());
+  if (config.method == Method::FiniteDifferences)
+    return std::make_unique<FiniteDifferenceEstimator>(scene, std::move(config));
+  const int K = int(config.params.size());
+  return with_dual_size(K, [&](auto n) -> std::unique_ptr<Estimator::Impl> {
+    return std::make_unique<GradientEstimator<decltype(n)::value>>(scene, std::move(config));
+  });
+}
+
+}  // namespace
+
+// ---- EstimatorConfig, RenderResult, SetupReport
+
+EstimatorConfig EstimatorConfig::primal() { return {}; }
+
+EstimatorConfig EstimatorConfig::gradient(std::vector<ParameterSpec> params, Method method, int boundary_spp) {
+  EstimatorConfig c;
+  c.params = std::move(params);
+  c.method = method;
+  c.boundary_spp = boundary_spp;
+  return c;
+}
+
+EstimatorConfig EstimatorConfig::finite_differences(std::vector<ParameterSpec> params, std::vector<double> steps) {
+  EstimatorConfig c;
+  c.params = std::move(params);
+  c.method = Method::FiniteDifferences;
+  c.fd_steps = std::move(steps);
+  return c;
+}
+
+void RenderResult::merge(const RenderResult& other) {
+  film.merge(other.film);
+  first_sample = std::min(first_sample, other.first_sample);
+  spp += other.spp;
+  seconds += other.seconds;
+  rays += other.rays;
+  nonfinite += other.nonfinite;
+  boundary_seconds += other.boundary_seconds;
+  traversals += other.traversals;
+  zero_traversals += other.zero_traversals;
+}
+
+std::string SetupReport::describe() const {
+  char buf[256];
+  std::snprintf(buf, sizeof buf, "%s: %d edges, %d fitted nodes (%d with quadrics), %d primary edges, %.3f s",
+                structure.c_str(), edges, fitted_nodes, quadric_nodes, primary_edges, seconds);
+  return buf;
+}
+
+// ---- Estimator
+
+Estimator::Estimator(const Scene& scene, EstimatorConfig config) {
+  if (!config.params.empty() && config.method != Method::FiniteDifferences && config.method != Method::None &&
+      !samples_edges(config.method))
+    throw Error("method " + std::string(method_name(config.method)) + " cannot estimate derivatives");
+  const auto t0 = Clock::now();
+  impl_ = make_impl(scene, std::move(config));
+  impl_->setup.seconds = seconds_since(t0);
+}
+
+Estimator::~Estimator() = default;
+Estimator::Estimator(Estimator&&) noexcept = default;
+Estimator& Estimator::operator=(Estimator&&) noexcept = default;
+
+RenderResult Estimator::run(const RenderOptions& options) const {
+  const int count = options.spp > 0 ? options.spp : impl_->scene.camera.spp;
+  if (count <= 0) throw Error("spp must be positive (got " + std::to_string(count) + ")");
+  if (options.first_sample < 0)
+    throw Error("the first sample index must be >= 0 (got " + std::to_string(options.first_sample) + ")");
+  RenderResult r;
+  impl_->run(options, options.first_sample, count, r);
+  QSIL_DCHECK(r.film.channels() == impl_->layout.channels());
+  return r;
+}
+
+const FilmLayout& Estimator::layout() const { return impl_->layout; }
+const EstimatorConfig& Estimator::config() const { return impl_->config; }
+const SetupReport& Estimator::setup() const { return impl_->setup; }
+const std::vector<double>& Estimator::fd_steps() const { return impl_->steps; }
+
+// ---- finite-difference steps
+
+double default_fd_step(const Scene& scene, const ParameterSpec& param) {
+  switch (param.kind) {
+    case ParameterSpec::Kind::Translate:
+    case ParameterSpec::Kind::Vertex: return 1e-3 * scene.bounds().diagonal() / param.direction.norm();
+    case ParameterSpec::Kind::Rotate:
+    case ParameterSpec::Kind::Scale: return 1e-3;
+  }
+  return 1e-3;
+}
+
+std::vector<double> fd_steps(const Scene& scene, const std::vector<ParameterSpec>& params,
+                             const std::vector<double>& h) {
+  std::vector<double> steps;
+  for (size_t k = 0; k < params.size(); ++k) {
+    if (h.empty()) steps.push_back(default_fd_step(scene, params[k]));
+    else if (h.size() == 1) steps.push_back(h[0]);
+    else if (h.size() == params.size()) steps.push_back(h[k]);
+    else throw Error("--h: give one value or one per --param (" + std::to_string(params.size()) + ")");
+  }
+  return steps;
+}
+
+}  // namespace qsil

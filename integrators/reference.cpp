@@ -1,0 +1,118 @@
+/// @file reference.cpp
+/// See qsil/integrators/reference.h.
+
+#include "qsil/integrators/reference.h"
+
+#include "qsil/error.h"
+
+#include <cmath>
+#include <cstdio>
+
+namespace qsil {
+
+Image reference_image(const RenderResult& r) {
+  Image img = r.film.to_image_with_standard_errors();
+  for (int k = 0; k < r.film.layout().num_params(); ++k) {
+    const ImageSum s = r.film.derivative_sum(k);
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.17g", s.sum);
+    img.attributes["qsil:sum" + std::to_string(k)] = buf;
+    std::snprintf(buf, sizeof buf, "%.17g", s.standard_error);
+    img.attributes["qsil:sum_se" + std::to_string(k)] = buf;
+  }
+  return img;
+}
+
+void summarize_reference(Reference& ref) {
+  const Image& im = ref.image;
+  const size_t n = size_t(im.width) * im.height;
+  auto plane = [&](int k, int c, const char* suffix) -> const std::vector<float>& {
+    return im.planes[size_t(im.channel_index(FilmLayout::derivative_name(k, c) + suffix))];
+  };
+  double floor = 0, sq = 0;
+  ref.sum.assign(size_t(ref.num_params), 0);
+  ref.sum_se.assign(size_t(ref.num_params), 0);
+  for (int k = 0; k < ref.num_params; ++k) {
+    for (int c = 0; c < 3; ++c) {
+      const auto& v = plane(k, c, "");
+      const auto& s = plane(k, c, ".se");
+      for (size_t i = 0; i < n; ++i) {
+        sq += double(v[i]) * v[i];
+        floor += double(s[i]) * s[i];
+        ref.sum[size_t(k)] += v[i] / 3.0;
+      }
+    }
+    // The image sum's standard error: exact if the renderer stored it, else a bound from the
+    // channel errors (treating R, G, B as fully correlated).
+    auto it = im.attributes.find("qsil:sum_se" + std::to_string(k));
+    if (it != im.attributes.end()) {
+      ref.sum_se[size_t(k)] = std::stod(it->second);
+    } else {
+      double var = 0;
+      for (size_t i = 0; i < n; ++i) {
+        double s = 0;
+        for (int c = 0; c < 3; ++c) s += plane(k, c, ".se")[i] / 3.0;
+        var += s * s;
+      }
+      ref.sum_se[size_t(k)] = std::sqrt(var);
+    }
+  }
+  const double count = double(n) * 3 * ref.num_params;
+  ref.noise_floor = floor / count;
+  ref.mean_sq = sq / count;
+}
+
+Reference read_reference(const std::filesystem::path& path, int num_params, int width, int height) {
+  Reference ref;
+  ref.image = read_exr(path);
+  ref.num_params = num_params;
+  if (ref.image.width != width || ref.image.height != height)
+    throw Error(path.string() + ": reference is " + std::to_string(ref.image.width) + "x" +
+                std::to_string(ref.image.height) + ", the scene renders " + std::to_string(width) + "x" +
+                std::to_string(height) + " (use the same -D res=...)");
+  for (int k = 0; k < num_params; ++k)
+    for (int c = 0; c < 3; ++c)
+      for (const std::string suffix : {"", ".se"})
+        if (ref.image.channel_index(FilmLayout::derivative_name(k, c) + suffix) < 0)
+          throw Error(path.string() + ": reference has no channel " + FilmLayout::derivative_name(k, c) + suffix +
+                      " (render it with `qsil reference`)");
+  summarize_reference(ref);
+  return ref;
+}
+
+ErrorMetrics measure_error(const Film& film, const Reference& ref) {
+  ErrorMetrics m;
+  const int K = ref.num_params;
+  const Image est = film.to_image();
+  const size_t n = size_t(est.width) * est.height;
+  std::vector<char> bad(n, 0);
+  for (size_t c = 0; c < est.planes.size(); ++c)
+    for (size_t i = 0; i < n; ++i)
+      if (!std::isfinite(est.planes[c][i])) bad[i] = 1;
+  for (size_t i = 0; i < n; ++i) m.nonfinite_pixels += bad[i];
+  double se = 0;
+  long long count = 0;
+  for (int k = 0; k < K; ++k)
+    for (int c = 0; c < 3; ++c) {
+      const std::string name = FilmLayout::derivative_name(k, c);
+      const auto& e = est.planes[size_t(est.channel_index(name))];
+      const auto& r = ref.image.planes[size_t(ref.image.channel_index(name))];
+      for (size_t i = 0; i < n; ++i) {
+        if (bad[i]) continue;
+        const double d = double(e[i]) - double(r[i]);
+        se += d * d;
+        ++count;
+      }
+    }
+  m.mse = count ? se / double(count) : std::nan("");
+  m.rel_mse = ref.mean_sq > 0 ? m.mse / ref.mean_sq : std::nan("");
+  for (int k = 0; k < K; ++k) {
+    const ImageSum s = film.derivative_sum(k);
+    m.sum.push_back(s.sum);
+    m.sum_se.push_back(s.standard_error);
+    m.sum_error.push_back(s.sum - ref.sum[size_t(k)]);
+  }
+  return m;
+}
+
+}  // namespace qsil

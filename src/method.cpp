@@ -1,0 +1,46 @@
+/// @file method.cpp
+/// Method names; see qsil/method.h.
+
+#include "qsil/method.h"
+
+#include "qsil/error.h"
+
+#include <algorithm>
+
+namespace qsil {
+
+std::string_view method_name(Method method) {
+  switch (method) {
+    case Method::Quadric: return "quadric";
+    case Method::QuadricBox: return "quadric-box";
+    case Method::VSphere: return "vsphere";
+    case Method::VSphereSolid: return "vsphere-solid";
+    case Method::Uniform: return "uniform";
+    case Method::None: return "none";
+    case Method::FiniteDifferences: return "fd";
+  }
+  return "?";
+}
+
+std::string method_list(std::span<const Method> allowed) {
+  std::string out;
+  for (Method m : allowed) out += (out.empty() ? "" : ", ") + std::string(method_name(m));
+  return out;
+}
+
+Method parse_method(std::string_view name, std::string_view option, std::span<const Method> allowed) {
+  const auto it = std::find_if(allowed.begin(), allowed.end(), [&](Method m) { return method_name(m) == name; });
+  if (it != allowed.end()) return *it;
+  throw Error(std::string(option) + " '" + std::string(name) + "': unsupported (supported: " + method_list(allowed) +
+              ")");
+}
+
+bool samples_edges(Method method) {
+  return std::find(kEdgeSamplingMethods.begin(), kEdgeSamplingMethods.end(), method) != kEdgeSamplingMethods.end();
+}
+
+bool uses_edge_forest(Method method) { return method == Method::Quadric || method == Method::QuadricBox; }
+
+bool uses_quadrics(Method method) { return method == Method::Quadric; }
+
+}  // namespace qsil
