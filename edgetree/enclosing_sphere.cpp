@@ -3,6 +3,7 @@
 /// [QSS 4.4, Appendix G].
 
 #include "edgetree/enclosing_sphere.h"
+#include "edgetree/extremes.h"
 
 #include <algorithm>
 #include <cmath>
@@ -145,13 +146,7 @@ Sphere approx_enclosing_sphere(std::span<const Vec3> points) {
     ext.assign(points.begin(), points.end());
   } else {
     for (const Vec3& d : dirs) {
-      size_t imin = 0, imax = 0;
-      double vmin = kInf, vmax = -kInf;
-      for (size_t i = 0; i < points.size(); ++i) {
-        const double v = d.dot(points[i]);
-        if (v < vmin) { vmin = v; imin = i; }
-        if (v > vmax) { vmax = v; imax = i; }
-      }
+      const auto [imin, imax] = extreme_indices(points.size(), [&](size_t i) { return d.dot(points[i]); });
       ext.push_back(points[imin]);
       ext.push_back(points[imax]);
     }

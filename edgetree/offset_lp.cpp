@@ -3,6 +3,8 @@
 
 #include "edgetree/offset_lp.h"
 
+#include "edgetree/extremes.h"
+
 #include <coin/ClpSimplex.hpp>
 
 #include <algorithm>
@@ -85,13 +87,7 @@ OffsetLpResult solve_offset_lp(std::span<const Vec4> planes) {
                                 Vec3(1, -1, 0), Vec3(1, 0, 1),   Vec3(1, 0, -1), Vec3(0, 1, 1),
                                 Vec3(0, 1, -1)};
   for (const Vec3& d : dirs) {
-    int imin = 0, imax = 0;
-    double vmin = kInf, vmax = -kInf;
-    for (int i = 0; i < m; ++i) {
-      const double v = d.dot(planes[i].head<3>());
-      if (v < vmin) { vmin = v; imin = i; }
-      if (v > vmax) { vmax = v; imax = i; }
-    }
+    const auto [imin, imax] = extreme_indices(m, [&](int i) { return d.dot(planes[i].head<3>()); });
     add(imin);
     add(imax);
   }

@@ -233,6 +233,8 @@ TEST_P(SceneLoaderErrorTest, MessageNamesFileAndLine) {
   EXPECT_EQ(msg.find('\n'), std::string::npos) << "one line: " << msg;
 }
 
+// One case per line (a table: the formatter leaves it as written).
+// clang-format off
 INSTANTIATE_TEST_SUITE_P(
     Cases, SceneLoaderErrorTest,
     ::testing::Values(
@@ -268,6 +270,7 @@ INSTANTIATE_TEST_SUITE_P(
       n = n.substr(0, n.find('.'));
       return n;
     });
+// clang-format on
 
 TEST(SceneLoaderTest, MitsubaCameraDefaults) {
   std::vector<std::string> warnings;

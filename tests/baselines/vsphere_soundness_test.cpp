@@ -56,8 +56,10 @@ Counts check_tree(const VSphereTree& t, const std::vector<Vec3>& pts) {
         }
       }
     }
+    // clang-format off
     ws += c.with_sil; ns += c.no_sil; frh += c.fr_hollow; frs += c.fr_solid; hns += c.hollow_not_solid;
     fah += c.fa_hollow; fas += c.fa_solid;
+    // clang-format on
   });
   return {ws.load(), ns.load(), frh.load(), frs.load(), hns.load(), fah.load(), fas.load()};
 }

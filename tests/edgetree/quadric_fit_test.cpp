@@ -4,6 +4,7 @@
 /// sign normalisation); lambda extrema match a dense search refined by golden section to 1e-9
 /// relative to the largest |lambda| on the wedge. Fixed seeds.
 
+#include "edgetree/extremes.h"
 #include "edgetree/quadric_fit.h"
 #include "edgetree/quadric_offsets.h"
 
@@ -69,13 +70,8 @@ TEST(QuadricFit, RejectsEmptyInput) {
 Vec2 dense_range(const Mat4& Qf, const Vec4& D, const Vec4& q0, const Vec4& q1) {
   auto lam = [&](double t) { return plane_lambda(Qf, D, (1 - t) * q0 + t * q1); };
   const int n = 20000;
-  int imin = 0, imax = 0;
-  double vmin = kInf, vmax = -kInf;
-  for (int i = 0; i <= n; ++i) {
-    const double v = lam(double(i) / n);
-    if (v < vmin) { vmin = v; imin = i; }
-    if (v > vmax) { vmax = v; imax = i; }
-  }
+  const auto [imin, imax] = extreme_indices(n + 1, [&](int i) { return lam(double(i) / n); });
+  const double vmin = lam(double(imin) / n), vmax = lam(double(imax) / n);
   auto golden = [&](int i, double sign) {
     double a = std::max(0.0, (i - 1.0) / n), b = std::min(1.0, (i + 1.0) / n);
     const double r = 0.5 * (std::sqrt(5.0) - 1.0);
