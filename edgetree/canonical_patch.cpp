@@ -3,9 +3,9 @@
 
 #include "qsil/edgetree/canonical_patch.h"
 
+#include "qsil/check.h"
 #include "qsil/edgetree/mesh_edges.h"
 #include "qsil/edgetree/node_rejection.h"
-#include "qsil/check.h"
 #include "qsil/error.h"
 
 #include <cmath>
@@ -30,10 +30,13 @@ namespace {
 
 /// Adds triangle (a, b, c) wound so that its normal points away from `inside`.
 void add_outward(TriangleMesh& m, int a, int b, int c, const Vec3& inside) {
-  const Vec3 n = (m.positions[size_t(b)] - m.positions[size_t(a)]).cross(m.positions[size_t(c)] - m.positions[size_t(a)]);
+  const Vec3 n =
+      (m.positions[size_t(b)] - m.positions[size_t(a)]).cross(m.positions[size_t(c)] - m.positions[size_t(a)]);
   const Vec3 centroid = (m.positions[size_t(a)] + m.positions[size_t(b)] + m.positions[size_t(c)]) / 3.0;
-  if (n.dot(centroid - inside) >= 0) m.triangles.emplace_back(a, b, c);
-  else m.triangles.emplace_back(a, c, b);
+  if (n.dot(centroid - inside) >= 0)
+    m.triangles.emplace_back(a, b, c);
+  else
+    m.triangles.emplace_back(a, c, b);
 }
 
 }  // namespace

@@ -10,8 +10,7 @@ namespace qsil::edgetree {
 namespace {
 // Real roots t of (r + t e)^T C (r + t e) = 0 for a finite point r = [r, 1] and a direction
 // e = [e, 0]; appends the finite points r + t e.
-void intersect_line(const Mat3& C, const Vec2& r2, const Vec2& e2, std::array<Vec2, 4>* out,
-                    int* n) {
+void intersect_line(const Mat3& C, const Vec2& r2, const Vec2& e2, std::array<Vec2, 4>* out, int* n) {
   const Eigen::Vector3d r(r2.x(), r2.y(), 1.0), e(e2.x(), e2.y(), 0.0);
   const Eigen::Vector3d Cr = C * r;
   const double c0 = r.dot(Cr), c1 = 2.0 * e.dot(Cr), c2 = e.dot(C * e);
@@ -22,8 +21,10 @@ void intersect_line(const Mat3& C, const Vec2& r2, const Vec2& e2, std::array<Ve
   }
   double disc = c1 * c1 - 4.0 * c2 * c0;
   if (disc < 0.0) {
-    if (disc >= -kConicTol * (c1 * c1 + 4.0 * std::abs(c2 * c0))) disc = 0.0;  // tangent
-    else return;
+    if (disc >= -kConicTol * (c1 * c1 + 4.0 * std::abs(c2 * c0)))
+      disc = 0.0;  // tangent
+    else
+      return;
   }
   if (c2 == 0.0) {
     if (c1 != 0.0) (*out)[(*n)++] = r2 - (c0 / c1) * e2;

@@ -17,8 +17,7 @@ inline constexpr double kNodeDefensiveShare = 0.1;
 ///   P(i) = (1 - eps) I_i / sum I + eps G_i / sum G,   eps = kNodeDefensiveShare (1 if sum I = 0),
 /// and G uniform (1/n) when sum G = 0. They sum to 1 up to rounding (checked in debug builds).
 template <class Candidates, class Importance, class Defensive>
-void defensive_probabilities(const Candidates& c, int n, Importance&& importance, Defensive&& defensive,
-                             double* prob) {
+void defensive_probabilities(const Candidates& c, int n, Importance&& importance, Defensive&& defensive, double* prob) {
   double si = 0, sg = 0;
   for (int i = 0; i < n; ++i) {
     si += importance(c[i]);

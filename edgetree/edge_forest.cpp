@@ -74,9 +74,12 @@ EdgeForest EdgeForest::fit(EdgeSet set, const NodeFitOptions& options) {
         const ForestNode& n = f.nodes_[size_t(i)];
         if (n.is_leaf()) continue;
         st.fitted++;
-        if (n.flags & kNodeUnrejectable) st.unrejectable++;
-        else if (n.flags & kNodeBoxOnly) st.box_only++;
-        else st.quadrics++;
+        if (n.flags & kNodeUnrejectable)
+          st.unrejectable++;
+        else if (n.flags & kNodeBoxOnly)
+          st.box_only++;
+        else
+          st.quadrics++;
         if (n.flags & kNodeInherited) st.inherited++;
         if (n.flags & kNodeUsedLp) st.used_lp++;
       }

@@ -89,12 +89,12 @@ class EdgePointSampler {
   double l0_ = 0, l1_ = 0;
   // LTC part: interval, transformed endpoints and the closed-form CDF constants.
   double ta_ = 0, tb_ = 0;
-  Vec3 u0_, u1_;        ///< M_inv w0, M_inv w1
-  double la_ = 0, lb_ = 0;  ///< |u(ta)|, |u(tb)|
-  double psi_max_ = 0;  ///< angle between u(ta) and u(tb)
+  Vec3 u0_, u1_;                              ///< M_inv w0, M_inv w1
+  double la_ = 0, lb_ = 0;                    ///< |u(ta)|, |u(tb)|
+  double psi_max_ = 0;                        ///< angle between u(ta) and u(tb)
   double z1_ = 0, z2_ = 0, m1_ = 0, m2_ = 0;  ///< omega'.z and m in the (e1, e2) basis
-  double F_total_ = 0;  ///< F(psi_max)
-  double ltc_scale_ = 0;  ///< |u0 x u1| h / F_total: ltc_pdf(t) = ltc_scale_ * u.z / |u|^4
+  double F_total_ = 0;                        ///< F(psi_max)
+  double ltc_scale_ = 0;                      ///< |u0 x u1| h / F_total: ltc_pdf(t) = ltc_scale_ * u.z / |u|^4
   double target_integral_ = 0;
 };
 

@@ -18,8 +18,7 @@ namespace {
 
 // Splits [b, e) into 2..4 groups: one binary SAH split, then each half again if it is larger
 // than a leaf [QSS 4.1: three binary splits per level].
-std::vector<std::pair<int, int>> split4(std::vector<ForestEdge>& edges, int b, int e,
-                                        const EdgeSetOptions& opt) {
+std::vector<std::pair<int, int>> split4(std::vector<ForestEdge>& edges, int b, int e, const EdgeSetOptions& opt) {
   std::vector<std::pair<int, int>> out;
   const int m = b + sah_split(std::span(edges.data() + b, size_t(e - b)), opt.sah_buckets);
   for (auto [lo, hi] : {std::pair{b, m}, std::pair{m, e}}) {
@@ -46,8 +45,10 @@ std::vector<std::pair<int, int>> build_topology(std::vector<ForestEdge>& edges, 
   if (eend <= ebase) return levels;
   const int nbase = int(nodes.size());
   std::vector<std::pair<int, int>> top;
-  if (eend - ebase <= opt.leaf_size) top.push_back({ebase, eend});
-  else top = split4(edges, ebase, eend, opt);
+  if (eend - ebase <= opt.leaf_size)
+    top.push_back({ebase, eend});
+  else
+    top = split4(edges, ebase, eend, opt);
   auto add_node = [&](int b, int e, int parent, int d) {
     ForestNode n;
     n.edge_begin = b;
@@ -125,7 +126,8 @@ EdgeSet EdgeSet::build(std::span<const ForestShapeInput> shapes, const EdgeSetOp
     std::vector<char> is_crease(set.edges.size(), 0);
     for (size_t idx = 0; idx < set.edges.size(); ++idx) {
       const EdgeClass cls = set.edges[idx].cls;
-      if ((cls == EdgeClass::Concave && creases != CreaseSet::None) || (cls == EdgeClass::Convex && creases == CreaseSet::All)) {
+      if ((cls == EdgeClass::Concave && creases != CreaseSet::None) ||
+          (cls == EdgeClass::Convex && creases == CreaseSet::All)) {
         is_crease[idx] = 1;
         always.push_back(make(int(idx)));
         always.back().crease = true;
@@ -166,8 +168,10 @@ EdgeSet EdgeSet::build(std::span<const ForestShapeInput> shapes, const EdgeSetOp
     st.depth = depth;
     for (int i = nbase; i < int(f.nodes_.size()); ++i) {
       st.nodes++;
-      if (f.nodes_[size_t(i)].is_leaf()) st.leaves++;
-      else st.inner_nodes++;
+      if (f.nodes_[size_t(i)].is_leaf())
+        st.leaves++;
+      else
+        st.inner_nodes++;
     }
     st.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     f.stats_.push_back(st);
@@ -183,7 +187,8 @@ std::vector<ForestShapeInput> forest_inputs(const Scene& scene) {
     in.mesh = &shape.mesh;
     in.shape = int(s);
     in.face_normals = shape.face_normals || shape.mesh.normals.empty();
-    const bool twosided = shape.bsdf >= 0 && shape.bsdf < int(scene.bsdfs.size()) && scene.bsdfs[size_t(shape.bsdf)].twosided;
+    const bool twosided =
+        shape.bsdf >= 0 && shape.bsdf < int(scene.bsdfs.size()) && scene.bsdfs[size_t(shape.bsdf)].twosided;
     in.creases = twosided ? CreaseSet::All : CreaseSet::Concave;
     inputs.push_back(in);
   }

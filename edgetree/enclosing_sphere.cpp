@@ -19,9 +19,7 @@ bool Sphere::contains(const Vec3& p) const {
 
 namespace {
 
-Sphere sphere_of_two(const Vec3& a, const Vec3& b) {
-  return {0.5 * (a + b), 0.5 * (a - b).norm()};
-}
+Sphere sphere_of_two(const Vec3& a, const Vec3& b) { return {0.5 * (a + b), 0.5 * (a - b).norm()}; }
 
 // Circumscribed sphere of the support points (1 to 4). Returns radius < 0 if degenerate.
 Sphere sphere_of_support(const Vec3* s, int n) {

@@ -18,8 +18,14 @@ std::pair<Index, Index> extreme_indices(Index n, Value&& value) {
   double vmin = kInf, vmax = -kInf;
   for (Index i = 0; i < n; ++i) {
     const double v = value(i);
-    if (v < vmin) { vmin = v; imin = i; }
-    if (v > vmax) { vmax = v; imax = i; }
+    if (v < vmin) {
+      vmin = v;
+      imin = i;
+    }
+    if (v > vmax) {
+      vmax = v;
+      imax = i;
+    }
   }
   return {imin, imax};
 }

@@ -24,7 +24,8 @@ double fast_atan2(double y, double x) {
   const double mx = std::max(ax, ay), mn = std::min(ax, ay);
   if (!(mx > 0)) return 0.0;
   const double a = mn / mx, s = a * a;
-  double r = a * (0.99997726 + s * (-0.33262347 + s * (0.19354346 + s * (-0.11643287 + s * (0.05265332 + s * -0.01172120)))));
+  double r =
+      a * (0.99997726 + s * (-0.33262347 + s * (0.19354346 + s * (-0.11643287 + s * (0.05265332 + s * -0.01172120)))));
   if (ay > ax) r = 0.5 * kPi - r;
   if (x < 0) r = kPi - r;
   return y < 0 ? -r : r;
@@ -34,7 +35,8 @@ double fast_atan2(double y, double x) {
 /// Lambert form factor ([LTC] Eq. 11). atan2 of |a x b| and a.b keeps the angle accurate for
 /// nearly parallel and nearly antiparallel a, b and is independent of |a|, |b|. A zero-length
 /// arc contributes 0.
-template <bool Fast> double edge_form_factor(const Vec3& a, const Vec3& b) {
+template <bool Fast>
+double edge_form_factor(const Vec3& a, const Vec3& b) {
   const Vec3 c = a.cross(b);
   const double cn = c.norm();
   if (!(cn > 0.0)) return 0.0;
@@ -43,7 +45,8 @@ template <bool Fast> double edge_form_factor(const Vec3& a, const Vec3& b) {
 }
 
 /// Form factor of a polygon already inside z >= 0 (signed sum, absolute value).
-template <bool Fast> double form_factor(std::span<const Vec3> poly) {
+template <bool Fast>
+double form_factor(std::span<const Vec3> poly) {
   const size_t n = poly.size();
   if (n < 3) return 0.0;
   double sum = 0.0;
@@ -217,7 +220,9 @@ BoxSilhouette box_silhouette_polygon(const Box3& box, const Vec3& p) {
   }
   // Andrew's monotone chain, counter-clockwise, collinear and duplicate points dropped.
   std::sort(pts.begin(), pts.end(), [](const P2& a, const P2& b) { return a.x < b.x || (a.x == b.x && a.y < b.y); });
-  auto cross = [](const P2& o, const P2& a, const P2& b) { return (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x); };
+  auto cross = [](const P2& o, const P2& a, const P2& b) {
+    return (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x);
+  };
   std::array<P2, 16> hull;
   int h = 0;
   for (int i = 0; i < 8; ++i) {

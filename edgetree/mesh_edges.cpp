@@ -26,9 +26,7 @@ namespace {
 struct HalfEdge {
   int a, b, face;
   bool forward;
-  bool operator<(const HalfEdge& o) const {
-    return a != o.a ? a < o.a : (b != o.b ? b < o.b : face < o.face);
-  }
+  bool operator<(const HalfEdge& o) const { return a != o.a ? a < o.a : (b != o.b ? b < o.b : face < o.face); }
 };
 }  // namespace
 
@@ -105,8 +103,7 @@ MeshEdgeSet build_mesh_edges(const TriangleMesh& mesh, int shape, const EdgeOpti
 }
 
 bool edge_is_silhouette(const MeshEdge& e, const Vec3& p) {
-  if (e.f1 < 0 || e.cls == EdgeClass::Boundary || e.cls == EdgeClass::NonManifold ||
-      e.cls == EdgeClass::Inconsistent)
+  if (e.f1 < 0 || e.cls == EdgeClass::Boundary || e.cls == EdgeClass::NonManifold || e.cls == EdgeClass::Inconsistent)
     return true;
   const double g0 = e.q0.head<3>().dot(p) + e.q0[3];
   const double g1 = e.q1.head<3>().dot(p) + e.q1[3];

@@ -13,8 +13,8 @@
 
 namespace qsil::edgetree {
 
-NodeFit fit_node(std::span<const Vec4> planes, std::span<const Wedge> wedges, const Box3& bp,
-                 const NodeFit* parent, const NodeFitOptions& options) {
+NodeFit fit_node(std::span<const Vec4> planes, std::span<const Wedge> wedges, const Box3& bp, const NodeFit* parent,
+                 const NodeFitOptions& options) {
   NodeFit out;
   NodeBound& b = out.bound;
   b.frame = LocalFrame::of_box(bp);

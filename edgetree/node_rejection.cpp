@@ -37,8 +37,7 @@ bool bound_may_have_silhouette(const NodeBound& b, bool box_only, const Vec3& p)
   if (!x.allFinite()) return true;
   // Rounding of the world-frame ground truth (q.x evaluated with |p|, |c| ~ m s): relative
   // tolerance grows with the world magnitude expressed in local units.
-  const double m =
-      1.0 + (p.cwiseAbs().maxCoeff() + fr.center.cwiseAbs().maxCoeff()) / fr.scale;
+  const double m = 1.0 + (p.cwiseAbs().maxCoeff() + fr.center.cwiseAbs().maxCoeff()) / fr.scale;
   const double rel = kRejectTol + 64.0 * kEps * m;
   const Vec4 a = b.A.transpose() * x;
 
@@ -64,8 +63,8 @@ bool bound_may_have_silhouette(const NodeBound& b, bool box_only, const Vec3& p)
   std::array<Vec3, 8> corner;
   std::array<double, 8> fc;
   for (int k = 0; k < 8; ++k) {
-    corner[k] = Vec3(k & 1 ? b.bq_hi.x() : b.bq_lo.x(), k & 2 ? b.bq_hi.y() : b.bq_lo.y(),
-                     k & 4 ? b.bq_hi.z() : b.bq_lo.z());
+    corner[k] =
+        Vec3(k & 1 ? b.bq_hi.x() : b.bq_lo.x(), k & 2 ? b.bq_hi.y() : b.bq_lo.y(), k & 4 ? b.bq_hi.z() : b.bq_lo.z());
     fc[k] = an.dot(corner[k]) + a[3];
   }
   std::array<Vec3, 12> pts;

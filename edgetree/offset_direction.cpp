@@ -66,8 +66,7 @@ OffsetDirection choose_offset_direction(std::span<const Vec4> planes) {
   }
   // 3. Unbounded (a direction exists that the approximate sphere missed) or a failed solve:
   // the exact smallest enclosing sphere over every normal (docs/architecture.md §5).
-  if (lp.status != OffsetLpResult::Status::Optimal &&
-      from_sphere(min_enclosing_sphere(normals), planes, &out))
+  if (lp.status != OffsetLpResult::Status::Optimal && from_sphere(min_enclosing_sphere(normals), planes, &out))
     return out;
   // Infeasible, rho <= 0, or unbounded while even the exact sphere found no direction (only at
   // the edge of feasibility, where min cos would be ~0 anyway): never reject [QSS App. B].

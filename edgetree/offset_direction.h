@@ -22,9 +22,9 @@ struct OffsetDirection {
     Unrejectable  ///< no D with D.q > 0 for every plane: a silhouette for every point [QSS App. B]
   };
   Kind kind = Kind::Unrejectable;
-  Vec4 D = Vec4::Zero();   ///< offset vector (frame of the input planes)
-  double min_cos = 0.0;    ///< min over planes of (D.q) / (|D| |q|), > kMinZq when not Unrejectable
-  bool used_lp = false;    ///< the LP was solved (the sphere steps found no direction)
+  Vec4 D = Vec4::Zero();  ///< offset vector (frame of the input planes)
+  double min_cos = 0.0;   ///< min over planes of (D.q) / (|D| |q|), > kMinZq when not Unrejectable
+  bool used_lp = false;   ///< the LP was solved (the sphere steps found no direction)
 };
 
 /// Chooses the offset vector D for the planes P of a patch (unit normals, expressed in the node's

@@ -44,8 +44,8 @@ OffsetLpResult solve_direct(std::span<const Vec4> planes) {
 
   ClpSimplex model;
   model.setLogLevel(0);
-  model.loadProblem(ncol, m, start.data(), index.data(), value.data(), collb.data(),
-                    colub.data(), obj.data(), rowlb.data(), rowub.data());
+  model.loadProblem(ncol, m, start.data(), index.data(), value.data(), collb.data(), colub.data(), obj.data(),
+                    rowlb.data(), rowub.data());
   model.primal();
   if (model.isProvenOptimal()) {
     const double* x = model.primalColumnSolution();
@@ -82,10 +82,9 @@ OffsetLpResult solve_offset_lp(std::span<const Vec4> planes) {
       sub.push_back(planes[i]);
     }
   };
-  static const Vec3 dirs[13] = {Vec3(1, 0, 0),  Vec3(0, 1, 0),   Vec3(0, 0, 1),  Vec3(1, 1, 1),
-                                Vec3(1, 1, -1), Vec3(1, -1, 1),  Vec3(-1, 1, 1), Vec3(1, 1, 0),
-                                Vec3(1, -1, 0), Vec3(1, 0, 1),   Vec3(1, 0, -1), Vec3(0, 1, 1),
-                                Vec3(0, 1, -1)};
+  static const Vec3 dirs[13] = {Vec3(1, 0, 0),  Vec3(0, 1, 0),  Vec3(0, 0, 1), Vec3(1, 1, 1),  Vec3(1, 1, -1),
+                                Vec3(1, -1, 1), Vec3(-1, 1, 1), Vec3(1, 1, 0), Vec3(1, -1, 0), Vec3(1, 0, 1),
+                                Vec3(1, 0, -1), Vec3(0, 1, 1),  Vec3(0, 1, -1)};
   for (const Vec3& d : dirs) {
     const auto [imin, imax] = extreme_indices(m, [&](int i) { return d.dot(planes[i].head<3>()); });
     add(imin);

@@ -18,8 +18,8 @@ struct OffsetLpResult {
     Failed       ///< the solver stopped for another reason (numerical trouble, limits)
   };
   Status status = Status::Failed;
-  double rho = 0.0;          ///< max over points of min_q q.[point,1] (units of the planes)
-  Vec3 point = Vec3::Zero(); ///< maximiser (same frame as the planes)
+  double rho = 0.0;           ///< max over points of min_q q.[point,1] (units of the planes)
+  Vec3 point = Vec3::Zero();  ///< maximiser (same frame as the planes)
 };
 
 /// Solves [QSS Eq. 6]: variables rho, D = [Dx, Dy, Dz, 1]; maximise rho subject to

@@ -36,9 +36,16 @@ bool fit_dual_quadric(std::span<const Vec4> planes, Mat4* Q) {
   for (const Vec4& q : planes) {
     double s[10];
     // q^T Q q = v . s(q)
-    s[0] = q[0] * q[0]; s[1] = q[1] * q[1]; s[2] = q[2] * q[2]; s[3] = q[3] * q[3];
-    s[4] = 2 * q[0] * q[1]; s[5] = 2 * q[0] * q[2]; s[6] = 2 * q[0] * q[3];
-    s[7] = 2 * q[1] * q[2]; s[8] = 2 * q[1] * q[3]; s[9] = 2 * q[2] * q[3];
+    s[0] = q[0] * q[0];
+    s[1] = q[1] * q[1];
+    s[2] = q[2] * q[2];
+    s[3] = q[3] * q[3];
+    s[4] = 2 * q[0] * q[1];
+    s[5] = 2 * q[0] * q[2];
+    s[6] = 2 * q[0] * q[3];
+    s[7] = 2 * q[1] * q[2];
+    s[8] = 2 * q[1] * q[3];
+    s[9] = 2 * q[2] * q[3];
     for (int j = 0; j < 10; ++j)
       for (int i = 0; i <= j; ++i) M(i, j) += s[i] * s[j];
     // (Q q)_3 = Q30 q0 + Q31 q1 + Q32 q2 + Q33 q3 = v . g(q)
@@ -83,8 +90,7 @@ bool fit_dual_quadric(std::span<const Vec4> planes, Mat4* Q) {
     const double e = eu.eigenvalues()[i];
     inv[i] = e > 1e-12 * emax ? 1.0 / e : 0.0;
   }
-  const Eigen::Matrix<double, 6, 6> Muu_pinv =
-      eu.eigenvectors() * inv.asDiagonal() * eu.eigenvectors().transpose();
+  const Eigen::Matrix<double, 6, 6> Muu_pinv = eu.eigenvectors() * inv.asDiagonal() * eu.eigenvectors().transpose();
   Eigen::Matrix4d S = Mww - Muw.transpose() * Muu_pinv * Muw;
   S = 0.5 * (S + S.transpose()).eval();
   const double ntr = Nww.trace();

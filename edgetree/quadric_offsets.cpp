@@ -37,8 +37,7 @@ Vec2 wedge_lambda_range(const Mat4& Qf, const Vec4& D, const Vec4& q0, const Vec
   return r;
 }
 
-bool appendix_d_lambda_star(const Mat4& Qf, const Vec4& D, const Vec4& q0, const Vec4& q1,
-                            double* lambda_star) {
+bool appendix_d_lambda_star(const Mat4& Qf, const Vec4& D, const Vec4& q0, const Vec4& q1, double* lambda_star) {
   const double f00 = q0.dot(Qf * q0), f11 = q1.dot(Qf * q1), f01 = q0.dot(Qf * q1);
   const double d0 = D.dot(q0), d1 = D.dot(q1);
   const double o00 = d0 * d0, o11 = d1 * d1, o01 = d0 * d1;

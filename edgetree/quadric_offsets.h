@@ -25,7 +25,6 @@ Vec2 wedge_lambda_range(const Mat4& Qf, const Vec4& D, const Vec4& q0, const Vec
 /// it is an interior extremum of the wedge, i.e. (q0^T Q* q1)(dq^T Q* dq) < 0 with
 /// Q* = Qf + lambda* D D^T and dq = q0 - q1. Used by the tests to cross-check
 /// wedge_lambda_range.
-bool appendix_d_lambda_star(const Mat4& Qf, const Vec4& D, const Vec4& q0, const Vec4& q1,
-                            double* lambda_star);
+bool appendix_d_lambda_star(const Mat4& Qf, const Vec4& D, const Vec4& q0, const Vec4& q1, double* lambda_star);
 
 }  // namespace qsil::edgetree

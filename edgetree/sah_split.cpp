@@ -72,8 +72,7 @@ int sah_split(std::span<ForestEdge> edges, int buckets) {
     }
   }
   if (best_k < 0) return median();
-  auto it = std::partition(edges.begin(), edges.end(),
-                                  [&](const ForestEdge& e) { return bucket_of(e) < best_k; });
+  auto it = std::partition(edges.begin(), edges.end(), [&](const ForestEdge& e) { return bucket_of(e) < best_k; });
   return int(it - edges.begin());
 }
 

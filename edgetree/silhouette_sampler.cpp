@@ -20,7 +20,8 @@ struct Candidate {
 };
 
 /// Probabilities of a choice among candidates (see the file comment of the header).
-template <class Range> void choice_probabilities(const Range& c, int n, double* prob) {
+template <class Range>
+void choice_probabilities(const Range& c, int n, double* prob) {
   defensive_probabilities(
       c, n, [](const Candidate& x) { return x.w.importance; }, [](const Candidate& x) { return x.w.defensive; }, prob);
 }
@@ -57,8 +58,8 @@ int top_candidates(const EdgeForest& f, const SilhouetteQuery& q, Method method,
 }
 
 /// The accepted children of inner node `n` (up to 4).
-int child_candidates(const EdgeForest& f, int n, const SilhouetteQuery& q, Method method,
-                     std::array<Candidate, 4>& out, int& tests) {
+int child_candidates(const EdgeForest& f, int n, const SilhouetteQuery& q, Method method, std::array<Candidate, 4>& out,
+                     int& tests) {
   int k = 0;
   const ForestNode& node = f.node(n);
   for (int c = node.first; c < node.first + node.count; ++c) {

@@ -8,8 +8,8 @@
 #include "qsil/files.h"
 #include "qsil/image.h"
 
-#include <nlohmann/json.hpp>
 #include <tbb/parallel_for.h>
+#include <nlohmann/json.hpp>
 
 #include <sstream>
 
@@ -75,7 +75,8 @@ PlaneStats evaluate_plane(const PatchTests& tests, const Vec3& c, const Vec3& no
   std::vector<SliceVerdict> v(size_t(N) * N);
   tbb::parallel_for(0, N, [&](int y) {
     for (int x = 0; x < N; ++x) {
-      const Vec3 p = c + ((x + 0.5) / N - 0.5) * extent * plane_frame.s + (0.5 - (y + 0.5) / N) * extent * plane_frame.t;
+      const Vec3 p =
+          c + ((x + 0.5) / N - 0.5) * extent * plane_frame.s + (0.5 - (y + 0.5) / N) * extent * plane_frame.t;
       v[size_t(y) * N + x] = tests.evaluate(p);
     }
   });
@@ -139,21 +140,24 @@ SliceStudy run_slice_study(const SliceStudyOptions& o) {
 void write_slice_study(const SliceStudy& s, const std::filesystem::path& dir) {
   std::filesystem::create_directories(dir);
   nlohmann::ordered_json j = {{"node", s.label},
-                      {"edges", s.edges},
-                      {"hough_origin", {s.origin.x(), s.origin.y(), s.origin.z()}},
-                      {"origin_silhouettes", s.origin_silhouettes},
-                      {"plane_normal", {s.normal.x(), s.normal.y(), s.normal.z()}},
-                      {"extent", s.extent},
-                      {"resolution", s.resolution},
-                      {"planes", nlohmann::ordered_json::array()},
-                      {"false_rejects", s.false_rejects()}};
+                              {"edges", s.edges},
+                              {"hough_origin", {s.origin.x(), s.origin.y(), s.origin.z()}},
+                              {"origin_silhouettes", s.origin_silhouettes},
+                              {"plane_normal", {s.normal.x(), s.normal.y(), s.normal.z()}},
+                              {"extent", s.extent},
+                              {"resolution", s.resolution},
+                              {"planes", nlohmann::ordered_json::array()},
+                              {"false_rejects", s.false_rejects()}};
   std::ostringstream csv;
   csv.precision(9);
   csv << "plane,height,test,points,no_silhouette,false_accepts,false_accept_rate,false_rejects\n";
   for (int k = 0; k < 2; ++k) {
     const PlaneStats& st = s.planes[size_t(k)];
-    nlohmann::ordered_json plane = {{"plane", k + 1}, {"height", st.height}, {"points", st.points},
-                            {"no_silhouette", st.no_silhouette}, {"tests", nlohmann::ordered_json::object()}};
+    nlohmann::ordered_json plane = {{"plane", k + 1},
+                                    {"height", st.height},
+                                    {"points", st.points},
+                                    {"no_silhouette", st.no_silhouette},
+                                    {"tests", nlohmann::ordered_json::object()}};
     for (size_t t = 0; t < kRejectionMethods.size(); ++t) {
       const std::string name(method_name(kRejectionMethods[t]));
       const std::string image = name + "-plane" + std::to_string(k + 1) + ".png";

@@ -46,8 +46,8 @@ double vsphere_max_bsdf(const Box3& box, const Vec3& p, const Frame& frame, cons
     for (int i = 0; i < sil.polygon.count; ++i) poly.push(sil.polygon.v[size_t(i)]);
   } else {
     for (int i = 0; i < 8; ++i)
-      poly.push(Vec3(i & 1 ? box.hi.x() : box.lo.x(), i & 2 ? box.hi.y() : box.lo.y(),
-                     i & 4 ? box.hi.z() : box.lo.z()) - p);
+      poly.push(
+          Vec3(i & 1 ? box.hi.x() : box.lo.x(), i & 2 ? box.hi.y() : box.lo.y(), i & 4 ? box.hi.z() : box.lo.z()) - p);
   }
   // Directions in the LTC's cosine domain (M_inv of the local direction, normalised).
   std::array<Vec3, kMaxPolygonVertices + 2> u;
@@ -97,7 +97,8 @@ void weigh(const Box3& bp, double lw, const SilhouetteQuery& q, bool parent_cont
 }
 
 /// The choice probabilities of candidates (defensive_probabilities, discrete_choice.h).
-template <class C> void mix(const C* c, int n, double* prob) {
+template <class C>
+void mix(const C* c, int n, double* prob) {
   defensive_probabilities(
       c, n, [](const C& x) { return x.importance; }, [](const C& x) { return x.defensive; }, prob);
 }
@@ -197,8 +198,10 @@ std::vector<EdgeProbability> VSphereEdgeSampler::edge_probabilities(const Silhou
   std::vector<std::pair<int, double>> stack;
   for (int i = 0; i < n_top; ++i) {
     if (!(prob[size_t(i)] > 0)) continue;
-    if (top[size_t(i)].edge) out.push_back({top[size_t(i)].edge, prob[size_t(i)]});
-    else stack.emplace_back(top[size_t(i)].node, prob[size_t(i)]);
+    if (top[size_t(i)].edge)
+      out.push_back({top[size_t(i)].edge, prob[size_t(i)]});
+    else
+      stack.emplace_back(top[size_t(i)].node, prob[size_t(i)]);
   }
   while (!stack.empty()) {
     const auto [n, pn] = stack.back();

@@ -17,8 +17,7 @@ Vec3 hough_point(const Vec4& q, const Vec3& o) {
   return -n * (n.dot(o) + q[3]);
 }
 
-bool vsphere_box_may_have_silhouette(const Box3& hb, double world_scale, const Vec3& p, const Vec3& o,
-                                     Method method) {
+bool vsphere_box_may_have_silhouette(const Box3& hb, double world_scale, const Vec3& p, const Vec3& o, Method method) {
   QSIL_DCHECK(method == Method::VSphere || method == Method::VSphereSolid);
   if (hb.empty()) return false;
   const Vec3 V = p - o;
@@ -28,8 +27,10 @@ bool vsphere_box_may_have_silhouette(const Box3& hb, double world_scale, const V
   double dmin2 = 0, dmax2 = 0;
   for (int k = 0; k < 3; ++k) {
     const double lo = hb.lo[k] - c[k], hi = hb.hi[k] - c[k];
-    if (lo > 0) dmin2 += lo * lo;
-    else if (hi < 0) dmin2 += hi * hi;
+    if (lo > 0)
+      dmin2 += lo * lo;
+    else if (hi < 0)
+      dmin2 += hi * hi;
     dmax2 += std::max(lo * lo, hi * hi);
   }
   // min/max over the box of g(h) = |h|^2 - h.V are dmin2 - r2 and dmax2 - r2. Tolerance: g is
@@ -108,8 +109,10 @@ struct Builder {
       int lo = b, hi = e - 1;
       while (lo < hi) {
         const int m = lo + (hi - lo) / 2;
-        if (items[size_t(m)].code & mask) hi = m;
-        else lo = m + 1;
+        if (items[size_t(m)].code & mask)
+          hi = m;
+        else
+          lo = m + 1;
       }
       mid = lo;
     }
@@ -136,9 +139,9 @@ VSphereTree VSphereTree::build(const EdgeSet& set, const Vec3& o) {
   int num_shapes = 0;
   for (const ForestEdge& e : set.edges()) num_shapes = std::max(num_shapes, e.shape + 1);
   for (const ForestEdge& e : set.always_edges()) num_shapes = std::max(num_shapes, e.shape + 1);
-  std::vector<std::vector<const ForestEdge*>> plain(static_cast<size_t>(num_shapes)), hough(static_cast<size_t>(num_shapes));
-  for (const ForestEdge& e : set.edges())
-    (edge_is_silhouette(e, o) ? plain : hough)[size_t(e.shape)].push_back(&e);
+  std::vector<std::vector<const ForestEdge*>> plain(static_cast<size_t>(num_shapes)),
+      hough(static_cast<size_t>(num_shapes));
+  for (const ForestEdge& e : set.edges()) (edge_is_silhouette(e, o) ? plain : hough)[size_t(e.shape)].push_back(&e);
   // Creases are candidates for every point (no v-sphere test applies): the plain BVH.
   for (const ForestEdge& e : set.always_edges())
     if (e.crease) plain[size_t(e.shape)].push_back(&e);

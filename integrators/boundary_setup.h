@@ -20,10 +20,10 @@ namespace qsil {
 /// quadric-box, fitted with quadrics only for quadric; a plain EdgeSet for vsphere,
 /// vsphere-solid and uniform) and the sampler over it.
 struct BoundarySetup {
-  std::unique_ptr<edgetree::EdgeSet> edges;          ///< edge set or forest (the sampler points into it)
-  std::unique_ptr<edgetree::EdgeSampler> sampler;    ///< the method's secondary edge sampler
-  const edgetree::EdgeForest* forest = nullptr;      ///< `edges` as a forest (quadric methods), else null
-  double seconds = 0;                                ///< wall time of the build
+  std::unique_ptr<edgetree::EdgeSet> edges;        ///< edge set or forest (the sampler points into it)
+  std::unique_ptr<edgetree::EdgeSampler> sampler;  ///< the method's secondary edge sampler
+  const edgetree::EdgeForest* forest = nullptr;    ///< `edges` as a forest (quadric methods), else null
+  double seconds = 0;                              ///< wall time of the build
 };
 
 /// Builds the structures of `method` (one of kEdgeSamplingMethods) over every shape of `scene`

@@ -157,8 +157,8 @@ CandidatesReport find_candidates(const Scene& scene, const CandidatesOptions& o)
     } else if (m == Method::Uniform) {
       mc.edges = edgetree::UniformEdgeSampler(*forest).edge_probabilities(q);
     } else {
-      throw Error("--methods: '" + std::string(method_name(m)) + "' samples no edges (supported: " +
-                  method_list(kEdgeSamplingMethods) + ")");
+      throw Error("--methods: '" + std::string(method_name(m)) +
+                  "' samples no edges (supported: " + method_list(kEdgeSamplingMethods) + ")");
     }
     std::erase_if(mc.edges, [](const EdgeProbability& e) { return !(e.probability > 0); });
     summarize(mc, rep.p, rep.n);
@@ -220,13 +220,13 @@ std::string edges_obj(const CandidatesReport& rep, const MethodCandidates& mc) {
 void write_summaries(const Scene& scene, const CandidatesReport& rep, const std::string& scene_path,
                      const std::filesystem::path& dir) {
   nlohmann::ordered_json j = {{"scene", portable_path(scene_path)},
-                      {"where", rep.where},
-                      {"shading_point", {rep.p.x(), rep.p.y(), rep.p.z()}},
-                      {"normal", {rep.n.x(), rep.n.y(), rep.n.z()}},
-                      {"shape", rep.shape >= 0 ? scene.shapes[size_t(rep.shape)].id : std::string()},
-                      {"true_silhouettes", rep.true_silhouettes},
-                      {"true_silhouettes_upper", rep.true_upper},
-                      {"methods", nlohmann::ordered_json::array()}};
+                              {"where", rep.where},
+                              {"shading_point", {rep.p.x(), rep.p.y(), rep.p.z()}},
+                              {"normal", {rep.n.x(), rep.n.y(), rep.n.z()}},
+                              {"shape", rep.shape >= 0 ? scene.shapes[size_t(rep.shape)].id : std::string()},
+                              {"true_silhouettes", rep.true_silhouettes},
+                              {"true_silhouettes_upper", rep.true_upper},
+                              {"methods", nlohmann::ordered_json::array()}};
   std::ostringstream csv;
   csv.precision(9);
   csv << "method,candidates,silhouettes,upper_silhouettes,non_silhouette_mass,dead_end_mass,upper_silhouette_mass,"

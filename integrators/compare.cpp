@@ -44,7 +44,9 @@ std::string num(double v) {
 }
 
 /// A number for JSON: null for non-finite values.
-nlohmann::ordered_json json_number(double v) { return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr); }
+nlohmann::ordered_json json_number(double v) {
+  return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr);
+}
 
 /// A CSV field, quoted (parameter specs contain commas).
 std::string csv_field(const std::string& s) {
@@ -95,8 +97,8 @@ void make_reference(const std::vector<ParameterSpec>& params, const CompareOptio
     for (int k = 0; k < K; ++k) {
       auto it = attrs.find("qsil:param" + std::to_string(k));
       if (it != attrs.end() && it->second != params[size_t(k)].text && log)
-        *log << "warning: " << o.reference << ": reference parameter " << k << " is '" << it->second
-             << "', comparing '" << params[size_t(k)].text << "'\n";
+        *log << "warning: " << o.reference << ": reference parameter " << k << " is '" << it->second << "', comparing '"
+             << params[size_t(k)].text << "'\n";
     }
     auto m = attrs.find("qsil:method");
     auto s = attrs.find("qsil:spp");
@@ -145,7 +147,8 @@ CompareRow run_row(const Estimator& est, Method m, double target, uint64_t seed,
   row.method = m;
   row.target = target;
   row.order = int(rep.rows.size());
-  row.run = render_progressive([&](const RenderOptions& ro) { return est.run(ro); }, progressive_options(o, target, seed));
+  row.run =
+      render_progressive([&](const RenderOptions& ro) { return est.run(ro); }, progressive_options(o, target, seed));
   row.err = measure_error(row.run.result.film, rep.reference);
   row.traversals = row.run.result.traversals;
   row.zero_rate = row.traversals > 0 ? double(row.run.result.zero_traversals) / double(row.traversals) : std::nan("");
@@ -202,8 +205,8 @@ CompareReport run_compare(const Scene& scene, const std::vector<ParameterSpec>& 
         char buf[256];
         std::snprintf(buf, sizeof buf, "compare [%d/%d] %s %s: %d spp in %d pass(es), %.3f s, rel. MSE %.4g%s\n",
                       int(rep.rows.size()), total, target_text(o, row.target).c_str(),
-                      std::string(method_name(m)).c_str(), row.run.result.spp, row.run.passes,
-                      row.run.wall_seconds, row.err.rel_mse, row.err.nonfinite_pixels ? " NON-FINITE PIXELS" : "");
+                      std::string(method_name(m)).c_str(), row.run.result.spp, row.run.passes, row.run.wall_seconds,
+                      row.err.rel_mse, row.err.nonfinite_pixels ? " NON-FINITE PIXELS" : "");
         *log << buf;
       }
     }
@@ -231,20 +234,20 @@ std::string results_csv(const CompareReport& rep, const std::vector<ParameterSpe
   const Reference& ref = rep.reference;
   for (const CompareRow& r : rep.rows) {
     const SetupReport& setup = setup_of(rep, r.method);
-    csv << csv_field(portable_path(o.scene)) << ',' << csv_field(params[0].text) << ',' << method_name(r.method)
-        << ',' << (o.equal_time ? "time" : "spp") << ',' << num(r.target) << ',' << r.order << ','
-        << num(r.run.wall_seconds) << ',' << r.run.result.spp << ',' << r.run.passes << ',' << num(r.err.mse) << ','
-        << num(r.err.rel_mse) << ',' << num(r.err.sum[0]) << ',' << num(r.err.sum_se[0]) << ',' << num(ref.sum[0])
-        << ',' << num(ref.sum_se[0]) << ',' << num(r.err.sum_error[0]) << ',' << r.err.nonfinite_pixels << ','
-        << r.run.result.nonfinite << ',' << (std::isfinite(r.zero_rate) ? num(r.zero_rate) : "") << ','
-        << r.traversals << ',' << num(ref.noise_floor) << ',' << num(ref.noise_floor / ref.mean_sq) << ','
-        << num(setup.seconds) << ',' << csv_field(setup.structure) << '\n';
+    csv << csv_field(portable_path(o.scene)) << ',' << csv_field(params[0].text) << ',' << method_name(r.method) << ','
+        << (o.equal_time ? "time" : "spp") << ',' << num(r.target) << ',' << r.order << ',' << num(r.run.wall_seconds)
+        << ',' << r.run.result.spp << ',' << r.run.passes << ',' << num(r.err.mse) << ',' << num(r.err.rel_mse) << ','
+        << num(r.err.sum[0]) << ',' << num(r.err.sum_se[0]) << ',' << num(ref.sum[0]) << ',' << num(ref.sum_se[0])
+        << ',' << num(r.err.sum_error[0]) << ',' << r.err.nonfinite_pixels << ',' << r.run.result.nonfinite << ','
+        << (std::isfinite(r.zero_rate) ? num(r.zero_rate) : "") << ',' << r.traversals << ',' << num(ref.noise_floor)
+        << ',' << num(ref.noise_floor / ref.mean_sq) << ',' << num(setup.seconds) << ',' << csv_field(setup.structure)
+        << '\n';
   }
   return csv.str();
 }
 
 nlohmann::ordered_json results_json(const CompareReport& rep, const std::vector<ParameterSpec>& params,
-                            const CompareOptions& o) {
+                                    const CompareOptions& o) {
   using json = nlohmann::ordered_json;
   const Reference& ref = rep.reference;
   json j;
@@ -269,7 +272,8 @@ nlohmann::ordered_json results_json(const CompareReport& rep, const std::vector<
   }
   j["fd_steps"] = rep.fd_steps;
   j["resolution"] = {rep.width, rep.height};
-  j["machine"] = {{"cpu", cpu_model()}, {"hardware_threads", std::thread::hardware_concurrency()}, {"threads", o.threads}};
+  j["machine"] = {
+      {"cpu", cpu_model()}, {"hardware_threads", std::thread::hardware_concurrency()}, {"threads", o.threads}};
   j["reference"] = {{"path", portable_path(rep.reference_path)},
                     {"description", rep.reference_description},
                     {"noise_floor", json_number(ref.noise_floor)},

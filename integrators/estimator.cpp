@@ -82,15 +82,17 @@ class PrimalEstimator final : public Estimator::Impl {
     const Vec3 origin = cam.origin();
     const PrimalView view{&scene};
     PathStats total;
-    run_pixels(cam, layout, options, first, count, "render",
-               [&](int x, int y, int, Sampler& sampler, PathStats& st, double* out) {
-      const Vec2 u = sampler.next2();
-      const Vec3 d = cam.direction(x + u.x(), y + u.y());
-      ++st.rays;
-      const Hit hit = tracer.intersect(origin, d);
-      const Color L = trace_path(ctx, view, origin, d, hit, 0, 0.0, sampler, st);
-      for (int c = 0; c < 3; ++c) out[layout.primal(c)] = L[c];
-    }, r, total);
+    run_pixels(
+        cam, layout, options, first, count, "render",
+        [&](int x, int y, int, Sampler& sampler, PathStats& st, double* out) {
+          const Vec2 u = sampler.next2();
+          const Vec3 d = cam.direction(x + u.x(), y + u.y());
+          ++st.rays;
+          const Hit hit = tracer.intersect(origin, d);
+          const Color L = trace_path(ctx, view, origin, d, hit, 0, 0.0, sampler, st);
+          for (int c = 0; c < 3; ++c) out[layout.primal(c)] = L[c];
+        },
+        r, total);
   }
 
  private:
@@ -101,7 +103,8 @@ class PrimalEstimator final : public Estimator::Impl {
 
 /// Primal + interior term in forward mode (duals of size N) + the boundary term of the method
 /// (`qsil grad`).
-template <int N> class GradientEstimator final : public Estimator::Impl {
+template <int N>
+class GradientEstimator final : public Estimator::Impl {
  public:
   GradientEstimator(const Scene& s, EstimatorConfig c)
       : Impl(s, std::move(c)), vel(compute_velocities(s, config.params)), tracer(s), lights(s) {
@@ -127,28 +130,30 @@ template <int N> class GradientEstimator final : public Estimator::Impl {
     const int K = layout.num_params();
     const bool with_boundary = bool(boundary.sampler);
     PathStats total;
-    run_pixels(cam, layout, options, first, count, "grad",
-               [&](int x, int y, int s, Sampler& sampler, PathStats& st, double* out) {
-      const Vec2 u = sampler.next2();
-      const Vec3 d = cam.direction(x + u.x(), y + u.y());
-      ++st.rays;
-      const Hit hit = tracer.intersect(origin, d);
-      ColorT<Dual<N>> L;
-      if (with_boundary) {
-        // The boundary term draws from a stream of its own, so the path itself is the primal's.
-        Sampler bsampler(options.seed, uint64_t(y) * cam.width + x, uint64_t(s), 1);
-        const BoundaryHook<N> hook{&ctx, &bctx, &bsampler};
-        L = trace_path(ctx, view, lift<Dual<N>>(origin), d, hit, 0, 0.0, sampler, st, hook);
-      } else {
-        L = trace_path(ctx, view, lift<Dual<N>>(origin), d, hit, 0, 0.0, sampler, st);
-      }
-      for (int c = 0; c < 3; ++c) out[layout.primal(c)] = L[c].value();
-      for (int k = 0; k < K; ++k) {
-        for (int c = 0; c < 3; ++c) out[layout.derivative(k, c)] = L[c].derivatives()[k];
-        out[layout.derivative_mean(k)] =
-            (out[layout.derivative(k, 0)] + out[layout.derivative(k, 1)] + out[layout.derivative(k, 2)]) / 3.0;
-      }
-    }, r, total);
+    run_pixels(
+        cam, layout, options, first, count, "grad",
+        [&](int x, int y, int s, Sampler& sampler, PathStats& st, double* out) {
+          const Vec2 u = sampler.next2();
+          const Vec3 d = cam.direction(x + u.x(), y + u.y());
+          ++st.rays;
+          const Hit hit = tracer.intersect(origin, d);
+          ColorT<Dual<N>> L;
+          if (with_boundary) {
+            // The boundary term draws from a stream of its own, so the path itself is the primal's.
+            Sampler bsampler(options.seed, uint64_t(y) * cam.width + x, uint64_t(s), 1);
+            const BoundaryHook<N> hook{&ctx, &bctx, &bsampler};
+            L = trace_path(ctx, view, lift<Dual<N>>(origin), d, hit, 0, 0.0, sampler, st, hook);
+          } else {
+            L = trace_path(ctx, view, lift<Dual<N>>(origin), d, hit, 0, 0.0, sampler, st);
+          }
+          for (int c = 0; c < 3; ++c) out[layout.primal(c)] = L[c].value();
+          for (int k = 0; k < K; ++k) {
+            for (int c = 0; c < 3; ++c) out[layout.derivative(k, c)] = L[c].derivatives()[k];
+            out[layout.derivative_mean(k)] =
+                (out[layout.derivative(k, 0)] + out[layout.derivative(k, 1)] + out[layout.derivative(k, 2)]) / 3.0;
+          }
+        },
+        r, total);
     // ---- Primary silhouettes: one edge sample per pixel sample, splatted where it lands.
     if (with_boundary) {
       const auto t0 = Clock::now();
@@ -223,20 +228,22 @@ class FiniteDifferenceEstimator final : public Estimator::Impl {
       return trace_path(side.ctx, PrimalView{&side.scene}, origin, d, hit, 0, 0.0, sampler, st);
     };
     PathStats total;
-    run_pixels(cam, layout, options, first, count, "fd",
-               [&](int x, int y, int, Sampler& sampler, PathStats& st, double* out) {
-      const Vec2 u = sampler.next2();
-      // Common random numbers: every side continues from a copy of the same sampler state.
-      const Color L0 = radiance(*sides[0], sampler, st, u, x, y);
-      for (int c = 0; c < 3; ++c) out[layout.primal(c)] = L0[c];
-      for (int k = 0; k < K; ++k) {
-        const Color Lp = radiance(*sides[size_t(1 + 2 * k)], sampler, st, u, x, y);
-        const Color Lm = radiance(*sides[size_t(2 + 2 * k)], sampler, st, u, x, y);
-        const Color dL = (Lp - Lm) / (2.0 * steps[size_t(k)]);
-        for (int c = 0; c < 3; ++c) out[layout.derivative(k, c)] = dL[c];
-        out[layout.derivative_mean(k)] = dL.mean();
-      }
-    }, r, total);
+    run_pixels(
+        cam, layout, options, first, count, "fd",
+        [&](int x, int y, int, Sampler& sampler, PathStats& st, double* out) {
+          const Vec2 u = sampler.next2();
+          // Common random numbers: every side continues from a copy of the same sampler state.
+          const Color L0 = radiance(*sides[0], sampler, st, u, x, y);
+          for (int c = 0; c < 3; ++c) out[layout.primal(c)] = L0[c];
+          for (int k = 0; k < K; ++k) {
+            const Color Lp = radiance(*sides[size_t(1 + 2 * k)], sampler, st, u, x, y);
+            const Color Lm = radiance(*sides[size_t(2 + 2 * k)], sampler, st, u, x, y);
+            const Color dL = (Lp - Lm) / (2.0 * steps[size_t(k)]);
+            for (int c = 0; c < 3; ++c) out[layout.derivative(k, c)] = dL[c];
+            out[layout.derivative_mean(k)] = dL.mean();
+          }
+        },
+        r, total);
   }
 
  private:
@@ -351,10 +358,14 @@ std::vector<double> fd_steps(const Scene& scene, const std::vector<ParameterSpec
                              const std::vector<double>& h) {
   std::vector<double> steps;
   for (size_t k = 0; k < params.size(); ++k) {
-    if (h.empty()) steps.push_back(default_fd_step(scene, params[k]));
-    else if (h.size() == 1) steps.push_back(h[0]);
-    else if (h.size() == params.size()) steps.push_back(h[k]);
-    else throw Error("--h: give one value or one per --param (" + std::to_string(params.size()) + ")");
+    if (h.empty())
+      steps.push_back(default_fd_step(scene, params[k]));
+    else if (h.size() == 1)
+      steps.push_back(h[0]);
+    else if (h.size() == params.size())
+      steps.push_back(h[k]);
+    else
+      throw Error("--h: give one value or one per --param (" + std::to_string(params.size()) + ")");
   }
   return steps;
 }

@@ -94,7 +94,8 @@ Agreement compare(const RenderResult& g, const RenderResult& f, const RenderResu
   a.resolved_fraction_within_4se =
       a.resolved_pixel_channels > 0 ? a.resolved_fraction_within_4se / a.resolved_pixel_channels : 1.0;
   a.fd_signal_fraction /= a.pixel_channels;
-  std::sort(all.begin(), all.end(), [](const Outlier& p, const Outlier& q) { return std::abs(p.z()) > std::abs(q.z()); });
+  std::sort(all.begin(), all.end(),
+            [](const Outlier& p, const Outlier& q) { return std::abs(p.z()) > std::abs(q.z()); });
   all.resize(std::min<size_t>(all.size(), 8));
   a.worst = all;
   a.grad = g.film.derivative_sum(0);
@@ -178,8 +179,8 @@ std::string describe(const std::string& name, const Agreement& a) {
   std::snprintf(buf, sizeof buf, "  worst pixel-channels (x, y, c: grad +- se | fd +- se | interior | z):\n");
   s += buf;
   for (const Outlier& o : a.worst) {
-    std::snprintf(buf, sizeof buf, "    (%d, %d, %c): %.4g +- %.3g | %.4g +- %.3g | %.4g | %+.1f\n", o.x, o.y, "RGB"[o.channel],
-                  o.grad, o.grad_se, o.fd, o.fd_se, o.interior, o.z());
+    std::snprintf(buf, sizeof buf, "    (%d, %d, %c): %.4g +- %.3g | %.4g +- %.3g | %.4g | %+.1f\n", o.x, o.y,
+                  "RGB"[o.channel], o.grad, o.grad_se, o.fd, o.fd_se, o.interior, o.z());
     s += buf;
   }
   return s;

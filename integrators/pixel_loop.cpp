@@ -27,8 +27,8 @@ void for_each_pixel(int width, int height, int threads, const std::string& label
     tbb::parallel_for(tbb::blocked_range2d<int>(0, height, 16, 0, width, 16), [&](const tbb::blocked_range2d<int>& r) {
       for (int y = r.rows().begin(); y < r.rows().end(); ++y)
         for (int x = r.cols().begin(); x < r.cols().end(); ++x) body(x, y);
-      const long long d = done.fetch_add((long long)r.rows().size() * r.cols().size()) +
-                          (long long)r.rows().size() * r.cols().size();
+      const long long d =
+          done.fetch_add((long long)r.rows().size() * r.cols().size()) + (long long)r.rows().size() * r.cols().size();
       if (label.empty()) return;
       const auto now = clock::now();
       if (now - start < std::chrono::seconds(1)) return;

@@ -21,8 +21,10 @@ bool clip(const Vec3& c0, const Vec3& c1, const Vec3& n, double d, double& ta, d
   if (f0 < 0 && f1 < 0) return false;
   if (f0 >= 0 && f1 >= 0) return true;
   const double tc = f0 / (f0 - f1);  // the crossing
-  if (f0 < 0) ta = std::max(ta, tc);
-  else tb = std::min(tb, tc);
+  if (f0 < 0)
+    ta = std::max(ta, tc);
+  else
+    tb = std::min(tb, tc);
   return ta < tb;
 }
 
@@ -53,7 +55,7 @@ void run_chunk(const PathContext& ctx, const SceneVelocities& vel, const std::ve
     const size_t j = std::min(size_t(std::upper_bound(cdf.begin(), cdf.end(), u) - cdf.begin()) - 1, edges.size() - 1);
     const PrimaryEdge& pe = edges[j];
     const double s = sampler.next();
-    const double tp = s * pe.za / (pe.zb * (1 - s) + s * pe.za);                 // perspective-correct
+    const double tp = s * pe.za / (pe.zb * (1 - s) + s * pe.za);                     // perspective-correct
     const double dsdt = pe.za * pe.zb / std::pow((1 - tp) * pe.za + tp * pe.zb, 2);  // ds/dt'
     const double t = pe.ta + tp * (pe.tb - pe.ta);
     const double pdf = (pe.weight / cdf.back()) * dsdt / (pe.tb - pe.ta);
@@ -145,8 +147,10 @@ void add_primary_boundary(Film& film, const PathContext& ctx, const SceneVelocit
     });
   };
   auto run = [&] { tbb::parallel_for(0LL, chunks, body); };
-  if (threads > 0) tbb::task_arena(threads).execute(run);
-  else run();
+  if (threads > 0)
+    tbb::task_arena(threads).execute(run);
+  else
+    run();
   // Merge in chunk order: the same sums whatever the thread count.
   for (long long c = 0; c < chunks; ++c) {
     for (const Splat& s : splats[size_t(c)]) film.splat(s.x, s.y, s.channel, s.value);

@@ -18,8 +18,8 @@
 /// pixel it lands in.
 
 #include "qsil/edgetree/edge_set.h"
-#include "qsil/integrators/path_tracer.h"
 #include "qsil/film.h"
+#include "qsil/integrators/path_tracer.h"
 #include "qsil/parameters.h"
 
 namespace qsil {
@@ -27,10 +27,10 @@ namespace qsil {
 /// One primary discontinuity edge: its visible parameter range and its projected segment.
 struct PrimaryEdge {
   const edgetree::ForestEdge* edge = nullptr;
-  double ta = 0, tb = 1;     ///< the part in front of the near plane and inside the frustum
+  double ta = 0, tb = 1;                    ///< the part in front of the near plane and inside the frustum
   Vec2 a = Vec2::Zero(), b = Vec2::Zero();  ///< film positions (pixels) of ta and tb
-  double za = 1, zb = 1;     ///< camera-space depths of ta and tb
-  double length = 0;         ///< |b - a| in pixels
+  double za = 1, zb = 1;                    ///< camera-space depths of ta and tb
+  double length = 0;                        ///< |b - a| in pixels
   /// Sampling weight (pixels): length for silhouettes and boundary edges, length * angle / pi
   /// for a crease, whose jump grows with its bend angle (always_edge_weight's scale): a smooth
   /// mesh's many shallow concave creases do not crowd out its silhouettes.

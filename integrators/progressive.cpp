@@ -37,8 +37,10 @@ ProgressiveResult render_progressive(const PassFunction& pass, const Progressive
     ro.threads = options.threads;
     ro.progress = false;
     RenderResult r = pass(ro);
-    if (i == 0) out.result = std::move(r);
-    else out.result.merge(r);
+    if (i == 0)
+      out.result = std::move(r);
+    else
+      out.result.merge(r);
     total_spp += next_spp;
     out.passes = i + 1;
 

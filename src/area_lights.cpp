@@ -17,8 +17,12 @@ AreaLights::AreaLights(const Scene& scene) {
     const TriangleMesh& mesh = shape.mesh;
     for (int f = 0; f < mesh.num_triangles(); ++f) {
       const auto& t = mesh.triangles[size_t(f)];
-      Triangle tri{mesh.positions[size_t(t[0])], mesh.positions[size_t(t[1])],
-                   mesh.positions[size_t(t[2])], Vec3::Zero(), int(s), f};
+      Triangle tri{mesh.positions[size_t(t[0])],
+                   mesh.positions[size_t(t[1])],
+                   mesh.positions[size_t(t[2])],
+                   Vec3::Zero(),
+                   int(s),
+                   f};
       const Vec3 cross = (tri.p1 - tri.p0).cross(tri.p2 - tri.p0);
       const double len = cross.norm();
       if (len > 0 && std::isfinite(len)) tri.normal = cross / len;

@@ -90,10 +90,8 @@ double bsdf_pdf(const BSDFDesc& b, const Vec3& wi_in, const Vec3& wo_in) {
   }
   if (!(wo.z() > 0)) return 0.0;
   switch (b.type) {
-    case BSDFDesc::Type::Diffuse:
-      return cosine_hemisphere_pdf(wi.z());
-    case BSDFDesc::Type::RoughConductor:
-      return ggx_reflection_pdf(ggx_alpha(b), wi, wo);
+    case BSDFDesc::Type::Diffuse: return cosine_hemisphere_pdf(wi.z());
+    case BSDFDesc::Type::RoughConductor: return ggx_reflection_pdf(ggx_alpha(b), wi, wo);
   }
   return 0.0;
 }

@@ -9,8 +9,10 @@
 namespace qsil::detail {
 
 void check_failed(const char* file, int line, const char* condition, const std::string& message) {
-  if (message.empty()) std::fprintf(stderr, "%s:%d: check failed: %s\n", file, line, condition);
-  else std::fprintf(stderr, "%s:%d: check failed: %s (%s)\n", file, line, condition, message.c_str());
+  if (message.empty())
+    std::fprintf(stderr, "%s:%d: check failed: %s\n", file, line, condition);
+  else
+    std::fprintf(stderr, "%s:%d: check failed: %s (%s)\n", file, line, condition, message.c_str());
   std::fflush(stderr);
   std::abort();
 }

@@ -31,14 +31,12 @@ Vec3 EnvironmentLight::uv_to_direction(const Vec2& uv) {
 
 EnvironmentLight::EnvironmentLight(const Environment& env) : type_(env.type) {
   switch (env.type) {
-    case Environment::Type::None:
-      return;
+    case Environment::Type::None: return;
     case Environment::Type::Constant:
       constant_ = env.radiance;
       average_ = env.radiance;
       return;
-    case Environment::Type::EnvMap:
-      break;
+    case Environment::Type::EnvMap: break;
   }
 
   // ---- validate the map and its frame
@@ -46,10 +44,8 @@ EnvironmentLight::EnvironmentLight(const Environment& env) : type_(env.type) {
   const std::string where = env.filename.empty() ? std::string("envmap") : env.filename;
   if (img.width <= 0 || img.height <= 0) throw Error(where + ": environment map has no texels");
   const int ch[3] = {img.channel_index("R"), img.channel_index("G"), img.channel_index("B")};
-  if (ch[0] < 0 || ch[1] < 0 || ch[2] < 0)
-    throw Error(where + ": environment map needs channels R, G, B");
-  if (!std::isfinite(env.scale) || env.scale < 0)
-    throw Error(where + ": envmap scale must be finite and non-negative");
+  if (ch[0] < 0 || ch[1] < 0 || ch[2] < 0) throw Error(where + ": environment map needs channels R, G, B");
+  if (!std::isfinite(env.scale) || env.scale < 0) throw Error(where + ": envmap scale must be finite and non-negative");
   const Mat3& r = env.to_world;
   if (!((r.transpose() * r - Mat3::Identity()).cwiseAbs().maxCoeff() < 1e-6))
     throw Error(where + ": envmap to_world must be a rotation (no scale or shear)");
@@ -88,12 +84,9 @@ Color EnvironmentLight::texel(int x, int y) const { return texels_[size_t(y) * s
 
 Color EnvironmentLight::eval(const Vec3& dir_world) const {
   switch (type_) {
-    case Environment::Type::None:
-      return Color::Zero();
-    case Environment::Type::Constant:
-      return constant_;
-    case Environment::Type::EnvMap:
-      break;
+    case Environment::Type::None: return Color::Zero();
+    case Environment::Type::Constant: return constant_;
+    case Environment::Type::EnvMap: break;
   }
   const Vec2 uv = direction_to_uv(to_world_.transpose() * dir_world);
   const int x = std::min(int(uv.x() * width_), width_ - 1);
@@ -104,15 +97,13 @@ Color EnvironmentLight::eval(const Vec3& dir_world) const {
 EnvironmentLight::Sample EnvironmentLight::sample(const Vec2& u) const {
   Sample s;
   switch (type_) {
-    case Environment::Type::None:
-      return s;
+    case Environment::Type::None: return s;
     case Environment::Type::Constant:
       s.dir = square_to_uniform_sphere(u);
       s.radiance = constant_;
       s.pdf = uniform_sphere_pdf();
       return s;
-    case Environment::Type::EnvMap:
-      break;
+    case Environment::Type::EnvMap: break;
   }
   const Distribution2D::Sample ds = distribution_.sample(u);
   if (!(ds.pdf > 0)) return s;  // all-black map: nothing to sample
@@ -128,12 +119,9 @@ EnvironmentLight::Sample EnvironmentLight::sample(const Vec2& u) const {
 
 double EnvironmentLight::pdf(const Vec3& dir_world) const {
   switch (type_) {
-    case Environment::Type::None:
-      return 0.0;
-    case Environment::Type::Constant:
-      return uniform_sphere_pdf();
-    case Environment::Type::EnvMap:
-      break;
+    case Environment::Type::None: return 0.0;
+    case Environment::Type::Constant: return uniform_sphere_pdf();
+    case Environment::Type::EnvMap: break;
   }
   const Vec3 d_local = to_world_.transpose() * dir_world;
   const double sin_theta = std::hypot(d_local.x(), d_local.z()) / d_local.norm();

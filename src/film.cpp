@@ -34,9 +34,14 @@ std::vector<std::string> FilmLayout::standard_error_names() const {
 }
 
 Film::Film(int width, int height, const FilmLayout& layout)
-    : width_(width), height_(height), channels_(layout.channels()), layout_(layout),
-      sum_(size_t(width) * height * channels_, 0.0), sum_sq_(size_t(width) * height * channels_, 0.0),
-      splat_sum_(size_t(width) * height * channels_, 0.0), splat_sq_(size_t(width) * height * channels_, 0.0),
+    : width_(width),
+      height_(height),
+      channels_(layout.channels()),
+      layout_(layout),
+      sum_(size_t(width) * height * channels_, 0.0),
+      sum_sq_(size_t(width) * height * channels_, 0.0),
+      splat_sum_(size_t(width) * height * channels_, 0.0),
+      splat_sq_(size_t(width) * height * channels_, 0.0),
       count_(size_t(width) * height, 0) {
   QSIL_CHECK(width > 0 && height > 0);
 }

@@ -9,13 +9,13 @@
 #include "qsil/files.h"
 #include "qsil/math.h"
 
+#include <Imath/ImathBox.h>
 #include <OpenEXR/ImfChannelList.h>
 #include <OpenEXR/ImfFrameBuffer.h>
 #include <OpenEXR/ImfHeader.h>
 #include <OpenEXR/ImfInputFile.h>
 #include <OpenEXR/ImfOutputFile.h>
 #include <OpenEXR/ImfStringAttribute.h>
-#include <Imath/ImathBox.h>
 
 #define STB_IMAGE_WRITE_IMPLEMENTATION
 #include <stb/stb_image_write.h>
@@ -49,8 +49,7 @@ Image read_exr(const std::filesystem::path& path) {
     for (size_t c = 0; c < img.planes.size(); ++c) {
       char* base = reinterpret_cast<char*>(img.planes[c].data()) -
                    (ptrdiff_t(dw.min.x) + ptrdiff_t(dw.min.y) * img.width) * ptrdiff_t(sizeof(float));
-      fb.insert(img.channel_names[c],
-                Imf::Slice(Imf::FLOAT, base, sizeof(float), sizeof(float) * size_t(img.width)));
+      fb.insert(img.channel_names[c], Imf::Slice(Imf::FLOAT, base, sizeof(float), sizeof(float) * size_t(img.width)));
     }
     file.setFrameBuffer(fb);
     file.readPixels(dw.min.y, dw.max.y);
@@ -58,9 +57,7 @@ Image read_exr(const std::filesystem::path& path) {
       if (std::string(it.attribute().typeName()) == "string")
         img.attributes[it.name()] = static_cast<const Imf::StringAttribute&>(it.attribute()).value();
     return img;
-  } catch (const Error&) {
-    throw;
-  } catch (const std::exception& e) {
+  } catch (const Error&) { throw; } catch (const std::exception& e) {
     std::string msg = e.what();
     if (auto nl = msg.find('\n'); nl != std::string::npos) msg = msg.substr(0, nl);
     throw Error(name + ": cannot read OpenEXR: " + msg);
@@ -94,8 +91,7 @@ void write_exr(const std::filesystem::path& path, const Image& image) {
   });
 }
 
-void write_png(const std::filesystem::path& path, int width, int height,
-               const std::vector<unsigned char>& rgb) {
+void write_png(const std::filesystem::path& path, int width, int height, const std::vector<unsigned char>& rgb) {
   if (width <= 0 || height <= 0 || rgb.size() != size_t(width) * height * 3)
     throw Error(path.string() + ": internal: malformed PNG data");
   write_atomically(path, [&](const std::filesystem::path& tmp) {
@@ -126,7 +122,8 @@ void write_npy(const std::filesystem::path& path, int height, int width, const s
 std::vector<float> luminance_plane(const Image& image, const std::string& prefix) {
   const std::string p = prefix.empty() ? "" : prefix + ".";
   const int r = image.channel_index(p + "R"), g = image.channel_index(p + "G"), b = image.channel_index(p + "B");
-  if (r < 0 || g < 0 || b < 0) throw Error("image has no " + (prefix.empty() ? std::string("R,G,B") : prefix) + " channels");
+  if (r < 0 || g < 0 || b < 0)
+    throw Error("image has no " + (prefix.empty() ? std::string("R,G,B") : prefix) + " channels");
   std::vector<float> out(size_t(image.width) * image.height);
   for (size_t i = 0; i < out.size(); ++i)
     out[i] = float(luminance(image.planes[size_t(r)][i], image.planes[size_t(g)][i], image.planes[size_t(b)][i]));

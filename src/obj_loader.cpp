@@ -19,9 +19,7 @@
 
 namespace qsil {
 
-std::vector<Vec3> vertex_normals(const TriangleMesh& mesh) {
-  return vertex_normals_t<double>(mesh, mesh.positions);
-}
+std::vector<Vec3> vertex_normals(const TriangleMesh& mesh) { return vertex_normals_t<double>(mesh, mesh.positions); }
 
 namespace {
 /// tinyobjloader reads a literal `nan` or `inf` coordinate, or a word, as 0 and a missing one as 0;
@@ -47,8 +45,9 @@ void check_vertices(const std::filesystem::path& path) {
         throw Error(where + "vertex coordinate '" + token + "' is not a number");
       if (!std::isfinite(x)) throw Error(where + "non-finite coordinate '" + token + "' in a vertex");
       if (std::abs(x) > kMaxCoordinate)
-        throw Error(where + "vertex coordinate " + token + " exceeds the largest supported magnitude 1e12 (ray "
-                            "tracing is in float)");
+        throw Error(where + "vertex coordinate " + token +
+                    " exceeds the largest supported magnitude 1e12 (ray "
+                    "tracing is in float)");
     }
     if (k < 3) throw Error(where + "vertex has " + std::to_string(k) + " coordinate(s), expected 3");
   }
@@ -99,8 +98,7 @@ TriangleMesh load_obj(const std::filesystem::path& path, bool weld, std::vector<
     if (inserted) {
       mesh.positions.push_back(p);
       if (has_normals) {
-        Vec3 n = nidx >= 0 ? Vec3(attrib.normals[3 * nidx], attrib.normals[3 * nidx + 1],
-                                  attrib.normals[3 * nidx + 2])
+        Vec3 n = nidx >= 0 ? Vec3(attrib.normals[3 * nidx], attrib.normals[3 * nidx + 1], attrib.normals[3 * nidx + 2])
                            : Vec3::Zero();
         mesh.normals.push_back(n);
       }
@@ -127,7 +125,10 @@ TriangleMesh load_obj(const std::filesystem::path& path, bool weld, std::vector<
   bool normals_ok = has_normals;
   for (auto& n : mesh.normals) {
     const double len = n.norm();
-    if (!(len > 0) || !std::isfinite(len)) { normals_ok = false; break; }
+    if (!(len > 0) || !std::isfinite(len)) {
+      normals_ok = false;
+      break;
+    }
     n /= len;
   }
   if (!normals_ok) mesh.normals = vertex_normals(mesh);

@@ -51,7 +51,8 @@ ParameterSpec parse_parameter(const std::string& text, const Scene& scene) {
   if (parts.size() < 2) throw Error("--param '" + text + "': expected ID:translate|rotate|scale|vertex:...");
   p.shape_id = parts[0];
   p.shape = scene.find_shape(p.shape_id);
-  if (p.shape < 0) throw Error("--param '" + text + "': no shape with id '" + p.shape_id + "' in " + scene.file.string());
+  if (p.shape < 0)
+    throw Error("--param '" + text + "': no shape with id '" + p.shape_id + "' in " + scene.file.string());
   std::string kind = parts[1];
   std::string center;
   if (auto at = kind.find('@'); at != std::string::npos) {  // ID:scale@C
@@ -70,7 +71,8 @@ ParameterSpec parse_parameter(const std::string& text, const Scene& scene) {
     if (kind == "rotate") take_center(arg);
     p.kind = kind == "translate" ? ParameterSpec::Kind::Translate : ParameterSpec::Kind::Rotate;
     p.direction = parse_vec3(arg, text, kind == "translate" ? "direction" : "axis");
-    if (!(p.direction.norm() > 0)) throw Error("--param '" + text + "': zero " + (kind == "translate" ? "direction" : "axis"));
+    if (!(p.direction.norm() > 0))
+      throw Error("--param '" + text + "': zero " + (kind == "translate" ? "direction" : "axis"));
     if (p.kind == ParameterSpec::Kind::Rotate) p.direction.normalize();
   } else if (kind == "scale") {
     if (parts.size() != 2) throw Error("--param '" + text + "': expected ID:scale[@CX,CY,CZ]");
@@ -167,8 +169,8 @@ SceneVelocities compute_velocities(const Scene& scene, const std::vector<Paramet
   return v;
 }
 
-std::vector<std::vector<Vec3>> displaced_positions(const Scene& scene, const std::vector<ParameterSpec>& params,
-                                                   int k, double theta) {
+std::vector<std::vector<Vec3>> displaced_positions(const Scene& scene, const std::vector<ParameterSpec>& params, int k,
+                                                   double theta) {
   std::vector<std::vector<Vec3>> pos(scene.shapes.size());
   for (size_t s = 0; s < scene.shapes.size(); ++s) pos[s] = scene.shapes[s].mesh.positions;
   const ParameterSpec& p = params.at(k);

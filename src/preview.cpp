@@ -52,7 +52,8 @@ double write_derivative_png(const std::filesystem::path& path, const Image& imag
     const double a = std::abs(t);
     const double red[3] = {0.70, 0.09, 0.17}, blue[3] = {0.13, 0.40, 0.67};
     const double* end = t >= 0 ? red : blue;
-    for (int c = 0; c < 3; ++c) rgb[3 * i + size_t(c)] = (unsigned char)std::lround(255.0 * ((1 - a) * 1.0 + a * end[c]));
+    for (int c = 0; c < 3; ++c)
+      rgb[3 * i + size_t(c)] = (unsigned char)std::lround(255.0 * ((1 - a) * 1.0 + a * end[c]));
   }
   write_png(path, image.width, image.height, rgb);
   return range;

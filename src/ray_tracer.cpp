@@ -89,8 +89,8 @@ RayTracer::RayTracer(const Scene& scene) : impl_(std::make_unique<Impl>()) {
     const TriangleMesh& mesh = scene.shapes[s].mesh;
     const auto& pos = mesh.positions;
     RTCGeometry geom = rtcNewGeometry(impl.device, RTC_GEOMETRY_TYPE_TRIANGLE);
-    auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                           3 * sizeof(float), pos.size()));
+    auto* vb = static_cast<float*>(
+        rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), pos.size()));
     for (size_t i = 0; i < pos.size(); ++i)
       for (int k = 0; k < 3; ++k) vb[3 * i + k] = float(pos[i][k]);
     auto* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,

@@ -76,8 +76,7 @@ Distribution1D::Distribution1D(std::span<const double> f) : f_(f.begin(), f.end(
   if (f_.empty()) throw std::invalid_argument("Distribution1D: no bins");
   for (size_t i = 0; i < f_.size(); ++i)
     if (!(f_[i] >= 0.0) || !std::isfinite(f_[i]))
-      throw std::invalid_argument("Distribution1D: weight " + std::to_string(i) +
-                                  " is negative or not finite");
+      throw std::invalid_argument("Distribution1D: weight " + std::to_string(i) + " is negative or not finite");
   const size_t n = f_.size();
   cdf_.assign(n + 1, 0.0);
   for (size_t i = 0; i < n; ++i) cdf_[i + 1] = cdf_[i] + f_[i];

@@ -51,18 +51,13 @@ void check_type(const Source& src, pugi::xml_node node, std::initializer_list<co
   if (type.empty()) src.fail(node, "<" + std::string(node.name()) + "> needs a 'type' attribute");
   for (const char* s : supported)
     if (type == s) return;
-  src.fail(node, "unsupported plugin '" + type + "' for <" + node.name() + "> (supported: " +
-                     join(supported) + ")");
+  src.fail(node, "unsupported plugin '" + type + "' for <" + node.name() + "> (supported: " + join(supported) + ")");
 }
 
-bool is_affine(const Mat4& m) {
-  return m(3, 0) == 0 && m(3, 1) == 0 && m(3, 2) == 0 && m(3, 3) == 1;
-}
+bool is_affine(const Mat4& m) { return m(3, 0) == 0 && m(3, 1) == 0 && m(3, 2) == 0 && m(3, 3) == 1; }
 
 /// Rᵀ R = I within a tolerance meant for matrices written with ~6 significant digits.
-bool is_orthogonal(const Mat3& r) {
-  return ((r.transpose() * r - Mat3::Identity()).cwiseAbs().maxCoeff()) < 1e-5;
-}
+bool is_orthogonal(const Mat3& r) { return ((r.transpose() * r - Mat3::Identity()).cwiseAbs().maxCoeff()) < 1e-5; }
 
 void check_color(const Plugin& p, const std::string& name, const Color& c) {
   if (!(c >= 0).all()) p.fail("'" + name + "' must be non-negative");
@@ -160,8 +155,7 @@ BSDFDesc Loader::parse_bsdf(pugi::xml_node node, bool nested_in_twosided) {
   }
   // roughconductor
   Plugin p(src_, node,
-           {"distribution", "alpha", "alpha_u", "alpha_v", "specular_reflectance", "material",
-            "sample_visible"});
+           {"distribution", "alpha", "alpha_u", "alpha_v", "specular_reflectance", "material", "sample_visible"});
   b.type = BSDFDesc::Type::RoughConductor;
   if (p.has("alpha_u") || p.has("alpha_v"))
     src_.fail(p.at(p.has("alpha_u") ? "alpha_u" : "alpha_v"),
@@ -172,8 +166,9 @@ BSDFDesc Loader::parse_bsdf(pugi::xml_node node, bool nested_in_twosided) {
   if (dist != "ggx") {
     src_.fail(p.has("distribution") ? p.at("distribution") : node,
               "roughconductor distribution '" + dist + "' is not supported (supported: ggx)" +
-                  (p.has("distribution") ? "" : "; Mitsuba 3's default is beckmann, set "
-                                                "<string name=\"distribution\" value=\"ggx\"/>"));
+                  (p.has("distribution") ? ""
+                                         : "; Mitsuba 3's default is beckmann, set "
+                                           "<string name=\"distribution\" value=\"ggx\"/>"));
   }
   const std::string material = p.get_string("material", "none");
   if (material != "none")
@@ -244,8 +239,8 @@ void Loader::place_mesh(const Plugin& p, Shape& shape, const Mat4& to_world, boo
     if (mesh.area(f) > 0) kept.push_back(mesh.triangles[f]);
   if (kept.empty()) src_.fail(where, "every triangle of the shape has zero area after to_world");
   if (kept.size() != mesh.triangles.size()) {
-    warn(p.node(), "dropped " + std::to_string(mesh.triangles.size() - kept.size()) +
-                       " zero-area triangle(s) after to_world");
+    warn(p.node(),
+         "dropped " + std::to_string(mesh.triangles.size() - kept.size()) + " zero-area triangle(s) after to_world");
     mesh.triangles = std::move(kept);
   }
 }
@@ -260,8 +255,7 @@ void Loader::parse_shape(pugi::xml_node node) {
   const std::set<std::string> nested = {"bsdf", "ref", "emitter"};
   std::optional<Plugin> plugin;
   if (shape.type == "obj") {
-    plugin.emplace(src_, node, std::set<std::string>{"filename", "to_world", "face_normals", "flip_normals"},
-                   nested);
+    plugin.emplace(src_, node, std::set<std::string>{"filename", "to_world", "face_normals", "flip_normals"}, nested);
   } else {
     plugin.emplace(src_, node, std::set<std::string>{"to_world", "flip_normals"}, nested);
   }
@@ -274,21 +268,20 @@ void Loader::parse_shape(pugi::xml_node node) {
     const std::string filename = p.get_string("filename", "");
     const std::filesystem::path path = src_.resolve(filename);
     std::error_code ec;
-    if (!std::filesystem::is_regular_file(path, ec))
-      src_.fail(p.at("filename"), "file not found: " + path.string());
+    if (!std::filesystem::is_regular_file(path, ec)) src_.fail(p.at("filename"), "file not found: " + path.string());
     std::vector<std::string> obj_warnings;
     try {
       shape.mesh = load_obj(path, /*weld=*/true, &obj_warnings);
-    } catch (const Error& e) {
-      src_.fail(p.at("filename"), e.what());
-    }
+    } catch (const Error& e) { src_.fail(p.at("filename"), e.what()); }
     for (const auto& w : obj_warnings) warn(p.at("filename"), w);
     place_mesh(p, shape, to_world, flip);
     // Mitsuba computes vertex normals of an OBJ without normals after applying to_world; qsil
     // welds, so its normals are always these (area-weighted) ones.
     shape.face_normals = p.get_bool("face_normals", false);
-    if (shape.face_normals) shape.mesh.normals.clear();
-    else shape.mesh.normals = vertex_normals(shape.mesh);
+    if (shape.face_normals)
+      shape.mesh.normals.clear();
+    else
+      shape.mesh.normals = vertex_normals(shape.mesh);
   } else {
     shape.mesh = rectangle_mesh();
     place_mesh(p, shape, to_world, flip);
@@ -351,8 +344,7 @@ Image rgb_texels(const Source& src, pugi::xml_node where, const Image& img, cons
       const float v = out.planes[c][k];
       if (!std::isfinite(v)) {
         src.fail(where, file + ": env map texel (" + std::to_string(k % out.width) + ", " +
-                            std::to_string(k / out.width) + ") channel " + out.channel_names[c] +
-                            " is not finite");
+                            std::to_string(k / out.width) + ") channel " + out.channel_names[c] + " is not finite");
       }
       mean_abs += std::abs(v);
     }
@@ -375,8 +367,8 @@ void Loader::parse_environment(pugi::xml_node node) {
   if (type == "area") src_.fail(node, "an area emitter must be nested in a <shape>");
   check_type(src_, node, {"envmap", "constant"});
   if (environment_)
-    src_.fail(node, "more than one environment emitter (first at line " +
-                        std::to_string(src_.line(environment_)) + ")");
+    src_.fail(node,
+              "more than one environment emitter (first at line " + std::to_string(src_.line(environment_)) + ")");
   environment_ = node;
   register_id(node);
   Environment& env = scene_.environment;
@@ -392,8 +384,7 @@ void Loader::parse_environment(pugi::xml_node node) {
   if (!p.has("filename")) p.fail("envmap needs <string name=\"filename\" .../>");
   const std::filesystem::path path = src_.resolve(p.get_string("filename", ""));
   std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec))
-    src_.fail(p.at("filename"), "file not found: " + path.string());
+  if (!std::filesystem::is_regular_file(path, ec)) src_.fail(p.at("filename"), "file not found: " + path.string());
   env.filename = path.string();
   env.scale = p.get_float("scale", 1.0);
   if (!(env.scale >= 0)) src_.fail(p.at("scale"), "envmap scale must be >= 0");
@@ -408,14 +399,12 @@ void Loader::parse_environment(pugi::xml_node node) {
   Image img;
   try {
     img = read_exr(path);
-  } catch (const Error& e) {
-    src_.fail(p.at("filename"), e.what());
-  }
+  } catch (const Error& e) { src_.fail(p.at("filename"), e.what()); }
   long long significant = 0;
   env.texels = rgb_texels(src_, p.at("filename"), img, path.string(), significant);
   if (significant > 0) {
-    warn(p.at("filename"), "clamped " + std::to_string(significant) +
-                               " negative env map texel value(s) below -1% of the mean to 0");
+    warn(p.at("filename"),
+         "clamped " + std::to_string(significant) + " negative env map texel value(s) below -1% of the mean to 0");
   }
 }
 
@@ -425,16 +414,16 @@ void Loader::parse_environment(pugi::xml_node node) {
 
 void Loader::parse_sensor(pugi::xml_node node) {
   check_type(src_, node, {"perspective"});
-  if (sensor_)
-    src_.fail(node, "more than one <sensor> (first at line " + std::to_string(src_.line(sensor_)) + ")");
+  if (sensor_) src_.fail(node, "more than one <sensor> (first at line " + std::to_string(src_.line(sensor_)) + ")");
   sensor_ = node;
   register_id(node);
-  Plugin p(src_, node, {"fov", "fov_axis", "focal_length", "near_clip", "far_clip", "to_world"},
-           {"film", "sampler"});
+  Plugin p(src_, node, {"fov", "fov_axis", "focal_length", "near_clip", "far_clip", "to_world"}, {"film", "sampler"});
   Camera& cam = scene_.camera;
   for (pugi::xml_node child : p.nested()) {
-    if (std::string(child.name()) == "film") parse_film(child);
-    else parse_sampler(child);
+    if (std::string(child.name()) == "film")
+      parse_film(child);
+    else
+      parse_sampler(child);
   }
   // Field of view: as Mitsuba 3 parse_fov(): `fov` along `fov_axis`, or else a 35 mm camera's
   // diagonal field of view for `focal_length` (default "50mm").
@@ -445,8 +434,7 @@ void Loader::parse_sensor(pugi::xml_node node) {
     for (auto& c : cam.fov_axis) c = char(std::tolower(static_cast<unsigned char>(c)));
     const std::set<std::string> axes = {"x", "y", "diagonal", "smaller", "larger"};
     if (!axes.count(cam.fov_axis))
-      src_.fail(p.at("fov_axis"), "fov_axis '" + cam.fov_axis +
-                                      "' is not one of x, y, diagonal, smaller, larger");
+      src_.fail(p.at("fov_axis"), "fov_axis '" + cam.fov_axis + "' is not one of x, y, diagonal, smaller, larger");
     if (!(cam.fov_deg > 0 && cam.fov_deg < 180)) src_.fail(p.at("fov"), "fov must be in (0, 180) degrees");
   } else {
     if (p.has("fov_axis")) src_.fail(p.at("fov_axis"), "fov_axis needs 'fov'");
@@ -470,8 +458,9 @@ void Loader::parse_sensor(pugi::xml_node node) {
   }
   if (const auto m = p.get_transform("to_world")) {
     if (!is_affine(*m) || !is_orthogonal(m->block<3, 3>(0, 0)))
-      src_.fail(p.at("to_world"), "sensor to_world must be rigid (rotation and translation): it "
-                                  "contains scale or shear");
+      src_.fail(p.at("to_world"),
+                "sensor to_world must be rigid (rotation and translation): it "
+                "contains scale or shear");
     // The camera position is a ray origin: within kMaxCoordinate like the geometry (qsil/scene.h).
     const Vec3 position = m->block<3, 1>(0, 3);
     if (!position.allFinite() || position.cwiseAbs().maxCoeff() > kMaxCoordinate) {
@@ -486,8 +475,7 @@ void Loader::parse_sensor(pugi::xml_node node) {
 
 void Loader::parse_film(pugi::xml_node node) {
   check_type(src_, node, {"hdrfilm"});
-  Plugin p(src_, node, {"width", "height", "pixel_format", "component_format", "file_format"},
-           {"rfilter"});
+  Plugin p(src_, node, {"width", "height", "pixel_format", "component_format", "file_format"}, {"rfilter"});
   Camera& cam = scene_.camera;
   const long long w = p.get_integer("width", 768), h = p.get_integer("height", 576);
   if (w <= 0 || w > 1 << 16) src_.fail(p.at("width"), "film width must be in [1, 65536]");
@@ -500,8 +488,9 @@ void Loader::parse_film(pugi::xml_node node) {
   p.get_string("file_format", "openexr");
   if (p.nested().size() > 1) src_.fail(p.nested()[1], "more than one <rfilter>");
   if (p.nested().empty()) {
-    warn(node, "film has no <rfilter>: Mitsuba 3 would use a gaussian filter, qsil uses a box "
-               "filter (add <rfilter type=\"box\"/>)");
+    warn(node,
+         "film has no <rfilter>: Mitsuba 3 would use a gaussian filter, qsil uses a box "
+         "filter (add <rfilter type=\"box\"/>)");
   } else {
     const pugi::xml_node rf = p.nested().front();
     check_type(src_, rf, {"box"});
@@ -512,8 +501,7 @@ void Loader::parse_film(pugi::xml_node node) {
 void Loader::parse_sampler(pugi::xml_node node) {
   check_type(src_, node, {"independent", "stratified", "multijitter", "orthogonal", "ldsampler"});
   Plugin p(src_, node, {"sample_count", "seed"});
-  if (p.type() != "independent")
-    warn(node, "sampler '" + p.type() + "' is rendered with independent samples (PCG32)");
+  if (p.type() != "independent") warn(node, "sampler '" + p.type() + "' is rendered with independent samples (PCG32)");
   const long long spp = p.get_integer("sample_count", 4);
   if (spp <= 0 || spp > (1LL << 31) - 1) src_.fail(p.at("sample_count"), "sample_count must be > 0");
   scene_.camera.spp = int(spp);
@@ -536,8 +524,7 @@ void Loader::parse_integrator(pugi::xml_node node) {
     p.get_integer("rr_depth", 5);
     warn(p.at("rr_depth"), "rr_depth is ignored (qsil does not use Russian roulette)");
   }
-  if (p.get_bool("hide_emitters", false))
-    src_.fail(p.at("hide_emitters"), "hide_emitters=true is not supported");
+  if (p.get_bool("hide_emitters", false)) src_.fail(p.at("hide_emitters"), "hide_emitters=true is not supported");
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -553,8 +540,9 @@ void Loader::load() {
     const std::string version = root.attribute("version").value();
     const long long major = xml::parse_integer(src_, root, version.substr(0, version.find('.')), "version");
     if (major < 2)
-      src_.fail(root, "scene version " + version + " predates Mitsuba 2/3 (camelCase parameter "
-                      "names); write it for version 3.x");
+      src_.fail(root, "scene version " + version +
+                          " predates Mitsuba 2/3 (camelCase parameter "
+                          "names); write it for version 3.x");
   }
   // Pass 1: top-level BSDFs, so that <ref> may point forward.
   for (pugi::xml_node child : root.children())
@@ -564,17 +552,21 @@ void Loader::load() {
     if (child.type() != pugi::node_element) continue;
     const std::string tag = child.name();
     if (tag == "default" || tag == "bsdf") continue;
-    if (tag == "shape") parse_shape(child);
-    else if (tag == "sensor") parse_sensor(child);
-    else if (tag == "emitter") parse_environment(child);
-    else if (tag == "integrator") parse_integrator(child);
+    if (tag == "shape")
+      parse_shape(child);
+    else if (tag == "sensor")
+      parse_sensor(child);
+    else if (tag == "emitter")
+      parse_environment(child);
+    else if (tag == "integrator")
+      parse_integrator(child);
     else
       src_.fail(child, "unsupported element <" + tag +
                            "> in <scene> (supported: default, sensor, shape, bsdf, emitter, integrator)");
   }
   if (!sensor_) src_.fail(root, "the scene has no <sensor>");
-  const bool any_area = std::any_of(scene_.shapes.begin(), scene_.shapes.end(),
-                                    [](const Shape& s) { return s.is_emitter; });
+  const bool any_area =
+      std::any_of(scene_.shapes.begin(), scene_.shapes.end(), [](const Shape& s) { return s.is_emitter; });
   if (scene_.shapes.empty() && scene_.environment.type == Environment::Type::None)
     src_.fail(root, "the scene has no shapes and no emitter");
   if (!any_area && scene_.environment.type == Environment::Type::None)

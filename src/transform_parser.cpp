@@ -28,8 +28,7 @@ Vec3 xyz_of(const Source& src, pugi::xml_node node, double def, const std::strin
 }
 
 Vec3 named_vector(const Source& src, pugi::xml_node node, const char* name) {
-  const auto v = parse_numbers(src, node, node.attribute(name).value(), 3, false,
-                               std::string("lookat ") + name);
+  const auto v = parse_numbers(src, node, node.attribute(name).value(), 3, false, std::string("lookat ") + name);
   return Vec3(v[0], v[1], v[2]);
 }
 

@@ -58,8 +58,10 @@ void WireframeCanvas::line(const Vec3& a, const Vec3& b, const Rgb& color, int t
           continue;
         }
         const double t = -f0 / df;
-        if (df > 0) t0 = std::max(t0, t);
-        else t1 = std::min(t1, t);
+        if (df > 0)
+          t0 = std::max(t0, t);
+        else
+          t1 = std::min(t1, t);
       }
     }
     if (t0 > t1) return;

@@ -9,12 +9,11 @@ namespace qsil::xml {
 
 namespace {
 
-const std::set<std::string> kPropertyTags = {"float",   "integer", "boolean", "string", "rgb",
-                                             "spectrum", "transform", "point", "vector"};
+const std::set<std::string> kPropertyTags = {"float",    "integer",   "boolean", "string", "rgb",
+                                             "spectrum", "transform", "point",   "vector"};
 // Mitsuba 3 object tags: known to Mitsuba, so a clearer message than "unknown element".
-const std::set<std::string> kObjectTags = {"bsdf",    "emitter", "shape",  "sensor", "film",
-                                           "sampler", "rfilter", "texture", "medium", "phase",
-                                           "volume",  "integrator", "ref"};
+const std::set<std::string> kObjectTags = {"bsdf",    "emitter", "shape", "sensor", "film",       "sampler", "rfilter",
+                                           "texture", "medium",  "phase", "volume", "integrator", "ref"};
 
 std::string join(const std::set<std::string>& names) {
   std::string s;
@@ -35,20 +34,20 @@ Plugin::Plugin(const Source& src, pugi::xml_node node, const std::set<std::strin
       const std::string name = child.attribute("name").value();
       if (name.empty()) src.fail(child, "<" + tag + "> needs a 'name' attribute");
       if (!params.count(name)) {
-        src.fail(child, "unknown parameter '" + name + "' for plugin '" + type_ + "' (supported: " +
-                            join(params) + ")");
+        src.fail(child,
+                 "unknown parameter '" + name + "' for plugin '" + type_ + "' (supported: " + join(params) + ")");
       }
       for (const auto& [n, prev] : params_) {
         if (n == name)
-          src.fail(child, "parameter '" + name + "' given twice (first at line " +
-                              std::to_string(src.line(prev)) + ")");
+          src.fail(child,
+                   "parameter '" + name + "' given twice (first at line " + std::to_string(src.line(prev)) + ")");
       }
       params_.emplace_back(name, child);
     } else if (nested.count(tag)) {
       nested_.push_back(child);
     } else if (kObjectTags.count(tag)) {
-      src.fail(child, "<" + tag + "> is not supported inside <" + std::string(node.name()) +
-                          " type=\"" + type_ + "\"> (supported: " + join(nested) + ")");
+      src.fail(child, "<" + tag + "> is not supported inside <" + std::string(node.name()) + " type=\"" + type_ +
+                          "\"> (supported: " + join(nested) + ")");
     } else {
       src.fail(child, "unsupported element <" + tag + "> in <" + std::string(node.name()) + ">");
     }
@@ -76,8 +75,7 @@ pugi::xml_node Plugin::require(const std::string& name, std::initializer_list<co
     }
     expected += std::string(expected.empty() ? "" : " or ") + "<" + t + ">";
   }
-  src_.fail(node, "parameter '" + name + "' of plugin '" + type_ + "' must be " + expected +
-                      ", not <" + tag + ">");
+  src_.fail(node, "parameter '" + name + "' of plugin '" + type_ + "' must be " + expected + ", not <" + tag + ">");
 }
 
 double Plugin::get_float(const std::string& name, double def) const {
@@ -99,8 +97,7 @@ bool Plugin::get_bool(const std::string& name, bool def) const {
   std::transform(v.begin(), v.end(), v.begin(), [](unsigned char c) { return std::tolower(c); });
   if (v == "true") return true;
   if (v == "false") return false;
-  src_.fail(n, "boolean '" + name + "' must be \"true\" or \"false\", not \"" +
-                   n.attribute("value").value() + "\"");
+  src_.fail(n, "boolean '" + name + "' must be \"true\" or \"false\", not \"" + n.attribute("value").value() + "\"");
 }
 
 std::string Plugin::get_string(const std::string& name, const std::string& def) const {

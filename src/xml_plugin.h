@@ -34,9 +34,9 @@ class Plugin {
   /// The property element of a parameter (for locations); must exist.
   pugi::xml_node at(const std::string& name) const;
 
-  double get_float(const std::string& name, double def) const;        ///< <float> or <integer>
-  long long get_integer(const std::string& name, long long def) const;  ///< <integer>
-  bool get_bool(const std::string& name, bool def) const;             ///< <boolean>
+  double get_float(const std::string& name, double def) const;                    ///< <float> or <integer>
+  long long get_integer(const std::string& name, long long def) const;            ///< <integer>
+  bool get_bool(const std::string& name, bool def) const;                         ///< <boolean>
   std::string get_string(const std::string& name, const std::string& def) const;  ///< <string>
   /// <rgb value="r, g, b"> (or one value), <float>, or a constant <spectrum value="v">.
   Color get_color(const std::string& name, const Color& def) const;

@@ -32,8 +32,7 @@ Source::Source(const std::filesystem::path& file) : file_(file) {
     throw Error(file.string() + ":" + std::to_string(line_of_offset(result.offset)) +
                 ": malformed XML: " + result.description());
   }
-  if (!doc_.document_element())
-    throw Error(file.string() + ":1: malformed XML: no root element");
+  if (!doc_.document_element()) throw Error(file.string() + ":1: malformed XML: no root element");
 }
 
 int Source::line_of_offset(std::ptrdiff_t offset) const {
@@ -49,9 +48,7 @@ std::string Source::where(pugi::xml_node node) const {
   return l > 0 ? file_.string() + ":" + std::to_string(l) : file_.string();
 }
 
-void Source::fail(pugi::xml_node node, const std::string& message) const {
-  throw Error(where(node) + ": " + message);
-}
+void Source::fail(pugi::xml_node node, const std::string& message) const { throw Error(where(node) + ": " + message); }
 
 std::filesystem::path Source::resolve(const std::string& relative) const {
   const std::filesystem::path p(relative);
@@ -66,8 +63,8 @@ bool is_name_char(char c, bool first) {
          (!first && std::isdigit(static_cast<unsigned char>(c)));
 }
 
-void substitute_node(const Source& src, pugi::xml_node node,
-                     const std::map<std::string, std::string>& params, std::set<std::string>& used) {
+void substitute_node(const Source& src, pugi::xml_node node, const std::map<std::string, std::string>& params,
+                     std::set<std::string>& used) {
   if (node.type() != pugi::node_element) return;
   if (std::string(node.name()) != "default") {
     for (pugi::xml_attribute attr : node.attributes()) {
@@ -75,17 +72,20 @@ void substitute_node(const Source& src, pugi::xml_node node,
       if (value.find('$') == std::string::npos) continue;
       std::string out;
       for (std::size_t i = 0; i < value.size();) {
-        if (value[i] != '$') { out += value[i++]; continue; }
+        if (value[i] != '$') {
+          out += value[i++];
+          continue;
+        }
         std::size_t j = i + 1;
         while (j < value.size() && is_name_char(value[j], j == i + 1)) ++j;
         const std::string name = value.substr(i + 1, j - i - 1);
         if (name.empty())
-          src.fail(node, "'$' not followed by a parameter name in attribute " + std::string(attr.name()) +
-                             "=\"" + value + "\"");
+          src.fail(node, "'$' not followed by a parameter name in attribute " + std::string(attr.name()) + "=\"" +
+                             value + "\"");
         const auto it = params.find(name);
         if (it == params.end())
-          src.fail(node, "undefined parameter '$" + name + "' (no <default name=\"" + name +
-                             "\"> and no -D " + name + "=...)");
+          src.fail(node, "undefined parameter '$" + name + "' (no <default name=\"" + name + "\"> and no -D " + name +
+                             "=...)");
         used.insert(name);
         out += it->second;
         i = j;
@@ -117,8 +117,7 @@ std::vector<std::string> split_list(const std::string& text) {
   return out;
 }
 
-double parse_double(const Source& src, pugi::xml_node node, const std::string& text,
-                    const std::string& what) {
+double parse_double(const Source& src, pugi::xml_node node, const std::string& text, const std::string& what) {
   const char* begin = text.c_str();
   while (std::isspace(static_cast<unsigned char>(*begin))) ++begin;
   char* end = nullptr;
@@ -126,15 +125,13 @@ double parse_double(const Source& src, pugi::xml_node node, const std::string& t
   const double v = std::strtod(begin, &end);
   const char* rest = end;
   while (rest && std::isspace(static_cast<unsigned char>(*rest))) ++rest;
-  if (end == begin || *rest != '\0')
-    src.fail(node, "cannot parse " + what + " '" + text + "' as a number");
+  if (end == begin || *rest != '\0') src.fail(node, "cannot parse " + what + " '" + text + "' as a number");
   if (!std::isfinite(v) || (errno == ERANGE && std::abs(v) > 1.0))
     src.fail(node, "non-finite " + what + " '" + text + "'");
   return v;
 }
 
-long long parse_integer(const Source& src, pugi::xml_node node, const std::string& text,
-                        const std::string& what) {
+long long parse_integer(const Source& src, pugi::xml_node node, const std::string& text, const std::string& what) {
   const char* begin = text.c_str();
   while (std::isspace(static_cast<unsigned char>(*begin))) ++begin;
   char* end = nullptr;
@@ -147,12 +144,12 @@ long long parse_integer(const Source& src, pugi::xml_node node, const std::strin
   return v;
 }
 
-std::vector<double> parse_numbers(const Source& src, pugi::xml_node node, const std::string& text,
-                                  std::size_t count, bool allow_single, const std::string& what) {
+std::vector<double> parse_numbers(const Source& src, pugi::xml_node node, const std::string& text, std::size_t count,
+                                  bool allow_single, const std::string& what) {
   const std::vector<std::string> tokens = split_list(text);
   if (tokens.size() != count && !(allow_single && tokens.size() == 1)) {
-    src.fail(node, what + " needs " + (allow_single ? "1 or " : "") + std::to_string(count) +
-                       " numbers, got '" + text + "'");
+    src.fail(node,
+             what + " needs " + (allow_single ? "1 or " : "") + std::to_string(count) + " numbers, got '" + text + "'");
   }
   std::vector<double> v;
   for (const auto& t : tokens) v.push_back(parse_double(src, node, t, what));

@@ -54,15 +54,13 @@ std::vector<std::string> split_list(const std::string& text);
 
 /// Parses one finite floating-point number (the whole string). `what` names it in messages:
 /// "FILE:LINE: cannot parse <what> 'text' as a number" or "...: non-finite <what> 'nan'".
-double parse_double(const Source& src, pugi::xml_node node, const std::string& text,
-                    const std::string& what);
+double parse_double(const Source& src, pugi::xml_node node, const std::string& text, const std::string& what);
 /// Parses a whole-string integer.
-long long parse_integer(const Source& src, pugi::xml_node node, const std::string& text,
-                        const std::string& what);
+long long parse_integer(const Source& src, pugi::xml_node node, const std::string& text, const std::string& what);
 /// Parses exactly `count` finite numbers (comma/space separated); with `allow_single`, one value
 /// is repeated `count` times (Mitsuba's `<rgb value="0.5"/>`, `<scale value="2"/>`).
-std::vector<double> parse_numbers(const Source& src, pugi::xml_node node, const std::string& text,
-                                  std::size_t count, bool allow_single, const std::string& what);
+std::vector<double> parse_numbers(const Source& src, pugi::xml_node node, const std::string& text, std::size_t count,
+                                  bool allow_single, const std::string& what);
 
 /// Checks that `node` has only attributes from `allowed` and every one of `required`.
 void check_attributes(const Source& src, pugi::xml_node node, const std::set<std::string>& allowed,

@@ -126,8 +126,8 @@ TEST(AreaLights, SolidAngleOfSquareMatchesAnalytic) {
     EXPECT_NEAR(AreaLights::to_solid_angle(1.0 / (a * a), from, Vec3(0, 0, 0), Vec3(0, 0, -1)), d * d / (a * a), 1e-12);
   }
   // Oblique: the cosine at the light. From (0, 1, -1) the centre is at 45 degrees: pdf = p d^2 / cos.
-  EXPECT_NEAR(AreaLights::to_solid_angle(2.0, Vec3(0, 1, -1), Vec3(0, 0, 0), Vec3(0, 0, -1)), 2.0 * 2.0 / std::sqrt(0.5),
-              1e-12);
+  EXPECT_NEAR(AreaLights::to_solid_angle(2.0, Vec3(0, 1, -1), Vec3(0, 0, 0), Vec3(0, 0, -1)),
+              2.0 * 2.0 / std::sqrt(0.5), 1e-12);
   // Degenerate: edge-on or coincident -> 0 (invalid).
   EXPECT_EQ(AreaLights::to_solid_angle(1.0, Vec3(1, 0, 0), Vec3(0, 0, 0), Vec3(0, 0, 1)), 0.0);
   EXPECT_EQ(AreaLights::to_solid_angle(1.0, Vec3(0, 0, 0), Vec3(0, 0, 0), Vec3(0, 0, 1)), 0.0);
@@ -141,8 +141,8 @@ TEST(AreaLights, OneSidedRadianceAndEmptyScenes) {
   const Vec3 n(0, 0, 1);
   EXPECT_TRUE((lights.radiance(1, n, Vec3(0.3, 0, 0.9).normalized()) == Color(1, 2, 3)).all());
   EXPECT_TRUE((lights.radiance(1, n, Vec3(0.3, 0, -0.9).normalized()) == 0).all());  // back side
-  EXPECT_TRUE((lights.radiance(0, n, Vec3(0, 0, 1)) == 0).all());                      // not an emitter
-  EXPECT_TRUE((lights.radiance(5, n, Vec3(0, 0, 1)) == 0).all());                      // no such shape
+  EXPECT_TRUE((lights.radiance(0, n, Vec3(0, 0, 1)) == 0).all());                    // not an emitter
+  EXPECT_TRUE((lights.radiance(5, n, Vec3(0, 0, 1)) == 0).all());                    // no such shape
 
   Scene none;
   none.shapes.push_back(rectangle(1, 1, 0, true, Color(1, 1, 1), false));
@@ -161,7 +161,8 @@ TEST(AreaLights, OneSidedRadianceAndEmptyScenes) {
   EXPECT_NEAR(dl.total_area(), 4.0, 1e-12);
   TestRng rng(94);
   for (int i = 0; i < 10000; ++i) ASSERT_NE(dl.sample(rng.uniform2(), rng.uniform()).triangle, 1);
-  for (double u : {0.0, 0.5, std::nextafter(0.5, 0.0), std::nextafter(1.0, 0.0)}) ASSERT_NE(dl.sample(Vec2(0.3, 0.3), u).triangle, 1);
+  for (double u : {0.0, 0.5, std::nextafter(0.5, 0.0), std::nextafter(1.0, 0.0)})
+    ASSERT_NE(dl.sample(Vec2(0.3, 0.3), u).triangle, 1);
 }
 
 }  // namespace

@@ -60,7 +60,8 @@ std::vector<Config> all_configs() {
   for (double t : thetas) out.push_back({diffuse(), t, "Diffuse_theta" + std::to_string(int(t))});
   const std::pair<double, const char*> alphas[] = {{0.01, "0p01"}, {0.1, "0p1"}, {0.3, "0p3"}, {0.7, "0p7"}};
   for (auto [a, an] : alphas)
-    for (double t : thetas) out.push_back({ggx(a), t, std::string("GGX_alpha") + an + "_theta" + std::to_string(int(t))});
+    for (double t : thetas)
+      out.push_back({ggx(a), t, std::string("GGX_alpha") + an + "_theta" + std::to_string(int(t))});
   return out;
 }
 
@@ -303,7 +304,8 @@ TEST(BSDFEval, KnownValues) {
   const Vec3 a(std::sin(1.2), 0, std::cos(1.2)), o(-std::sin(1.0) * 0.6, std::sin(1.0) * 0.8, std::cos(1.0));
   const Vec3 h = (a + o).normalized();
   const double alpha = 0.4;
-  const double expected = ggx_D<double>(alpha, h) * ggx_G1<double>(alpha, a, h) * ggx_G1<double>(alpha, o, h) / (4 * o.z());
+  const double expected =
+      ggx_D<double>(alpha, h) * ggx_G1<double>(alpha, a, h) * ggx_G1<double>(alpha, o, h) / (4 * o.z());
   EXPECT_NEAR(bsdf_eval<double>(ggx(alpha), a, o)[0], expected, 1e-14 * expected);
 }
 
@@ -312,15 +314,15 @@ TEST(BSDFEval, GGXNormalizations) {
   // integral G1(v,m) max(0, v.m) D(m) / v.z dm = 1 (Heitz 2014 Eq. 18): this pins G1 to the Smith
   // masking of GGX. Quadrature over the upper hemisphere (D jumps to 0 at its rim); error < 1e-4.
   for (double alpha : {0.01, 0.1, 0.3, 0.7}) {
-    const double nd = test::integrate_sphere(Vec3(0, 0, 1), kQuadS, kQuadPhi / 4,
-                                             [&](const Vec3& m) { return ggx_D<double>(alpha, m) * std::max(0.0, m.z()); },
-                                             kPi / 2);
+    const double nd = test::integrate_sphere(
+        Vec3(0, 0, 1), kQuadS, kQuadPhi / 4,
+        [&](const Vec3& m) { return ggx_D<double>(alpha, m) * std::max(0.0, m.z()); }, kPi / 2);
     EXPECT_NEAR(nd, 1.0, 2e-4) << "alpha " << alpha;
     for (double theta : {0.0, 1.0, 1.48}) {
       const Vec3 v(std::sin(theta), 0, std::cos(theta));
-      const double vis = test::integrate_sphere(Vec3(0, 0, 1), kQuadS, kQuadPhi / 4,
-                                                [&](const Vec3& m) { return ggx_visible_normal_pdf(alpha, v, m); },
-                                                kPi / 2);
+      const double vis = test::integrate_sphere(
+          Vec3(0, 0, 1), kQuadS, kQuadPhi / 4, [&](const Vec3& m) { return ggx_visible_normal_pdf(alpha, v, m); },
+          kPi / 2);
       EXPECT_NEAR(vis, 1.0, 2e-4) << "alpha " << alpha << " theta " << theta;
     }
   }

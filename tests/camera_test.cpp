@@ -13,9 +13,7 @@ namespace qsil {
 namespace {
 
 double deg(double radians) { return radians * 180.0 / kPi; }
-double angle_between(const Vec3& a, const Vec3& b) {
-  return deg(std::atan2(a.cross(b).norm(), a.dot(b)));
-}
+double angle_between(const Vec3& a, const Vec3& b) { return deg(std::atan2(a.cross(b).norm(), a.dot(b))); }
 
 Camera make_camera(int w, int h, double fov, const std::string& axis) {
   Camera c;

@@ -12,8 +12,8 @@
 #include "qsil/math.h"
 
 #include <algorithm>
-#include <cstdint>
 #include <cmath>
+#include <cstdint>
 #include <functional>
 #include <numeric>
 #include <sstream>
@@ -35,7 +35,10 @@ struct TestRng {
   }
   /// Uniform in [0,1) with 53 random bits.
   double uniform() { return double(next_u64() >> 11) * 0x1.0p-53; }
-  Vec2 uniform2() { const double a = uniform(); return {a, uniform()}; }
+  Vec2 uniform2() {
+    const double a = uniform();
+    return {a, uniform()};
+  }
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -94,8 +97,8 @@ struct Chi2Result {
 
 /// Pearson chi-square test of observed counts against expected counts (same total), pooling as
 /// Mitsuba's chi2.py: cells are visited by increasing expected count; cells with expected < 5 are
-/// pooled together, and a pool still below 5 is merged into the next larger cell. A cell with expected == 0 but observed > 0 fails
-/// immediately (a sample where the density says none can be). Rejects when p < significance.
+/// pooled together, and a pool still below 5 is merged into the next larger cell. A cell with expected == 0 but
+/// observed > 0 fails immediately (a sample where the density says none can be). Rejects when p < significance.
 inline Chi2Result chi2_test(const std::vector<double>& observed, const std::vector<double>& expected,
                             double significance, double min_expected = 5.0) {
   Chi2Result r;
@@ -146,8 +149,8 @@ inline Chi2Result chi2_test(const std::vector<double>& observed, const std::vect
   }
   r.p_value = chi2_survival(chsq, dof);
   r.passed = r.p_value >= significance;
-  msg << "chi2 = " << chsq << ", dof = " << dof << ", p = " << r.p_value << " (significance "
-      << significance << ", " << pooled_cells << " cells pooled)";
+  msg << "chi2 = " << chsq << ", dof = " << dof << ", p = " << r.p_value << " (significance " << significance << ", "
+      << pooled_cells << " cells pooled)";
   r.message = msg.str();
   return r;
 }
@@ -189,7 +192,8 @@ inline void sphere_quadrature(const Vec3& center, int n_s, int n_phi,
 inline double integrate_sphere(const Vec3& center, int n_s, int n_phi, const std::function<double(const Vec3&)>& f,
                                double theta_max = kPi) {
   double sum = 0;
-  sphere_quadrature(center, n_s, n_phi, [&](const Vec3& d, double w) { sum += f(d) * w; }, theta_max);
+  sphere_quadrature(
+      center, n_s, n_phi, [&](const Vec3& d, double w) { sum += f(d) * w; }, theta_max);
   return sum;
 }
 

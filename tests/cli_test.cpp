@@ -4,13 +4,13 @@
 
 #include <gtest/gtest.h>
 
+#include <unistd.h>
 #include <algorithm>
 #include <array>
-#include <cstring>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <string>
-#include <unistd.h>
 
 namespace {
 
@@ -88,8 +88,10 @@ TEST(CLI, ParameterErrorsExitWithCode2) {
 // Repeatable options take one value each, wherever they stand relative to the scene argument.
 TEST(CLI, RepeatedOptionsBeforeTheSceneDoNotSwallowIt) {
   const std::string out = tmp("qsil_order.exr");
-  const CliRun r = run_qsil("fd --param object:translate:0,1,0 --param light:translate:1,0,0 -D res=8 "
-                            "scenes/shadow-quad.xml -q --spp 1 -o " + out);
+  const CliRun r = run_qsil(
+      "fd --param object:translate:0,1,0 --param light:translate:1,0,0 -D res=8 "
+      "scenes/shadow-quad.xml -q --spp 1 -o " +
+      out);
   EXPECT_EQ(r.code, 0) << r.err;
   EXPECT_EQ(qsil::read_exr(out).channel_names.size(), 9u);
 }
@@ -136,8 +138,10 @@ TEST(CLI, GradIsBitIdenticalForAnyThreadCount) {
 TEST(CLI, GradWritesTheDocumentedChannelsAttributesAndPreviews) {
   const std::string out = tmp("qsil_grad_layout.exr"), dir = tmp("qsil_grad_previews");
   std::filesystem::remove_all(dir);
-  const CliRun r = run_qsil("grad scenes/shadow-quad.xml -q -D res=16 --spp 2 --param object:translate:0,1,0 "
-                     "--param light:rotate:1,0,0 -o " + out + " --preview-dir " + dir);
+  const CliRun r = run_qsil(
+      "grad scenes/shadow-quad.xml -q -D res=16 --spp 2 --param object:translate:0,1,0 "
+      "--param light:rotate:1,0,0 -o " +
+      out + " --preview-dir " + dir);
   ASSERT_EQ(r.code, 0) << r.err;
   const qsil::Image img = qsil::read_exr(out);
   for (const char* ch : {"R", "G", "B", "dtheta0.R", "dtheta0.G", "dtheta0.B", "dtheta1.R", "dtheta1.G", "dtheta1.B"})

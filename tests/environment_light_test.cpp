@@ -241,7 +241,8 @@ TEST(EnvironmentLightSampling, Chi2RejectsFivePercentPdfTilt) {
     for (int x = 0; x < 16 * 4; ++x) {
       const double u = (x + 0.5) / 64, v = (y + 0.5) / 32;
       const Vec3 dl = ref_uv_to_dir(u, v);
-      const double p = light.pdf(env.to_world * dl) * (1 + 0.05 * dl.y()) * std::sin(kPi * v) * (kPi / 32) * (2 * kPi / 64);
+      const double p =
+          light.pdf(env.to_world * dl) * (1 + 0.05 * dl.y()) * std::sin(kPi * v) * (kPi / 32) * (2 * kPi / 64);
       integrals[size_t(y / 4) * 16 + size_t(x / 4)] += p;
       total += p;
     }

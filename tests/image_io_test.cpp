@@ -39,7 +39,11 @@ TEST(ImageIO, ExrRoundTripKeepsChannelsValuesAndAttributes) {
 TEST(ImageIO, ReadingAMissingOrBrokenFileIsAOneLineError) {
   EXPECT_THROW(read_exr("/nonexistent/x.exr"), Error);
   const auto path = std::filesystem::temp_directory_path() / "qsil_broken_test.exr";
-  { std::FILE* f = std::fopen(path.c_str(), "w"); std::fputs("not an exr", f); std::fclose(f); }
+  {
+    std::FILE* f = std::fopen(path.c_str(), "w");
+    std::fputs("not an exr", f);
+    std::fclose(f);
+  }
   try {
     read_exr(path);
     FAIL() << "no error";

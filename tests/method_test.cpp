@@ -1,8 +1,8 @@
 // The one method type (qsil/method.h): every name parses back to its method, the subsets accept
 // exactly their members with an error that lists them, and the structure predicates agree with
 // what each method samples from.
-#include "qsil/error.h"
 #include "qsil/method.h"
+#include "qsil/error.h"
 
 #include <gtest/gtest.h>
 
@@ -41,8 +41,8 @@ TEST(Method, SubsetsRejectOtherMethodsNamingTheOptionAndTheChoices) {
 
 TEST(Method, StructurePredicates) {
   for (Method m : kAllMethods) {
-    const bool in_edge = std::find(kEdgeSamplingMethods.begin(), kEdgeSamplingMethods.end(), m) !=
-                         kEdgeSamplingMethods.end();
+    const bool in_edge =
+        std::find(kEdgeSamplingMethods.begin(), kEdgeSamplingMethods.end(), m) != kEdgeSamplingMethods.end();
     EXPECT_EQ(samples_edges(m), in_edge) << method_name(m);
     EXPECT_LE(uses_quadrics(m), uses_edge_forest(m)) << method_name(m);  // quadrics need a forest
     EXPECT_LE(uses_edge_forest(m), samples_edges(m)) << method_name(m);

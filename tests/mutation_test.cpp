@@ -192,8 +192,8 @@ std::string icosphere_obj() {
 
 /// The outcome of one `qsil` run.
 struct Outcome {
-  int status = 0;        ///< raw wait status
-  std::string err;       ///< stderr
+  int status = 0;   ///< raw wait status
+  std::string err;  ///< stderr
 };
 
 /// Runs qsil in `dir` (SUBCOMMAND scene.xml ARGS -o out.exr), killed after 120 s.
@@ -245,9 +245,7 @@ std::string check_run(const fs::path& dir, const std::string& subcommand, const 
     const Image img = read_exr(dir / "out.exr");
     if (int(img.channel_names.size()) != expected_channels || img.width <= 0 || img.height <= 0)
       return subcommand + ": out.exr has " + std::to_string(img.channel_names.size()) + " channels";
-  } catch (const std::exception& e) {
-    return subcommand + ": out.exr is not a whole EXR: " + e.what();
-  }
+  } catch (const std::exception& e) { return subcommand + ": out.exr is not a whole EXR: " + e.what(); }
   return "";
 }
 
@@ -357,8 +355,8 @@ TEST(SpotHugeVertex, ExitsZeroOrTwoWithoutPartialOutput) {
     for (const auto& l : lines) text += l + "\n";
     spit(dir / "meshes" / "spot.obj", text);
     Tally tally;
-    expect_survives(dir, std::string("spot '") + c.vertex + "'", "explicit", {dir / "scene.xml", dir / "meshes" / "spot.obj"},
-                    tally);
+    expect_survives(dir, std::string("spot '") + c.vertex + "'", "explicit",
+                    {dir / "scene.xml", dir / "meshes" / "spot.obj"}, tally);
     // The verdict itself, and for 2 the one-line error names the OBJ file, its line and the value.
     const Outcome o = run_in(dir, "grad", "--param spot:translate:0,1,0");
     ASSERT_TRUE(WIFEXITED(o.status)) << c.vertex;

@@ -4,10 +4,11 @@
 /// Embree would abort the process on its `ray.valid()` assertion. And the gradient of the scene
 /// that aborted (spot-mirror with one Spot vertex at 1e30, placed in memory past the loader that
 /// now refuses it) completes. And rays that pass through back faces (IgnoreSet::through_back_faces,
-/// which keep the radiance of smooth-shaded meshes continuous across edges) skip exactly the back sides of one-sided surfaces.
+/// which keep the radiance of smooth-shaded meshes continuous across edges) skip exactly the back sides of one-sided
+/// surfaces.
 
-#include "qsil/integrators/estimator.h"
 #include "qsil/ray_tracer.h"
+#include "qsil/integrators/estimator.h"
 #include "qsil/scene.h"
 #include "test_data.h"
 #include "test_scenes.h"
@@ -62,7 +63,7 @@ TEST(RayTracer, InvalidRaysAreCountedMisses) {
       {Vec3(0, 0, kInf), toward, kInf},
       {Vec3(nan, 0, 4), toward, kInf},
       {Vec3(0, 0, 4), Vec3(0, nan, -1), kInf},
-      {Vec3(0, 0, 4), Vec3(0, 0, 1e-60), kInf},                      // rounds to a zero float direction
+      {Vec3(0, 0, 4), Vec3(0, 0, 1e-60), kInf},  // rounds to a zero float direction
       {Vec3(0, 0, 4), toward, nan},
   };
   int n = 0;
@@ -164,6 +165,5 @@ TEST(RayTracer, ThroughBackFacesSkipsOnlyBackSidesOfOneSidedSurfaces) {
   both.prims[1] = {0, 1};
   EXPECT_EQ(rt.intersect(Vec3(0.1, 0.2, 1), Vec3(0, 0, -1), kInf, both).shape, 1);
 }
-
 
 }  // namespace qsil

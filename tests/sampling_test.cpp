@@ -45,23 +45,22 @@ test::Chi2Result chi2_direction_warp(Warp warp, BinIntegral bin_integral, uint64
 }
 
 TEST(SamplingWarps, UniformSphereChi2) {
-  const auto r = chi2_direction_warp(square_to_uniform_sphere,
-                                     [](double c0, double c1) { return (c1 - c0) * 2 * kPi * uniform_sphere_pdf(); }, 1);
+  const auto r = chi2_direction_warp(
+      square_to_uniform_sphere, [](double c0, double c1) { return (c1 - c0) * 2 * kPi * uniform_sphere_pdf(); }, 1);
   EXPECT_TRUE(r.passed) << r.message;
 }
 
 TEST(SamplingWarps, UniformHemisphereChi2) {
-  const auto r = chi2_direction_warp(square_to_uniform_hemisphere, [](double c0, double c1) {
-    return c0 >= 0 ? (c1 - c0) * 2 * kPi * uniform_hemisphere_pdf(0.5) : 0.0;
-  }, 2);
+  const auto r = chi2_direction_warp(
+      square_to_uniform_hemisphere,
+      [](double c0, double c1) { return c0 >= 0 ? (c1 - c0) * 2 * kPi * uniform_hemisphere_pdf(0.5) : 0.0; }, 2);
   EXPECT_TRUE(r.passed) << r.message;
 }
 
 TEST(SamplingWarps, CosineHemisphereChi2) {
   // integral of cos/pi over cos in [c0,c1] and all phi: (c1^2 - c0^2) (2 pi) / (2 pi).
-  const auto r = chi2_direction_warp(square_to_cosine_hemisphere, [](double c0, double c1) {
-    return c0 >= 0 ? (c1 * c1 - c0 * c0) : 0.0;
-  }, 3);
+  const auto r = chi2_direction_warp(
+      square_to_cosine_hemisphere, [](double c0, double c1) { return c0 >= 0 ? (c1 * c1 - c0 * c0) : 0.0; }, 3);
   EXPECT_TRUE(r.passed) << r.message;
   // The pdf helper agrees with the normalised density, and the directions are unit.
   TestRng rng(4);
@@ -75,9 +74,8 @@ TEST(SamplingWarps, CosineHemisphereChi2) {
 
 TEST(SamplingWarps, CosineHemisphereChi2DetectsWrongDensity) {
   // Negative control: the uniform hemisphere warp tested against the cosine density must fail.
-  const auto r = chi2_direction_warp(square_to_uniform_hemisphere, [](double c0, double c1) {
-    return c0 >= 0 ? (c1 * c1 - c0 * c0) : 0.0;
-  }, 5);
+  const auto r = chi2_direction_warp(
+      square_to_uniform_hemisphere, [](double c0, double c1) { return c0 >= 0 ? (c1 * c1 - c0 * c0) : 0.0; }, 5);
   EXPECT_FALSE(r.passed) << r.message;
 }
 
@@ -209,11 +207,10 @@ TEST(SamplingDistribution1D, RejectsInvalidWeights) {
 // ---------------------------------------------------------------------------------------------
 
 /// 5 columns x 4 rows with a zero row, a zero column and isolated zeros.
-const std::vector<double> kGrid = {
-    0.0, 1.0, 0.0, 2.0, 0.5,   // row 0
-    0.0, 0.0, 0.0, 0.0, 0.0,   // row 1: all zero
-    0.0, 4.0, 1.0, 0.0, 0.25,  // row 2
-    0.0, 0.0, 3.0, 1.0, 0.0};  // row 3
+const std::vector<double> kGrid = {0.0, 1.0, 0.0, 2.0, 0.5,   // row 0
+                                   0.0, 0.0, 0.0, 0.0, 0.0,   // row 1: all zero
+                                   0.0, 4.0, 1.0, 0.0, 0.25,  // row 2
+                                   0.0, 0.0, 3.0, 1.0, 0.0};  // row 3
 
 TEST(SamplingDistribution2D, NeverReturnsZeroCellAndPdfMatches) {
   const Distribution2D d(kGrid, 5, 4);

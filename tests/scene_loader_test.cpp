@@ -25,9 +25,7 @@ std::string bundled(const std::string& name) { return std::string(QSIL_SOURCE_DI
 std::string load_error(const std::string& file, const std::map<std::string, std::string>& defs = {}) {
   try {
     load_scene(file, defs);
-  } catch (const Error& e) {
-    return e.what();
-  }
+  } catch (const Error& e) { return e.what(); }
   return "";
 }
 
@@ -38,8 +36,7 @@ const Shape& shape(const Scene& s, const std::string& id) {
 }
 
 bool has_vertex(const TriangleMesh& m, const Vec3& p) {
-  return std::any_of(m.positions.begin(), m.positions.end(),
-                     [&](const Vec3& q) { return (q - p).norm() < 1e-12; });
+  return std::any_of(m.positions.begin(), m.positions.end(), [&](const Vec3& q) { return (q - p).norm() < 1e-12; });
 }
 
 /// Slab test: does the ray o + t d, t > 0, meet the box?
@@ -92,8 +89,7 @@ TEST(SceneLoaderTest, DefaultsSubstitutionAndOverrides) {
   EXPECT_DOUBLE_EQ(s.bsdfs[shape(s, "tet_ref").bsdf].reflectance[0], 0.25);
 
   std::vector<std::string> warnings;
-  const Scene o = load_scene(data("features.xml"), {{"res", "64"}, {"albedo", "0.75"}, {"unused", "1"}},
-                             &warnings);
+  const Scene o = load_scene(data("features.xml"), {{"res", "64"}, {"albedo", "0.75"}, {"unused", "1"}}, &warnings);
   EXPECT_EQ(o.camera.width, 64);
   EXPECT_DOUBLE_EQ(o.bsdfs[shape(o, "tet_ref").bsdf].reflectance[1], 0.75);
   ASSERT_EQ(warnings.size(), 1u);
@@ -331,8 +327,7 @@ TEST(SceneLoaderTest, SpotMirrorShowsSpotOnlyInTheMirror) {
 
   int direct_hits = 0;
   for (int j = 0; j <= 2 * cam.height; ++j)
-    for (int i = 0; i <= 2 * cam.width; ++i)
-      direct_hits += ray_hits_box(o, cam.direction(0.5 * i, 0.5 * j), box);
+    for (int i = 0; i <= 2 * cam.width; ++i) direct_hits += ray_hits_box(o, cam.direction(0.5 * i, 0.5 * j), box);
   EXPECT_EQ(direct_hits, 0);
 
   int on_mirror = 0, reflected_hits = 0;
@@ -360,10 +355,10 @@ TEST(SceneLoaderTest, ShadowQuadGeometry) {
   EXPECT_FALSE(object.is_emitter);
   EXPECT_EQ(s.environment.type, Environment::Type::Constant);
   const Box3 ob = object.mesh.bounds(), fb = floor.mesh.bounds(), lb = light.mesh.bounds();
-  EXPECT_GT(ob.lo.y(), fb.hi.y());                // on the floor, not through it
+  EXPECT_GT(ob.lo.y(), fb.hi.y());  // on the floor, not through it
   EXPECT_LT(ob.lo.y(), fb.hi.y() + 1e-2);
-  EXPECT_NEAR(ob.extent().y(), 1.16, 0.01);       // about one unit tall
-  EXPECT_GT(lb.lo.y(), ob.hi.y());                // the light is above the object
+  EXPECT_NEAR(ob.extent().y(), 1.16, 0.01);                           // about one unit tall
+  EXPECT_GT(lb.lo.y(), ob.hi.y());                                    // the light is above the object
   EXPECT_NEAR(light.mesh.face_cross(0).normalized().y(), -1, 1e-12);  // facing down
   EXPECT_NEAR(floor.mesh.face_cross(0).normalized().y(), 1, 1e-12);   // facing up
   // The camera sees the object: its centre ray passes near it, its whole box projects inside.

@@ -1,7 +1,7 @@
 #pragma once
-// The soundness set of the edge forest (points where a false reject would show), shared by the rejection-test tests of every method
-// (tests/edgetree/forest_soundness_test.cpp, tests/baselines/): a subdivided cube and shading
-// points uniform around a mesh, near its surface and on its triangle planes.
+// The soundness set of the edge forest (points where a false reject would show), shared by the rejection-test tests of
+// every method (tests/edgetree/forest_soundness_test.cpp, tests/baselines/): a subdivided cube and shading points
+// uniform around a mesh, near its surface and on its triangle planes.
 #include "qsil/scene.h"
 
 #include <cmath>

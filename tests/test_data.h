@@ -36,9 +36,12 @@ inline std::string data_file(const std::string& relative) {
 /// std::runtime_error for an unknown name or a missing file (see data_file()).
 inline std::string mesh_file(const std::string& name) {
   static const std::map<std::string, std::string> where = {
-      {"spot.obj", "scenes/meshes"},           {"bunny.obj", "scenes/meshes"},
-      {"teapot.obj", "scenes/stability/meshes"}, {"wingnut.obj", "scenes/stability/meshes"},
-      {"bob.obj", "tests/data/meshes"},        {"torus.obj", "tests/data/meshes"},
+      {"spot.obj", "scenes/meshes"},
+      {"bunny.obj", "scenes/meshes"},
+      {"teapot.obj", "scenes/stability/meshes"},
+      {"wingnut.obj", "scenes/stability/meshes"},
+      {"bob.obj", "tests/data/meshes"},
+      {"torus.obj", "tests/data/meshes"},
   };
   const auto it = where.find(name);
   if (it == where.end()) throw std::runtime_error("unknown test mesh '" + name + "' (see tests/data/meshes/README.md)");

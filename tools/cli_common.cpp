@@ -13,10 +13,10 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <cmath>
 #include <iostream>
 #include <vector>
 
@@ -38,7 +38,8 @@ void add_common_flags(CLI::App& app, CommonFlags& flags, const std::string& defa
   app.add_option("-o,--output", flags.output, "Output OpenEXR file")->capture_default_str();
   app.add_option("--preview", flags.preview, "Also write a PNG preview to this path");
   app.add_option("--exposure", flags.exposure, "Preview exposure in stops (primal previews)");
-  app.add_flag_callback("-q,--quiet", [&flags] { flags.render.progress = false; }, "No progress bar");
+  app.add_flag_callback(
+      "-q,--quiet", [&flags] { flags.render.progress = false; }, "No progress bar");
 }
 
 void add_param_option(CLI::App& app, std::vector<std::string>& params) {
@@ -138,14 +139,13 @@ int run_python_script(const std::string& who, const std::string& name, const std
   while (waitpid(pid, &status, 0) < 0)
     if (errno != EINTR) return -1;
   const int code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  if (code != 0) std::cerr << who << ": warning: " << python << " " << script.string() << " failed (exit " << code << ")\n";
+  if (code != 0)
+    std::cerr << who << ": warning: " << python << " " << script.string() << " failed (exit " << code << ")\n";
   return code;
 }
 
-
-
-void write_gradient_outputs(const CommonFlags& flags, const std::vector<ParameterSpec>& params,
-                            const RenderResult& r, const std::string& preview_dir, const std::string& method) {
+void write_gradient_outputs(const CommonFlags& flags, const std::vector<ParameterSpec>& params, const RenderResult& r,
+                            const std::string& preview_dir, const std::string& method) {
   const int K = int(params.size());
   Image img = r.film.to_image();
   add_render_attributes(img, flags, r);
@@ -159,7 +159,8 @@ void write_gradient_outputs(const CommonFlags& flags, const std::vector<Paramete
     std::printf("  dtheta%d (%s): image sum %.6g +- %.3g (1 s.e.)", k, params[size_t(k)].text.c_str(), s.sum,
                 s.standard_error);
     if (!preview_dir.empty()) {
-      const std::filesystem::path png = std::filesystem::path(preview_dir) / (FilmLayout::derivative_prefix(k) + ".png");
+      const std::filesystem::path png =
+          std::filesystem::path(preview_dir) / (FilmLayout::derivative_prefix(k) + ".png");
       const double range = write_derivative_png(png, img, FilmLayout::derivative_prefix(k));
       std::printf(", preview %s range +-%.4g", png.c_str(), range);
     }

@@ -25,7 +25,7 @@ struct CommonFlags {
   RenderOptions render;
   std::string output;
   std::string preview;
-  double exposure = 0;               ///< preview exposure in stops
+  double exposure = 0;  ///< preview exposure in stops
 };
 
 /// Adds SCENE, -D, --spp, --seed, --threads, -o, --preview, --exposure, --quiet to `app`.
@@ -60,8 +60,8 @@ double mrays_per_second(const RenderResult& r);
 /// qsil:param<k>, `method` as qsil:method), and with a preview directory one diverging PNG per
 /// parameter plus the primal PNG; prints each parameter's image sum +- standard error and
 /// preview range.
-void write_gradient_outputs(const CommonFlags& flags, const std::vector<ParameterSpec>& params,
-                            const RenderResult& r, const std::string& preview_dir, const std::string& method);
+void write_gradient_outputs(const CommonFlags& flags, const std::vector<ParameterSpec>& params, const RenderResult& r,
+                            const std::string& preview_dir, const std::string& method);
 
 /// Adds `--scripts-dir DIR` (where the chart scripts are, see find_script) to `app`.
 void add_scripts_dir_option(CLI::App& app, std::string& scripts_dir);

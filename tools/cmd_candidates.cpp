@@ -42,38 +42,41 @@ int run(const Flags& f) {
       f.out_dir.empty() ? std::filesystem::path("out") / "candidates" : std::filesystem::path(f.out_dir);
   write_candidates(scene, rep, f.scene, dir, f.size);
   for (const MethodCandidates& m : rep.methods)
-    std::printf("candidates %-13s %6lld candidates, %5lld silhouettes (%lld facing the upper hemisphere), "
-                "non-silhouette mass %.4f, dead-end mass %.4f%s\n",
-                std::string(method_name(m.method)).c_str(), m.candidates, m.silhouettes, m.upper,
-                m.non_silhouette_mass, m.dead_end_mass,
-                m.leaf_edges >= 0 ? (", leaf edges tested " + std::to_string(m.leaf_edges)).c_str() : "");
+    std::printf(
+        "candidates %-13s %6lld candidates, %5lld silhouettes (%lld facing the upper hemisphere), "
+        "non-silhouette mass %.4f, dead-end mass %.4f%s\n",
+        std::string(method_name(m.method)).c_str(), m.candidates, m.silhouettes, m.upper, m.non_silhouette_mass,
+        m.dead_end_mass, m.leaf_edges >= 0 ? (", leaf edges tested " + std::to_string(m.leaf_edges)).c_str() : "");
   if (!f.no_grid &&
-      run_python_script("candidates", "candidates_grid.py", {(dir / "summary.json").string(), (dir / "grid.png").string()},
-                        f.scripts_dir) != 0)
+      run_python_script("candidates", "candidates_grid.py",
+                        {(dir / "summary.json").string(), (dir / "grid.png").string()}, f.scripts_dir) != 0)
     std::fprintf(stderr, "candidates: warning: the grid image was not drawn\n");
   std::printf("candidates: %s at %s, p = (%.4f, %.4f, %.4f), %lld true silhouettes (%lld upper) -> %s\n",
-              f.scene.c_str(), rep.where.c_str(), rep.p.x(), rep.p.y(), rep.p.z(), rep.true_silhouettes,
-              rep.true_upper, dir.string().c_str());
+              f.scene.c_str(), rep.where.c_str(), rep.p.x(), rep.p.y(), rep.p.z(), rep.true_silhouettes, rep.true_upper,
+              dir.string().c_str());
   return 0;
 }
 
-const CommandRegistrar registrar{{"candidates", "Edges each method can sample from one shading point ([QSS] Fig. 8)",
-  [](CLI::App& app) -> std::function<int()> {
-    auto f = std::make_shared<Flags>();
-    add_scene_options(app, f->scene, f->defines);
-    app.add_option("--pixel", f->study.pixel, "Pixel X,Y whose first hit is the shading point")->delimiter(',')->expected(2);
-    app.add_option("--point", f->study.point, "Shading point X,Y,Z (with --normal)")->delimiter(',')->expected(3);
-    app.add_option("--normal", f->study.normal, "Shading normal X,Y,Z (with --point)")->delimiter(',')->expected(3);
-    app.add_option("--methods", f->methods, "Methods, comma separated: " + method_list(kEdgeSamplingMethods))
-        ->delimiter(',');
-    app.add_option("--shapes", f->study.shapes, "Eligible shape ids, comma separated (default: every shape)")
-        ->delimiter(',');
-    app.add_option("--size", f->size, "Larger side of the pictures in pixels")->capture_default_str();
-    app.add_option("--out-dir", f->out_dir, "Output directory (default out/candidates)");
-    app.add_flag("--no-grid", f->no_grid, "Skip the labelled grid image (no Python)");
-    add_scripts_dir_option(app, f->scripts_dir);
-    return [f] { return run(*f); };
-  }}};
+const CommandRegistrar registrar{
+    {"candidates", "Edges each method can sample from one shading point ([QSS] Fig. 8)",
+     [](CLI::App& app) -> std::function<int()> {
+       auto f = std::make_shared<Flags>();
+       add_scene_options(app, f->scene, f->defines);
+       app.add_option("--pixel", f->study.pixel, "Pixel X,Y whose first hit is the shading point")
+           ->delimiter(',')
+           ->expected(2);
+       app.add_option("--point", f->study.point, "Shading point X,Y,Z (with --normal)")->delimiter(',')->expected(3);
+       app.add_option("--normal", f->study.normal, "Shading normal X,Y,Z (with --point)")->delimiter(',')->expected(3);
+       app.add_option("--methods", f->methods, "Methods, comma separated: " + method_list(kEdgeSamplingMethods))
+           ->delimiter(',');
+       app.add_option("--shapes", f->study.shapes, "Eligible shape ids, comma separated (default: every shape)")
+           ->delimiter(',');
+       app.add_option("--size", f->size, "Larger side of the pictures in pixels")->capture_default_str();
+       app.add_option("--out-dir", f->out_dir, "Output directory (default out/candidates)");
+       app.add_flag("--no-grid", f->no_grid, "Skip the labelled grid image (no Python)");
+       add_scripts_dir_option(app, f->scripts_dir);
+       return [f] { return run(*f); };
+     }}};
 
 }  // namespace
 }  // namespace qsil::cli

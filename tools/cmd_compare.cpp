@@ -87,9 +87,8 @@ CompareOptions compare_options(const Flags& f) {
 void print_summary(const CompareReport& rep, const CompareOptions& o, const std::vector<ParameterSpec>& params) {
   const Reference& ref = rep.reference;
   std::printf("compare: %s, %s, %zu method(s) x %zu %s, reference %s (rel. noise floor %.3g) -> %s\n", o.scene.c_str(),
-              params[0].text.c_str(), o.methods.size(), rep.targets.size(),
-              o.equal_time ? "budget(s)" : "spp count(s)", rep.reference_description.c_str(),
-              ref.noise_floor / ref.mean_sq, (o.out / "results.csv").c_str());
+              params[0].text.c_str(), o.methods.size(), rep.targets.size(), o.equal_time ? "budget(s)" : "spp count(s)",
+              rep.reference_description.c_str(), ref.noise_floor / ref.mean_sq, (o.out / "results.csv").c_str());
   for (const CompareSetup& s : rep.setups)
     std::printf("  %-14s set-up once: %s\n", std::string(method_name(s.method)).c_str(), s.report.describe().c_str());
   for (const CompareRow& r : rep.rows) {
@@ -97,30 +96,32 @@ void print_summary(const CompareReport& rep, const CompareOptions& o, const std:
     char target[64];
     std::snprintf(target, sizeof target, o.equal_time ? "budget %g s" : "%g spp", r.target);
     std::printf("  %-14s %s: %6d spp, %7.3f s, rel. MSE %.4g, image-sum error %.4g (se %.3g), %lld non-finite px\n",
-                std::string(method_name(r.method)).c_str(), target, r.run.result.spp, r.run.wall_seconds,
-                r.err.rel_mse, r.err.sum_error[0], r.err.sum_se[0], r.err.nonfinite_pixels);
+                std::string(method_name(r.method)).c_str(), target, r.run.result.spp, r.run.wall_seconds, r.err.rel_mse,
+                r.err.sum_error[0], r.err.sum_se[0], r.err.nonfinite_pixels);
   }
   std::fflush(stdout);
 }
 
-const CommandRegistrar registrar{{"compare", "Equal-time comparison of gradient methods against a reference",
-  [](CLI::App& app) -> std::function<int()> {
-    auto flags = std::make_shared<Flags>();
-    add_options(app, *flags);
-    return [flags]() {
-      const CompareOptions options = compare_options(*flags);
-      const Scene scene = load_scene_with_flags(flags->scene, flags->defines);
-      const auto params = parse_parameters(flags->params, scene);
-      const CompareReport report = run_compare(scene, params, options, flags->quiet ? nullptr : &std::cerr);
-      print_summary(report, options, params);
-      // ---- charts (matplotlib, Debian's python3 found on PATH)
-      if (!flags->no_plot && run_python_script("compare", "plot_compare.py", {options.out.string()}, flags->scripts_dir) != 0) {
-        std::cerr << "warning: the charts were not drawn; results.csv and results.json are written\n";
-        return 1;
-      }
-      return 0;
-    };
-  }}};
+const CommandRegistrar registrar{
+    {"compare", "Equal-time comparison of gradient methods against a reference",
+     [](CLI::App& app) -> std::function<int()> {
+       auto flags = std::make_shared<Flags>();
+       add_options(app, *flags);
+       return [flags]() {
+         const CompareOptions options = compare_options(*flags);
+         const Scene scene = load_scene_with_flags(flags->scene, flags->defines);
+         const auto params = parse_parameters(flags->params, scene);
+         const CompareReport report = run_compare(scene, params, options, flags->quiet ? nullptr : &std::cerr);
+         print_summary(report, options, params);
+         // ---- charts (matplotlib, Debian's python3 found on PATH)
+         if (!flags->no_plot &&
+             run_python_script("compare", "plot_compare.py", {options.out.string()}, flags->scripts_dir) != 0) {
+           std::cerr << "warning: the charts were not drawn; results.csv and results.json are written\n";
+           return 1;
+         }
+         return 0;
+       };
+     }}};
 
 }  // namespace
 }  // namespace qsil::cli

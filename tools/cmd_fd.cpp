@@ -10,32 +10,33 @@
 namespace qsil::cli {
 namespace {
 
-const CommandRegistrar registrar{{"fd", "Finite-difference derivatives (central, common random numbers)",
-  [](CLI::App& app) -> std::function<int()> {
-    struct Flags : CommonFlags {
-      std::vector<std::string> params;
-      std::vector<double> h;
-      std::string preview_dir;
-    };
-    auto flags = std::make_shared<Flags>();
-    add_common_flags(app, *flags, "fd.exr");
-    add_param_option(app, flags->params);
-    add_fd_step_option(app, flags->h);
-    app.add_option("--preview-dir", flags->preview_dir, "Write primal.png and one diverging PNG per parameter here");
-    return [flags]() {
-      const Scene scene = load_scene_with_flags(flags->scene, flags->defines);
-      const auto params = parse_parameters(flags->params, scene);
-      const Estimator estimator(scene, EstimatorConfig::finite_differences(params, fd_steps(scene, params, flags->h)));
-      const RenderResult r = estimator.run(flags->render);
-      report_nonfinite(r);
-      std::printf("fd: %s %dx%d, %d spp, %zu parameter(s), %.3f s (set-up %.3f s) -> %s\n", flags->scene.c_str(),
-                  r.film.width(), r.film.height(), r.spp, params.size(), estimator.setup().seconds + r.seconds,
-                  estimator.setup().seconds, flags->output.c_str());
-      for (size_t k = 0; k < params.size(); ++k) std::printf("  h%zu = %.6g\n", k, estimator.fd_steps()[k]);
-      write_gradient_outputs(*flags, params, r, flags->preview_dir, "fd");
-      return 0;
-    };
-  }}};
+const CommandRegistrar registrar{
+    {"fd", "Finite-difference derivatives (central, common random numbers)", [](CLI::App& app) -> std::function<int()> {
+       struct Flags : CommonFlags {
+         std::vector<std::string> params;
+         std::vector<double> h;
+         std::string preview_dir;
+       };
+       auto flags = std::make_shared<Flags>();
+       add_common_flags(app, *flags, "fd.exr");
+       add_param_option(app, flags->params);
+       add_fd_step_option(app, flags->h);
+       app.add_option("--preview-dir", flags->preview_dir, "Write primal.png and one diverging PNG per parameter here");
+       return [flags]() {
+         const Scene scene = load_scene_with_flags(flags->scene, flags->defines);
+         const auto params = parse_parameters(flags->params, scene);
+         const Estimator estimator(scene,
+                                   EstimatorConfig::finite_differences(params, fd_steps(scene, params, flags->h)));
+         const RenderResult r = estimator.run(flags->render);
+         report_nonfinite(r);
+         std::printf("fd: %s %dx%d, %d spp, %zu parameter(s), %.3f s (set-up %.3f s) -> %s\n", flags->scene.c_str(),
+                     r.film.width(), r.film.height(), r.spp, params.size(), estimator.setup().seconds + r.seconds,
+                     estimator.setup().seconds, flags->output.c_str());
+         for (size_t k = 0; k < params.size(); ++k) std::printf("  h%zu = %.6g\n", k, estimator.fd_steps()[k]);
+         write_gradient_outputs(*flags, params, r, flags->preview_dir, "fd");
+         return 0;
+       };
+     }}};
 
 }  // namespace
 }  // namespace qsil::cli

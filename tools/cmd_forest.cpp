@@ -56,8 +56,7 @@ int run_forest(const ForestFlags& f) {
   }
   std::unique_ptr<tbb::global_control> gc;
   if (f.threads > 0)
-    gc = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
-                                               size_t(f.threads));
+    gc = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, size_t(f.threads));
   edgetree::ForestOptions opt;
   opt.edges.keep_concave = f.keep_concave;
   opt.fit.min_fit_planes = f.min_fit_planes;
@@ -72,24 +71,25 @@ int run_forest(const ForestFlags& f) {
     edges_total += st.edges_kept + st.edges_always;
     if (f.stats) {
       std::printf("shape %d (%s)\n", st.shape, names[st.shape].c_str());
-      std::printf("  edges: %d total, %d convex, %d concave, %d flat, %d boundary, "
-                  "%d non-manifold, %d inconsistent\n",
-                  st.edges_total, c(EdgeClass::Convex), c(EdgeClass::Concave), c(EdgeClass::Flat),
-                  c(EdgeClass::Boundary), c(EdgeClass::NonManifold), c(EdgeClass::Inconsistent));
+      std::printf(
+          "  edges: %d total, %d convex, %d concave, %d flat, %d boundary, "
+          "%d non-manifold, %d inconsistent\n",
+          st.edges_total, c(EdgeClass::Convex), c(EdgeClass::Concave), c(EdgeClass::Flat), c(EdgeClass::Boundary),
+          c(EdgeClass::NonManifold), c(EdgeClass::Inconsistent));
       std::printf("  kept in tree: %d, always-candidate: %d (%d creases; always-candidate tree: %d nodes)\n",
                   st.edges_kept, st.edges_always, st.creases, st.always_nodes);
-      std::printf("  nodes: %d (%d inner, %d leaves, %d roots), depth %d\n", st.nodes,
-                  st.inner_nodes, st.leaves, st.roots, st.depth);
-      std::printf("  inner nodes: %d fitted, %d with quadrics, %d unrejectable, %d box-only, %d inherited quadric, "
-                  "%d LP\n",
-                  st.fitted, st.quadrics, st.unrejectable, st.box_only, st.inherited, st.used_lp);
+      std::printf("  nodes: %d (%d inner, %d leaves, %d roots), depth %d\n", st.nodes, st.inner_nodes, st.leaves,
+                  st.roots, st.depth);
+      std::printf(
+          "  inner nodes: %d fitted, %d with quadrics, %d unrejectable, %d box-only, %d inherited quadric, "
+          "%d LP\n",
+          st.fitted, st.quadrics, st.unrejectable, st.box_only, st.inherited, st.used_lp);
       std::printf("  build time: %.4f s\n", st.build_seconds);
     }
   }
   const double bpe = edges_total ? double(forest.memory_bytes()) / double(edges_total) : 0.0;
-  std::printf("forest: %zu shapes, %zu edges, %zu nodes, %zu roots, %.4f s, %.1f bytes/edge\n",
-              forest.stats().size(), edges_total, forest.nodes().size(), forest.roots().size(),
-              total, bpe);
+  std::printf("forest: %zu shapes, %zu edges, %zu nodes, %zu roots, %.4f s, %.1f bytes/edge\n", forest.stats().size(),
+              edges_total, forest.nodes().size(), forest.roots().size(), total, bpe);
   return 0;
 }
 
@@ -101,8 +101,7 @@ const CommandRegistrar registrar{
        app.add_flag("--stats", flags->stats, "Print per-shape statistics");
        app.add_flag("--keep-concave", flags->keep_concave,
                     "Keep concave edges (needed for open meshes or a camera inside a closed one)");
-       app.add_option("--threads", flags->threads, "Worker threads (0 = all)")
-           ->check(CLI::NonNegativeNumber);
+       app.add_option("--threads", flags->threads, "Worker threads (0 = all)")->check(CLI::NonNegativeNumber);
        app.add_option("--min-fit-planes", flags->min_fit_planes,
                       "Fewer distinct planes: inherit the parent's quadric (default 15)")
            ->check(CLI::PositiveNumber);

@@ -11,45 +11,46 @@
 namespace qsil::cli {
 namespace {
 
-const CommandRegistrar registrar{{"grad", "Render an image and its derivatives with respect to geometry parameters",
-  [](CLI::App& app) -> std::function<int()> {
-    struct Flags : CommonFlags {
-      std::vector<std::string> params;
-      std::string boundary = "quadric";
-      int boundary_spp = 1;
-      std::string preview_dir;
-    };
-    auto flags = std::make_shared<Flags>();
-    add_common_flags(app, *flags, "grad.exr");
-    add_param_option(app, flags->params);
-    app.add_option("--boundary", flags->boundary,
-                   "Boundary-term estimator: quadric (edge forest, dual box + bounding quadrics [QSS]), "
-                   "quadric-box (dual box only), vsphere (Li 2019's Hough-space tree, hollow v-sphere test), "
-                   "vsphere-solid (redner's original solid v-sphere test), uniform (no rejection, length x "
-                   "dihedral angle), none (interior term only: misses silhouettes, shadows, outlines)")
-        ->capture_default_str();
-    add_boundary_spp_option(app, flags->boundary_spp);
-    app.add_option("--preview-dir", flags->preview_dir, "Write primal.png and one diverging PNG per parameter here");
-    return [flags]() {
-      const Method method = parse_method(flags->boundary, "--boundary", kBoundaryMethods);
-      const Scene scene = load_scene_with_flags(flags->scene, flags->defines);
-      const Estimator estimator(
-          scene, EstimatorConfig::gradient(parse_parameters(flags->params, scene), method, flags->boundary_spp));
-      const RenderResult r = estimator.run(flags->render);
-      report_nonfinite(r);
-      const SetupReport& setup = estimator.setup();
-      std::printf("grad: %s %dx%d, %d spp, %zu parameter(s), boundary %s, %.3f s (set-up %.3f s, interior %.3f s, "
-                  "boundary %.3f s), %.2f Mrays/s, %llu traversals, %.1f%% zero-contribution -> %s\n",
-                  flags->scene.c_str(), r.film.width(), r.film.height(), r.spp, estimator.config().params.size(),
-                  flags->boundary.c_str(), setup.seconds + r.seconds, setup.seconds, r.seconds - r.boundary_seconds,
-                  r.boundary_seconds, mrays_per_second(r), (unsigned long long)r.traversals,
-                  r.traversals ? 100.0 * double(r.zero_traversals) / double(r.traversals) : 0.0,
-                  flags->output.c_str());
-      std::printf("  set-up: %s\n", setup.describe().c_str());
-      write_gradient_outputs(*flags, estimator.config().params, r, flags->preview_dir, "grad/" + flags->boundary);
-      return 0;
-    };
-  }}};
+const CommandRegistrar registrar{
+    {"grad", "Render an image and its derivatives with respect to geometry parameters",
+     [](CLI::App& app) -> std::function<int()> {
+       struct Flags : CommonFlags {
+         std::vector<std::string> params;
+         std::string boundary = "quadric";
+         int boundary_spp = 1;
+         std::string preview_dir;
+       };
+       auto flags = std::make_shared<Flags>();
+       add_common_flags(app, *flags, "grad.exr");
+       add_param_option(app, flags->params);
+       app.add_option("--boundary", flags->boundary,
+                      "Boundary-term estimator: quadric (edge forest, dual box + bounding quadrics [QSS]), "
+                      "quadric-box (dual box only), vsphere (Li 2019's Hough-space tree, hollow v-sphere test), "
+                      "vsphere-solid (redner's original solid v-sphere test), uniform (no rejection, length x "
+                      "dihedral angle), none (interior term only: misses silhouettes, shadows, outlines)")
+           ->capture_default_str();
+       add_boundary_spp_option(app, flags->boundary_spp);
+       app.add_option("--preview-dir", flags->preview_dir, "Write primal.png and one diverging PNG per parameter here");
+       return [flags]() {
+         const Method method = parse_method(flags->boundary, "--boundary", kBoundaryMethods);
+         const Scene scene = load_scene_with_flags(flags->scene, flags->defines);
+         const Estimator estimator(
+             scene, EstimatorConfig::gradient(parse_parameters(flags->params, scene), method, flags->boundary_spp));
+         const RenderResult r = estimator.run(flags->render);
+         report_nonfinite(r);
+         const SetupReport& setup = estimator.setup();
+         std::printf(
+             "grad: %s %dx%d, %d spp, %zu parameter(s), boundary %s, %.3f s (set-up %.3f s, interior %.3f s, "
+             "boundary %.3f s), %.2f Mrays/s, %llu traversals, %.1f%% zero-contribution -> %s\n",
+             flags->scene.c_str(), r.film.width(), r.film.height(), r.spp, estimator.config().params.size(),
+             flags->boundary.c_str(), setup.seconds + r.seconds, setup.seconds, r.seconds - r.boundary_seconds,
+             r.boundary_seconds, mrays_per_second(r), (unsigned long long)r.traversals,
+             r.traversals ? 100.0 * double(r.zero_traversals) / double(r.traversals) : 0.0, flags->output.c_str());
+         std::printf("  set-up: %s\n", setup.describe().c_str());
+         write_gradient_outputs(*flags, estimator.config().params, r, flags->preview_dir, "grad/" + flags->boundary);
+         return 0;
+       };
+     }}};
 
 }  // namespace
 }  // namespace qsil::cli

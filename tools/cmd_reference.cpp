@@ -13,57 +13,60 @@
 namespace qsil::cli {
 namespace {
 
-const CommandRegistrar registrar{{"reference", "Render a high-spp reference gradient with per-pixel standard errors",
-  [](CLI::App& app) -> std::function<int()> {
-    struct Flags : CommonFlags {
-      std::vector<std::string> params;
-      std::string method = "quadric";
-      std::vector<double> h;
-      int boundary_spp = 1;
-    };
-    auto flags = std::make_shared<Flags>();
-    add_common_flags(app, *flags, "reference.exr");
-    add_param_option(app, flags->params);
-    app.add_option("--method", flags->method,
-                   "Unbiased estimator: quadric, quadric-box, vsphere, vsphere-solid, uniform (boundary term "
-                   "of `qsil grad`), or fd (central finite differences; biased by O(h^2))")
-        ->capture_default_str();
-    add_fd_step_option(app, flags->h);
-    add_boundary_spp_option(app, flags->boundary_spp);
-    return [flags]() {
-      const Method method = parse_method(flags->method, "--method", kReferenceMethods);
-      const Scene scene = load_scene_with_flags(flags->scene, flags->defines);
-      const auto params = parse_parameters(flags->params, scene);
-      const int K = int(params.size());
-      const EstimatorConfig config = method == Method::FiniteDifferences
-                                         ? EstimatorConfig::finite_differences(params, fd_steps(scene, params, flags->h))
-                                         : EstimatorConfig::gradient(params, method, flags->boundary_spp);
-      const Estimator estimator(scene, config);
-      // One run with the progress bar (a reference is one long run, not passes).
-      const RenderResult r = estimator.run(flags->render);
-      report_nonfinite(r);
-      Reference ref;
-      ref.image = reference_image(r);
-      ref.num_params = K;
-      add_render_attributes(ref.image, *flags, r);
-      ref.image.attributes["qsil:method"] = "reference/" + flags->method;
-      for (int k = 0; k < K; ++k) ref.image.attributes["qsil:param" + std::to_string(k)] = params[size_t(k)].text;
-      for (size_t k = 0; k < estimator.fd_steps().size(); ++k)
-        ref.image.attributes["qsil:h" + std::to_string(k)] = std::to_string(estimator.fd_steps()[k]);
-      write_exr(flags->output, ref.image);
-      if (!flags->preview.empty()) write_preview_png(flags->preview, ref.image, flags->exposure);
-      summarize_reference(ref);
-      std::printf("reference: %s %dx%d, %d spp, %d parameter(s), method %s, %.3f s, %.2f Mrays/s, "
-                  "noise floor (mean se^2) %.4g = %.3g x mean(ref^2) -> %s\n",
-                  flags->scene.c_str(), r.film.width(), r.film.height(), r.spp, K, flags->method.c_str(),
-                  r.seconds + estimator.setup().seconds, mrays_per_second(r), ref.noise_floor,
-                  ref.mean_sq > 0 ? ref.noise_floor / ref.mean_sq : 0.0, flags->output.c_str());
-      for (int k = 0; k < K; ++k)
-        std::printf("  dtheta%d (%s): image sum %.6g +- %.3g (1 s.e.)\n", k, params[size_t(k)].text.c_str(),
-                    ref.sum[size_t(k)], ref.sum_se[size_t(k)]);
-      return 0;
-    };
-  }}};
+const CommandRegistrar registrar{
+    {"reference", "Render a high-spp reference gradient with per-pixel standard errors",
+     [](CLI::App& app) -> std::function<int()> {
+       struct Flags : CommonFlags {
+         std::vector<std::string> params;
+         std::string method = "quadric";
+         std::vector<double> h;
+         int boundary_spp = 1;
+       };
+       auto flags = std::make_shared<Flags>();
+       add_common_flags(app, *flags, "reference.exr");
+       add_param_option(app, flags->params);
+       app.add_option("--method", flags->method,
+                      "Unbiased estimator: quadric, quadric-box, vsphere, vsphere-solid, uniform (boundary term "
+                      "of `qsil grad`), or fd (central finite differences; biased by O(h^2))")
+           ->capture_default_str();
+       add_fd_step_option(app, flags->h);
+       add_boundary_spp_option(app, flags->boundary_spp);
+       return [flags]() {
+         const Method method = parse_method(flags->method, "--method", kReferenceMethods);
+         const Scene scene = load_scene_with_flags(flags->scene, flags->defines);
+         const auto params = parse_parameters(flags->params, scene);
+         const int K = int(params.size());
+         const EstimatorConfig config =
+             method == Method::FiniteDifferences
+                 ? EstimatorConfig::finite_differences(params, fd_steps(scene, params, flags->h))
+                 : EstimatorConfig::gradient(params, method, flags->boundary_spp);
+         const Estimator estimator(scene, config);
+         // One run with the progress bar (a reference is one long run, not passes).
+         const RenderResult r = estimator.run(flags->render);
+         report_nonfinite(r);
+         Reference ref;
+         ref.image = reference_image(r);
+         ref.num_params = K;
+         add_render_attributes(ref.image, *flags, r);
+         ref.image.attributes["qsil:method"] = "reference/" + flags->method;
+         for (int k = 0; k < K; ++k) ref.image.attributes["qsil:param" + std::to_string(k)] = params[size_t(k)].text;
+         for (size_t k = 0; k < estimator.fd_steps().size(); ++k)
+           ref.image.attributes["qsil:h" + std::to_string(k)] = std::to_string(estimator.fd_steps()[k]);
+         write_exr(flags->output, ref.image);
+         if (!flags->preview.empty()) write_preview_png(flags->preview, ref.image, flags->exposure);
+         summarize_reference(ref);
+         std::printf(
+             "reference: %s %dx%d, %d spp, %d parameter(s), method %s, %.3f s, %.2f Mrays/s, "
+             "noise floor (mean se^2) %.4g = %.3g x mean(ref^2) -> %s\n",
+             flags->scene.c_str(), r.film.width(), r.film.height(), r.spp, K, flags->method.c_str(),
+             r.seconds + estimator.setup().seconds, mrays_per_second(r), ref.noise_floor,
+             ref.mean_sq > 0 ? ref.noise_floor / ref.mean_sq : 0.0, flags->output.c_str());
+         for (int k = 0; k < K; ++k)
+           std::printf("  dtheta%d (%s): image sum %.6g +- %.3g (1 s.e.)\n", k, params[size_t(k)].text.c_str(),
+                       ref.sum[size_t(k)], ref.sum_se[size_t(k)]);
+         return 0;
+       };
+     }}};
 
 }  // namespace
 }  // namespace qsil::cli

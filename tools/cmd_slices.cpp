@@ -41,8 +41,10 @@ int run(const Flags& f) {
                   st.false_accepts[t], st.no_silhouette, st.false_rejects[t]);
   }
   if (s.origin_silhouettes > 0)
-    std::fprintf(stderr, "slices: warning: %d edges are silhouettes from the Hough origin: the v-sphere methods keep "
-                 "them in a plain tree and accept every point\n", s.origin_silhouettes);
+    std::fprintf(stderr,
+                 "slices: warning: %d edges are silhouettes from the Hough origin: the v-sphere methods keep "
+                 "them in a plain tree and accept every point\n",
+                 s.origin_silhouettes);
   if (!f.no_grid &&
       run_python_script("slices", "slices_grid.py", {(dir / "summary.json").string(), (dir / "grid.png").string()},
                         f.scripts_dir) != 0)
@@ -57,25 +59,35 @@ int run(const Flags& f) {
   return 0;
 }
 
-const CommandRegistrar registrar{{"slices", "False accepts of four rejection tests on two planes through one node ([QSS] Fig. 7)",
-  [](CLI::App& app) -> std::function<int()> {
-    auto f = std::make_shared<Flags>();
-    edgetree::SliceStudyOptions& s = f->study;
-    app.add_option("mesh", s.mesh, "Mesh (.obj) whose forest node --node is shown");
-    app.add_option("--node", s.node, "Inner node id of the mesh's quadric edge forest");
-    app.add_option("--patch", s.patch, "Canonical patch instead of a mesh: sphere (spherical cap) or torus (toroidal patch)");
-    app.add_option("--origin", s.origin, "Hough origin X,Y,Z of the v-sphere tests (default: 3 diagonals along the mean normal)")
-        ->delimiter(',')->expected(3);
-    app.add_option("--plane-normal", s.normal, "Normal X,Y,Z of the two planes (default 0,0,1)")->delimiter(',')->expected(3);
-    app.add_option("--heights", s.heights, "Plane offsets H1,H2 along the normal (n.x = H)")->delimiter(',')->expected(2);
-    app.add_option("--center", s.center, "Centre X,Y,Z of the squares (projected onto each plane)")->delimiter(',')->expected(3);
-    app.add_option("--extent", s.extent, "Side of the square on each plane (scene units)");
-    app.add_option("--resolution", s.resolution, "Points per side")->capture_default_str();
-    app.add_option("--out-dir", f->out_dir, "Output directory (default out/slices-<patch>)");
-    app.add_flag("--no-grid", f->no_grid, "Skip the labelled grid image (no Python)");
-    add_scripts_dir_option(app, f->scripts_dir);
-    return [f] { return run(*f); };
-  }}};
+const CommandRegistrar registrar{
+    {"slices", "False accepts of four rejection tests on two planes through one node ([QSS] Fig. 7)",
+     [](CLI::App& app) -> std::function<int()> {
+       auto f = std::make_shared<Flags>();
+       edgetree::SliceStudyOptions& s = f->study;
+       app.add_option("mesh", s.mesh, "Mesh (.obj) whose forest node --node is shown");
+       app.add_option("--node", s.node, "Inner node id of the mesh's quadric edge forest");
+       app.add_option("--patch", s.patch,
+                      "Canonical patch instead of a mesh: sphere (spherical cap) or torus (toroidal patch)");
+       app.add_option("--origin", s.origin,
+                      "Hough origin X,Y,Z of the v-sphere tests (default: 3 diagonals along the mean normal)")
+           ->delimiter(',')
+           ->expected(3);
+       app.add_option("--plane-normal", s.normal, "Normal X,Y,Z of the two planes (default 0,0,1)")
+           ->delimiter(',')
+           ->expected(3);
+       app.add_option("--heights", s.heights, "Plane offsets H1,H2 along the normal (n.x = H)")
+           ->delimiter(',')
+           ->expected(2);
+       app.add_option("--center", s.center, "Centre X,Y,Z of the squares (projected onto each plane)")
+           ->delimiter(',')
+           ->expected(3);
+       app.add_option("--extent", s.extent, "Side of the square on each plane (scene units)");
+       app.add_option("--resolution", s.resolution, "Points per side")->capture_default_str();
+       app.add_option("--out-dir", f->out_dir, "Output directory (default out/slices-<patch>)");
+       app.add_flag("--no-grid", f->no_grid, "Skip the labelled grid image (no Python)");
+       add_scripts_dir_option(app, f->scripts_dir);
+       return [f] { return run(*f); };
+     }}};
 
 }  // namespace
 }  // namespace qsil::cli

@@ -18,12 +18,12 @@ std::vector<Command>& command_registry() {
 
 int main(int argc, char** argv) {
   using namespace qsil::cli;
-  CLI::App app{"qsil: a differentiable path tracer with quadric-based silhouette sampling "
-               "(Soroka, Peters, Marschner 2025)."};
+  CLI::App app{
+      "qsil: a differentiable path tracer with quadric-based silhouette sampling "
+      "(Soroka, Peters, Marschner 2025)."};
   app.require_subcommand(1);
   auto& registry = command_registry();
-  std::sort(registry.begin(), registry.end(),
-            [](const Command& a, const Command& b) { return a.name < b.name; });
+  std::sort(registry.begin(), registry.end(), [](const Command& a, const Command& b) { return a.name < b.name; });
   std::vector<std::pair<CLI::App*, std::function<int()>>> runners;
   for (auto& c : registry) {
     CLI::App* sub = app.add_subcommand(c.name, c.description);

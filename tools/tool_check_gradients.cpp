@@ -76,8 +76,10 @@ int main(int argc, char** argv) {
   Flags f;
   std::string case_list;
   for (const auto& c : gradcheck::cases()) case_list += " " + c.name;
-  CLI::App app{"qsil-check_gradients: image-level gradient checks (grad vs finite differences). Cases (scenes "
-               "under --root):" + case_list};
+  CLI::App app{
+      "qsil-check_gradients: image-level gradient checks (grad vs finite differences). Cases (scenes "
+      "under --root):" +
+      case_list};
   app.add_option("--case", f.names, "A gradient case (repeatable; default: every case)")->allow_extra_args(false);
   app.add_option("--res", f.res, "Image side in pixels")->capture_default_str()->check(CLI::PositiveNumber);
   app.add_option("--spp", f.spp, "Samples per pixel of grad")->capture_default_str()->check(CLI::PositiveNumber);
@@ -88,7 +90,8 @@ int main(int argc, char** argv) {
   app.add_option("--root", f.root, "The repository whose scenes the cases use")->capture_default_str();
   app.add_option("--scene", f.scene, "Any scene instead of the cases (with --param)");
   app.add_option("--param", f.param, "The parameter of --scene");
-  app.add_option("-D", f.defines, "Override a <default> of --scene: -D name=value (repeatable)")->allow_extra_args(false);
+  app.add_option("-D", f.defines, "Override a <default> of --scene: -D name=value (repeatable)")
+      ->allow_extra_args(false);
   if (const auto code = qsil::cli::parse_arguments(app, argc, argv)) return *code;
   try {
     return run_cases(f) ? 0 : 1;

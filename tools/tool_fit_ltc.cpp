@@ -49,7 +49,8 @@ std::pair<double, double> report_fit(const std::vector<LTCFitNode>& table) {
 /// Prints the table as the initializer of edgetree/ltc_ggx_table.inc.
 void print_table(const std::vector<LTCFitNode>& table, double mean, double worst) {
   std::printf("// edgetree/ltc_ggx_table.inc -- GENERATED, do not edit.\n");
-  std::printf("// LTC fit of qsil's GGX (ggx_eval_cos: separable Smith G, Fresnel 1); layout in qsil/edgetree/ltc.h.\n");
+  std::printf(
+      "// LTC fit of qsil's GGX (ggx_eval_cos: separable Smith G, Fresnel 1); layout in qsil/edgetree/ltc.h.\n");
   std::printf("// Regenerate: build/qsil-fit_ltc > edgetree/ltc_ggx_table.inc  (tools/tool_fit_ltc.cpp)\n");
   std::printf("// [alpha node %d][cos node %d] = {M_inv(0,0), M_inv(0,2), M_inv(2,0), M_inv(2,2), albedo}\n", NA, NC);
   std::printf("// Fit: mean relative L1 error %.4f, worst %.4f.\n", mean, worst);
@@ -67,8 +68,9 @@ void print_table(const std::vector<LTCFitNode>& table, double mean, double worst
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"qsil-fit_ltc: fits the LTC table of qsil's GGX and prints it as edgetree/ltc_ggx_table.inc "
-               "(about two minutes on one core; a fit summary goes to stderr)"};
+  CLI::App app{
+      "qsil-fit_ltc: fits the LTC table of qsil's GGX and prints it as edgetree/ltc_ggx_table.inc "
+      "(about two minutes on one core; a fit summary goes to stderr)"};
   if (const auto code = qsil::cli::parse_arguments(app, argc, argv)) return *code;
   const std::vector<LTCFitNode> table =
       fit_ltc_table([](double alpha) { std::fprintf(stderr, "alpha %.3e done\n", alpha); });

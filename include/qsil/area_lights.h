@@ -68,7 +68,7 @@ class AreaLights {
     Vec3 p0, p1, p2;
     Vec3 normal;  ///< unit geometric normal (zero for a degenerate triangle)
     int shape;
-    int index;    ///< triangle index in the shape's mesh
+    int index;  ///< triangle index in the shape's mesh
   };
   std::vector<Triangle> triangles_;
   std::vector<Color> shape_radiance_;  ///< per scene shape: radiance if emitter, else 0

@@ -44,7 +44,8 @@ inline double ggx_alpha(const BSDFDesc& b) { return std::max(b.alpha, kMinGGXAlp
 /// GGX normal distribution D(m) for a unit microfacet normal m [Walter 2007 Eq. 33]:
 ///   D(m) = 1 / (pi alpha^2 (m.z^2 + (m.x^2 + m.y^2)/alpha^2)^2) for m.z > 0, else 0.
 /// Normalised so that the projected area integrates to one: integral D(m) m.z dm = 1. Units sr^-1.
-template <class T> T ggx_D(double alpha, const Vec3T<T>& m) {
+template <class T>
+T ggx_D(double alpha, const Vec3T<T>& m) {
   if (!(m.z() > 0.0)) return T(0.0);
   const double a2 = alpha * alpha;
   const T s = (m.x() * m.x() + m.y() * m.y()) / a2 + m.z() * m.z();
@@ -54,7 +55,8 @@ template <class T> T ggx_D(double alpha, const Vec3T<T>& m) {
 /// Smith masking G1(v, m) for GGX [Walter 2007 Eq. 34], written without tan to stay finite at
 /// grazing angles: G1 = 2 |v.z| / (|v.z| + sqrt(v.z^2 + alpha^2 (v.x^2 + v.y^2))), and 0 when the
 /// microfacet's back is seen, i.e. (v.m)(v.z) <= 0 (the chi+ factor). v, m unit. Dimensionless.
-template <class T> T ggx_G1(double alpha, const Vec3T<T>& v, const Vec3T<T>& m) {
+template <class T>
+T ggx_G1(double alpha, const Vec3T<T>& v, const Vec3T<T>& m) {
   using std::sqrt;
   const T vm = v.dot(m);
   if (!(vm * v.z() > 0.0)) return T(0.0);
@@ -67,7 +69,8 @@ template <class T> T ggx_G1(double alpha, const Vec3T<T>& v, const Vec3T<T>& m) 
 /// Cosine-weighted GGX reflection with F = 1, for wi, wo both strictly above the surface (z > 0):
 ///   f_s(wi,wo) cos_i = D(h) G1(wi,h) G1(wo,h) / (4 cos_o),  h = normalize(wi + wo).
 /// Returns 0 when either direction is not above the surface. Dimensionless (sr^-1 times sr^0).
-template <class T> T ggx_eval_cos(double alpha, const Vec3T<T>& wi, const Vec3T<T>& wo) {
+template <class T>
+T ggx_eval_cos(double alpha, const Vec3T<T>& wi, const Vec3T<T>& wo) {
   using std::sqrt;
   if (!(wi.z() > 0.0) || !(wo.z() > 0.0)) return T(0.0);
   const Vec3T<T> hs = wi + wo;  // |hs| > 0 since both are in the upper hemisphere
@@ -107,7 +110,8 @@ double ggx_reflection_pdf(double alpha, const Vec3& wi, const Vec3& wo);
 /// - Diffuse: reflectance * cos_i / pi. RoughConductor: specular_reflectance * ggx_eval_cos.
 /// Differentiable in wi and wo (T = double or a forward-mode dual number); only the support test
 /// branches. The value is reciprocal: bsdf_eval(wi,wo)/|cos_i| = bsdf_eval(wo,wi)/|cos_o|.
-template <class T> ColorT<T> bsdf_eval(const BSDFDesc& b, const Vec3T<T>& wi_in, const Vec3T<T>& wo_in) {
+template <class T>
+ColorT<T> bsdf_eval(const BSDFDesc& b, const Vec3T<T>& wi_in, const Vec3T<T>& wo_in) {
   ColorT<T> out;
   for (int c = 0; c < 3; ++c) out[c] = T(0.0);
   Vec3T<T> wi = wi_in, wo = wo_in;

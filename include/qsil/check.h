@@ -24,13 +24,12 @@ namespace qsil::detail {
 #define QSIL_CHECK(cond) \
   ((cond) ? static_cast<void>(0) : ::qsil::detail::check_failed(__FILE__, __LINE__, #cond, std::string()))
 
-#define QSIL_CHECK_MSG(cond, message)                                            \
-  ((cond) ? static_cast<void>(0)                                                  \
-          : ::qsil::detail::check_failed(__FILE__, __LINE__, #cond, [&] {         \
-              std::ostringstream qsil_check_stream_;                              \
-              qsil_check_stream_ << message;                                      \
-              return qsil_check_stream_.str();                                    \
-            }()))
+#define QSIL_CHECK_MSG(cond, message)                                                            \
+  ((cond) ? static_cast<void>(0) : ::qsil::detail::check_failed(__FILE__, __LINE__, #cond, [&] { \
+    std::ostringstream qsil_check_stream_;                                                       \
+    qsil_check_stream_ << message;                                                               \
+    return qsil_check_stream_.str();                                                             \
+  }()))
 
 #ifdef QSIL_DCHECKS
 #define QSIL_DCHECK(cond) QSIL_CHECK(cond)

@@ -20,7 +20,8 @@
 namespace qsil {
 
 /// Dual number with N derivative entries.
-template <int N> using Dual = Eigen::AutoDiffScalar<Eigen::Matrix<double, N, 1>>;
+template <int N>
+using Dual = Eigen::AutoDiffScalar<Eigen::Matrix<double, N, 1>>;
 
 /// Largest number of parameters differentiated in one run.
 inline constexpr int kMaxParameters = 8;
@@ -29,7 +30,8 @@ inline constexpr int kMaxParameters = 8;
 /// the smallest of 1, 2, 4, 8 that is >= num_params. The one dispatch from a run-time parameter
 /// count to the compile-time derivative size. num_params must be in 1..kMaxParameters (checked:
 /// parameter lists are validated by check_parameter_count first).
-template <class F> decltype(auto) with_dual_size(int num_params, F&& f) {
+template <class F>
+decltype(auto) with_dual_size(int num_params, F&& f) {
   QSIL_CHECK(num_params >= 1 && num_params <= kMaxParameters);
   if (num_params == 1) return f(std::integral_constant<int, 1>{});
   if (num_params == 2) return f(std::integral_constant<int, 2>{});
@@ -38,19 +40,35 @@ template <class F> decltype(auto) with_dual_size(int num_params, F&& f) {
 }
 
 inline double value(double x) { return x; }
-template <int N> inline double value(const Dual<N>& x) { return x.value(); }
+template <int N>
+inline double value(const Dual<N>& x) {
+  return x.value();
+}
 
-template <class T> inline Vec3 value(const Vec3T<T>& v) { return Vec3(value(v.x()), value(v.y()), value(v.z())); }
+template <class T>
+inline Vec3 value(const Vec3T<T>& v) {
+  return Vec3(value(v.x()), value(v.y()), value(v.z()));
+}
 inline const Vec3& value(const Vec3& v) { return v; }
-template <class T> inline Color value(const ColorT<T>& c) { return Color(value(c.x()), value(c.y()), value(c.z())); }
+template <class T>
+inline Color value(const ColorT<T>& c) {
+  return Color(value(c.x()), value(c.y()), value(c.z()));
+}
 inline const Color& value(const Color& c) { return c; }
 
 /// Lifts a double vector to scalar type T with zero derivatives.
-template <class T> inline Vec3T<T> lift(const Vec3& v) { return Vec3T<T>(T(v.x()), T(v.y()), T(v.z())); }
-template <class T> inline ColorT<T> lift(const Color& c) { return ColorT<T>(T(c.x()), T(c.y()), T(c.z())); }
+template <class T>
+inline Vec3T<T> lift(const Vec3& v) {
+  return Vec3T<T>(T(v.x()), T(v.y()), T(v.z()));
+}
+template <class T>
+inline ColorT<T> lift(const Color& c) {
+  return ColorT<T>(T(c.x()), T(c.y()), T(c.z()));
+}
 
 /// Lifts position x with per-parameter velocities dx/dtheta_k (columns of vel, 3 x N) to a dual.
-template <int N> inline Vec3T<Dual<N>> lift(const Vec3& x, const Eigen::Matrix<double, 3, N>& vel) {
+template <int N>
+inline Vec3T<Dual<N>> lift(const Vec3& x, const Eigen::Matrix<double, 3, N>& vel) {
   Vec3T<Dual<N>> r;
   for (int i = 0; i < 3; ++i) r[i] = Dual<N>(x[i], vel.row(i).transpose());
   return r;

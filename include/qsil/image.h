@@ -15,8 +15,8 @@ namespace qsil {
 struct Image {
   int width = 0;
   int height = 0;
-  std::vector<std::string> channel_names;   ///< e.g. {"R","G","B","dtheta0.R",...}
-  std::vector<std::vector<float>> planes;   ///< one plane per channel, width*height values
+  std::vector<std::string> channel_names;         ///< e.g. {"R","G","B","dtheta0.R",...}
+  std::vector<std::vector<float>> planes;         ///< one plane per channel, width*height values
   std::map<std::string, std::string> attributes;  ///< string header attributes (EXR metadata)
 
   int channel_index(const std::string& name) const;  ///< -1 if absent
@@ -35,8 +35,7 @@ void write_exr(const std::filesystem::path& path, const Image& image);
 
 /// Writes 8-bit RGB PNG data (width*height*3 bytes, top row first) atomically (temporary + rename).
 /// Throws qsil::Error on failure.
-void write_png(const std::filesystem::path& path, int width, int height,
-               const std::vector<unsigned char>& rgb);
+void write_png(const std::filesystem::path& path, int width, int height, const std::vector<unsigned char>& rgb);
 
 /// Writes a float32 2D array (height x width, row-major, top row first) as a NumPy .npy file
 /// (format version 1.0, C order), atomically. Throws qsil::Error on failure.

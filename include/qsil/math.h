@@ -26,8 +26,10 @@ using Color = Eigen::Array3d;
 inline double luminance(double r, double g, double b) { return 0.2126 * r + 0.7152 * g + 0.0722 * b; }
 
 /// Generic 3-vector and colour over a scalar type T (double, or a dual number in forward mode).
-template <class T> using Vec3T = Eigen::Matrix<T, 3, 1>;
-template <class T> using ColorT = Eigen::Array<T, 3, 1>;
+template <class T>
+using Vec3T = Eigen::Matrix<T, 3, 1>;
+template <class T>
+using ColorT = Eigen::Array<T, 3, 1>;
 
 /// luminance(r, g, b) of a colour.
 inline double luminance(const Color& c) { return luminance(c[0], c[1], c[2]); }
@@ -40,8 +42,14 @@ inline constexpr double kInf = std::numeric_limits<double>::infinity();
 struct Box3 {
   Vec3 lo = Vec3::Constant(kInf);
   Vec3 hi = Vec3::Constant(-kInf);
-  void expand(const Vec3& p) { lo = lo.cwiseMin(p); hi = hi.cwiseMax(p); }
-  void expand(const Box3& b) { lo = lo.cwiseMin(b.lo); hi = hi.cwiseMax(b.hi); }
+  void expand(const Vec3& p) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  void expand(const Box3& b) {
+    lo = lo.cwiseMin(b.lo);
+    hi = hi.cwiseMax(b.hi);
+  }
   bool empty() const { return (lo.array() > hi.array()).any(); }
   Vec3 center() const { return 0.5 * (lo + hi); }
   Vec3 extent() const { return hi - lo; }
@@ -52,7 +60,8 @@ struct Box3 {
 
 /// Orthonormal frame (s, t, n) built from a unit normal n (Duff et al. 2017, "Building an
 /// orthonormal basis, revisited"). Works for double and for dual numbers.
-template <class T> struct FrameT {
+template <class T>
+struct FrameT {
   Vec3T<T> s, t, n;
   FrameT() = default;
   explicit FrameT(const Vec3T<T>& nn) : n(nn) {

@@ -19,32 +19,32 @@ namespace qsil {
 /// A derivative estimator: the boundary-term sampler of `qsil grad`, the interior term alone, or
 /// finite differences. The first four are also the four rejection tests of `qsil slices`.
 enum class Method {
-  Quadric,       ///< `quadric`: edge forest, dual box + bounding quadric pair test [QSS] (default)
-  QuadricBox,    ///< `quadric-box`: the same forest with the dual box test only (ablation)
-  VSphere,       ///< `vsphere`: Li 2019's Hough-space tree, hollow v-sphere test ([QSS] App. F)
-  VSphereSolid,  ///< `vsphere-solid`: redner's original solid v-sphere test
-  Uniform,       ///< `uniform`: no rejection, edges by length x dihedral angle (a floor)
-  None,          ///< `none`: the interior term only (misses silhouettes, shadows, outlines)
+  Quadric,            ///< `quadric`: edge forest, dual box + bounding quadric pair test [QSS] (default)
+  QuadricBox,         ///< `quadric-box`: the same forest with the dual box test only (ablation)
+  VSphere,            ///< `vsphere`: Li 2019's Hough-space tree, hollow v-sphere test ([QSS] App. F)
+  VSphereSolid,       ///< `vsphere-solid`: redner's original solid v-sphere test
+  Uniform,            ///< `uniform`: no rejection, edges by length x dihedral angle (a floor)
+  None,               ///< `none`: the interior term only (misses silhouettes, shadows, outlines)
   FiniteDifferences,  ///< `fd`: central finite differences with common random numbers
 };
 
 /// Every method, in the order above.
-inline constexpr std::array<Method, 7> kAllMethods = {Method::Quadric,      Method::QuadricBox, Method::VSphere,
-                                                       Method::VSphereSolid, Method::Uniform,    Method::None,
-                                                       Method::FiniteDifferences};
+inline constexpr std::array<Method, 7> kAllMethods = {Method::Quadric,          Method::QuadricBox, Method::VSphere,
+                                                      Method::VSphereSolid,     Method::Uniform,    Method::None,
+                                                      Method::FiniteDifferences};
 /// The methods that sample edges (`qsil candidates`).
 inline constexpr std::array<Method, 5> kEdgeSamplingMethods = {Method::Quadric, Method::QuadricBox, Method::VSphere,
-                                                                Method::VSphereSolid, Method::Uniform};
+                                                               Method::VSphereSolid, Method::Uniform};
 /// The methods with a rejection test ([QSS] Fig. 7, `qsil slices`), in display order.
 inline constexpr std::array<Method, 4> kRejectionMethods = {Method::Quadric, Method::QuadricBox, Method::VSphere,
-                                                             Method::VSphereSolid};
+                                                            Method::VSphereSolid};
 /// The values of `qsil grad --boundary`: every edge sampler, and none.
 inline constexpr std::array<Method, 6> kBoundaryMethods = {Method::Quadric,      Method::QuadricBox, Method::VSphere,
-                                                            Method::VSphereSolid, Method::Uniform,    Method::None};
+                                                           Method::VSphereSolid, Method::Uniform,    Method::None};
 /// Unbiased gradient methods (`qsil reference --method`): every edge sampler, and fd.
-inline constexpr std::array<Method, 6> kReferenceMethods = {Method::Quadric,      Method::QuadricBox,
-                                                             Method::VSphere,      Method::VSphereSolid,
-                                                             Method::Uniform,      Method::FiniteDifferences};
+inline constexpr std::array<Method, 6> kReferenceMethods = {Method::Quadric, Method::QuadricBox,
+                                                            Method::VSphere, Method::VSphereSolid,
+                                                            Method::Uniform, Method::FiniteDifferences};
 
 /// The method's name on the command line and in outputs: "quadric", "quadric-box", "vsphere",
 /// "vsphere-solid", "uniform", "none", "fd".

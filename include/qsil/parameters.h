@@ -21,9 +21,9 @@ namespace qsil {
 /// One parsed parameter specification.
 struct ParameterSpec {
   enum class Kind { Translate, Rotate, Scale, Vertex };
-  std::string text;       ///< as given on the command line
+  std::string text;  ///< as given on the command line
   std::string shape_id;
-  int shape = -1;         ///< resolved shape index
+  int shape = -1;  ///< resolved shape index
   Kind kind = Kind::Translate;
   Vec3 direction = Vec3::Zero();  ///< translate/vertex direction, or rotation axis (unit)
   Vec3 center = Vec3::Zero();     ///< rotate/scale centre (world)
@@ -60,8 +60,8 @@ SceneVelocities compute_velocities(const Scene& scene, const std::vector<Paramet
 
 /// The scene's vertex positions with parameter `k` set to `theta` (exact motion: a rotation by
 /// the angle theta, not its linearisation), all other parameters at 0. Used by finite differences.
-std::vector<std::vector<Vec3>> displaced_positions(const Scene& scene, const std::vector<ParameterSpec>& params,
-                                                   int k, double theta);
+std::vector<std::vector<Vec3>> displaced_positions(const Scene& scene, const std::vector<ParameterSpec>& params, int k,
+                                                   double theta);
 
 /// A copy of `scene` whose vertices (and area-weighted shading normals) are displaced as above.
 Scene displaced_scene(const Scene& scene, const std::vector<ParameterSpec>& params, int k, double theta);

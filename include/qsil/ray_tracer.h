@@ -16,10 +16,10 @@ namespace qsil {
 
 /// A ray hit: which triangle, and Embree's (float-accurate) distance and barycentrics.
 struct Hit {
-  int shape = -1;     ///< shape index, -1 for a miss
-  int triangle = -1;  ///< triangle index within the shape
-  double t = kInf;    ///< distance along the (unit) ray direction, scene units
-  double u = 0, v = 0;///< barycentrics of vertices 1 and 2
+  int shape = -1;       ///< shape index, -1 for a miss
+  int triangle = -1;    ///< triangle index within the shape
+  double t = kInf;      ///< distance along the (unit) ray direction, scene units
+  double u = 0, v = 0;  ///< barycentrics of vertices 1 and 2
   /// u, v are exact (a point known on the triangle, e.g. a sampled edge point), so the surface
   /// point is interpolated from them instead of intersecting a ray with the triangle's plane
   /// (which degenerates when the ray grazes the plane).
@@ -43,8 +43,7 @@ struct IgnoreSet {
   std::array<std::pair<int, int>, 2> prims{{{-1, -1}, {-1, -1}}};
   bool through_back_faces = false;  ///< skip hits on the back side of one-sided surfaces
   bool contains(int shape, int tri) const {
-    return (prims[0].first == shape && prims[0].second == tri) ||
-           (prims[1].first == shape && prims[1].second == tri);
+    return (prims[0].first == shape && prims[0].second == tri) || (prims[1].first == shape && prims[1].second == tri);
   }
   /// True when no hit is filtered (Embree then runs without a filter function).
   bool empty() const { return prims[0].first < 0 && prims[1].first < 0 && !through_back_faces; }

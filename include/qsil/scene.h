@@ -71,13 +71,13 @@ struct BSDFDesc {
 
 /// One shape: a triangle mesh with a BSDF and, optionally, an area emitter on its front side.
 struct Shape {
-  std::string id;            ///< XML id (parameters refer to it), may be empty
-  std::string type;          ///< "obj" or "rectangle"
-  std::string source;        ///< "scene.xml:LINE" for messages
+  std::string id;      ///< XML id (parameters refer to it), may be empty
+  std::string type;    ///< "obj" or "rectangle"
+  std::string source;  ///< "scene.xml:LINE" for messages
   TriangleMesh mesh;
-  bool face_normals = false; ///< flat shading: every non-flat edge is a shading discontinuity
-  int bsdf = -1;             ///< index into Scene::bsdfs
-  bool is_emitter = false;   ///< area emitter on the front (normal) side
+  bool face_normals = false;       ///< flat shading: every non-flat edge is a shading discontinuity
+  int bsdf = -1;                   ///< index into Scene::bsdfs
+  bool is_emitter = false;         ///< area emitter on the front (normal) side
   Color radiance = Color::Zero();  ///< emitted radiance when is_emitter
 };
 
@@ -87,11 +87,11 @@ struct Shape {
 struct Environment {
   enum class Type { None, Constant, EnvMap };
   Type type = Type::None;
-  Color radiance = Color::Zero();  ///< Constant: radiance
-  std::string filename;            ///< EnvMap: resolved path
-  double scale = 1.0;              ///< EnvMap: multiplier
-  Mat3 to_world = Mat3::Identity();///< EnvMap: rotation part of to_world (local -> world)
-  Image texels;                    ///< EnvMap: RGB texels (channels R,G,B)
+  Color radiance = Color::Zero();    ///< Constant: radiance
+  std::string filename;              ///< EnvMap: resolved path
+  double scale = 1.0;                ///< EnvMap: multiplier
+  Mat3 to_world = Mat3::Identity();  ///< EnvMap: rotation part of to_world (local -> world)
+  Image texels;                      ///< EnvMap: RGB texels (channels R,G,B)
 };
 
 /// Mitsuba 3's Transform4f::look_at as a camera-to-world matrix: columns [left, up', dir, origin]
@@ -109,8 +109,8 @@ struct Camera {
   std::string fov_axis = "x";        ///< x, y, diagonal, smaller, larger
   int width = 768;
   int height = 576;
-  int spp = 4;                       ///< sampler sample_count
-  double near_clip = 1e-2;           ///< Mitsuba near_clip, scene units
+  int spp = 4;              ///< sampler sample_count
+  double near_clip = 1e-2;  ///< Mitsuba near_clip, scene units
   Vec3 origin() const { return to_world.block<3, 1>(0, 3); }
   /// tan of half the horizontal and vertical field of view.
   Vec2 tan_half_fov() const;
@@ -129,13 +129,13 @@ struct Camera {
 
 /// A loaded scene. Shapes' geometry is in world space.
 struct Scene {
-  std::filesystem::path file;        ///< the XML file it came from
+  std::filesystem::path file;  ///< the XML file it came from
   std::vector<Shape> shapes;
   std::vector<BSDFDesc> bsdfs;
   Environment environment;
   Camera camera;
-  int max_depth = -1;                ///< Mitsuba path integrator: -1 = unbounded (capped, see integrators)
-  Box3 bounds() const;               ///< bounding box of all shapes
+  int max_depth = -1;                           ///< Mitsuba path integrator: -1 = unbounded (capped, see integrators)
+  Box3 bounds() const;                          ///< bounding box of all shapes
   int find_shape(const std::string& id) const;  ///< index, or -1
 };
 
@@ -148,8 +148,7 @@ std::map<std::string, std::string> parse_defines(const std::vector<std::string>&
 /// `defaults` override `<default name value>` entries (the CLI's -D name=value).
 /// Throws qsil::Error "scene.xml:LINE: message" for every unsupported or malformed input.
 /// `warnings` receives counted, non-fatal warnings (one line each).
-Scene load_scene(const std::filesystem::path& file,
-                 const std::map<std::string, std::string>& defaults = {},
+Scene load_scene(const std::filesystem::path& file, const std::map<std::string, std::string>& defaults = {},
                  std::vector<std::string>* warnings = nullptr);
 
 /// Loads a Wavefront OBJ file as a welded TriangleMesh (positions welded by exact equality when

@@ -22,8 +22,10 @@ std::vector<Vec3T<T>> vertex_normals_t(const TriangleMesh& mesh, const std::vect
   for (auto& v : n) {
     using std::sqrt;
     const T len = sqrt(v.squaredNorm());
-    if (value(len) > 0) v /= len;
-    else v = Vec3T<T>(T(0.0), T(0.0), T(1.0));
+    if (value(len) > 0)
+      v /= len;
+    else
+      v = Vec3T<T>(T(0.0), T(0.0), T(1.0));
   }
   return n;
 }

@@ -12,8 +12,8 @@
 
 #include "baselines/baseline_test_util.h"
 #include "chi2.h"
-#include "qsil/edgetree/edge_forest.h"
 #include "edgetree/edge_point_sampler.h"
+#include "qsil/edgetree/edge_forest.h"
 #include "qsil/edgetree/ltc.h"
 #include "qsil/edgetree/uniform_sampler.h"
 #include "qsil/edgetree/vsphere_sampler.h"
@@ -166,7 +166,8 @@ TEST(BaselinePdf, HistogramMatchesProbabilities) {
           continue;
         }
         observed[size_t(it->second)] += 1;
-        const EdgePointSampler ps(c.q.frame.to_local(s.edge->p0 - c.q.p), c.q.frame.to_local(s.edge->p1 - c.q.p), c.q.ltc);
+        const EdgePointSampler ps(c.q.frame.to_local(s.edge->p0 - c.q.p), c.q.frame.to_local(s.edge->p1 - c.q.p),
+                                  c.q.ltc);
         const double want = expected[size_t(it->second)] / n * ps.pdf(s.t);
         bad_pdf += !(std::abs(s.pdf - want) <= 1e-9 * want);
       }

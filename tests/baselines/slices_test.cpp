@@ -12,11 +12,11 @@
 
 #include <gtest/gtest.h>
 
+#include <sys/wait.h>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <sys/wait.h>
 
 namespace qsil::edgetree {
 namespace {
@@ -80,7 +80,8 @@ TEST(Slices, CommandWritesImagesAndSummaries) {
   fs::remove_all(dir);
   ASSERT_EQ(run("slices --patch torus --resolution 40 --no-grid --out-dir " + dir.string()), 0);
   for (const char* name : {"quadric", "quadric-box", "vsphere", "vsphere-solid"})
-    for (int k = 1; k <= 2; ++k) EXPECT_TRUE(fs::exists(dir / (std::string(name) + "-plane" + std::to_string(k) + ".png")));
+    for (int k = 1; k <= 2; ++k)
+      EXPECT_TRUE(fs::exists(dir / (std::string(name) + "-plane" + std::to_string(k) + ".png")));
   EXPECT_TRUE(fs::exists(dir / "summary.json"));
   EXPECT_TRUE(fs::exists(dir / "summary.csv"));
   EXPECT_EQ(run("slices --patch cone"), 2);
@@ -92,7 +93,9 @@ TEST(Candidates, CommandWritesImagesAndSummaries) {
   const fs::path dir = fs::temp_directory_path() / "qsil-candidates-test";
   fs::remove_all(dir);
   // spot-mirror at 64x64: the centre pixel sees the mirror (Spot in it).
-  ASSERT_EQ(run("candidates scenes/spot-mirror.xml -D res=64 --pixel 32,32 --size 96 --no-grid --out-dir " + dir.string()), 0);
+  ASSERT_EQ(
+      run("candidates scenes/spot-mirror.xml -D res=64 --pixel 32,32 --size 96 --no-grid --out-dir " + dir.string()),
+      0);
   for (const char* name : {"quadric", "quadric-box", "vsphere", "vsphere-solid", "uniform"}) {
     EXPECT_TRUE(fs::exists(dir / (std::string(name) + "-camera.png")));
     EXPECT_TRUE(fs::exists(dir / (std::string(name) + "-edges.obj")));

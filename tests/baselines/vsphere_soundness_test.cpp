@@ -86,10 +86,11 @@ void expect_sound(const TriangleMesh& mesh, int npoints, unsigned seed, const st
     if (rejects_some) {
       EXPECT_LT(c.fa_hollow, c.no_sil) << name;  // it rejects something at all
     }
-    std::printf("[%s, o=(%.2f,%.2f,%.2f)] plain %d / hough %d edges; %lld (node, point) pairs with a silhouette; "
-                "false-accept rate hollow %.3f solid %.3f\n",
-                name.c_str(), o.x(), o.y(), o.z(), t.plain_edges(), t.hough_edges(), c.with_sil,
-                c.no_sil ? double(c.fa_hollow) / c.no_sil : 0.0, c.no_sil ? double(c.fa_solid) / c.no_sil : 0.0);
+    std::printf(
+        "[%s, o=(%.2f,%.2f,%.2f)] plain %d / hough %d edges; %lld (node, point) pairs with a silhouette; "
+        "false-accept rate hollow %.3f solid %.3f\n",
+        name.c_str(), o.x(), o.y(), o.z(), t.plain_edges(), t.hough_edges(), c.with_sil,
+        c.no_sil ? double(c.fa_hollow) / c.no_sil : 0.0, c.no_sil ? double(c.fa_solid) / c.no_sil : 0.0);
   }
 }
 

@@ -113,9 +113,12 @@ TEST(CompareCli, CsvHasOneRowPerMethodAndTarget) {
     std::vector<std::string> fields(1);
     bool quoted = false;
     for (char ch : line) {
-      if (ch == '"') quoted = !quoted;
-      else if (ch == ',' && !quoted) fields.emplace_back();
-      else fields.back() += ch;
+      if (ch == '"')
+        quoted = !quoted;
+      else if (ch == ',' && !quoted)
+        fields.emplace_back();
+      else
+        fields.back() += ch;
     }
     ASSERT_GE(fields.size(), 5u) << line;
     EXPECT_EQ(fields[1], "object:translate:0,1,0");

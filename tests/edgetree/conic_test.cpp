@@ -29,11 +29,20 @@ TEST(RejectionConic, RealConicsHaveAPointFound) {
   for (int trial = 0; trial < 2000; ++trial) {
     Mat3 C0 = Mat3::Zero();
     switch (trial % 5) {
-      case 0: C0.diagonal() << 1 / u(rng), 1 / u(rng), -1; break;      // ellipse
-      case 1: C0.diagonal() << 1 / u(rng), -1 / u(rng), 1; break;      // hyperbola
-      case 2: C0(0, 0) = 1; C0(1, 2) = C0(2, 1) = -0.5 * u(rng); break; // parabola x^2 = a y
-      case 3: C0(0, 0) = 1; C0(1, 1) = -u(rng); break;                 // line pair
-      case 4: C0(0, 0) = 1; C0(1, 1) = u(rng); break;                  // single real point
+      case 0: C0.diagonal() << 1 / u(rng), 1 / u(rng), -1; break;  // ellipse
+      case 1: C0.diagonal() << 1 / u(rng), -1 / u(rng), 1; break;  // hyperbola
+      case 2:
+        C0(0, 0) = 1;
+        C0(1, 2) = C0(2, 1) = -0.5 * u(rng);
+        break;  // parabola x^2 = a y
+      case 3:
+        C0(0, 0) = 1;
+        C0(1, 1) = -u(rng);
+        break;  // line pair
+      case 4:
+        C0(0, 0) = 1;
+        C0(1, 1) = u(rng);
+        break;  // single real point
     }
     const Mat3 T = random_affine(rng);
     if (std::abs(T.determinant()) < 1e-3) continue;

@@ -120,7 +120,8 @@ constexpr int kBins = 100;
 constexpr int kSub = 2000;
 
 /// Integral of f over each of kBins equal bins of [0, 1] (midpoint rule, kSub points per bin).
-template <class F> std::vector<double> bin_integrals(const F& f) {
+template <class F>
+std::vector<double> bin_integrals(const F& f) {
   std::vector<double> out(kBins, 0.0);
   const double h = 1.0 / (double(kBins) * kSub);
   for (int b = 0; b < kBins; ++b) {
@@ -157,8 +158,8 @@ TEST(EdgePointSamplerTest, TargetIntegralIsClosedForm) {
     const double q = sum(bin_integrals([&](double t) { return s.target(t); }));
     EXPECT_NEAR(s.target_integral(), q, 1e-6 * q + 1e-300) << c.name;
     std::printf("[EdgePoint] %-24s target integral %.6g (quadrature %.6g), true f cos integral %.6g, defensive %.2f\n",
-                c.name.c_str(), s.target_integral(), q, sum(bin_integrals([&](double t) { return true_integrand(c, t); })),
-                s.defensive_share());
+                c.name.c_str(), s.target_integral(), q,
+                sum(bin_integrals([&](double t) { return true_integrand(c, t); })), s.defensive_share());
   }
   // Entirely below the horizon: no LTC part, pure defensive.
   const EdgeCase below = cases()[5];

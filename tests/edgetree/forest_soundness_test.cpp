@@ -16,9 +16,9 @@
 
 #include <gtest/gtest.h>
 
+#include <tbb/parallel_for.h>
 #include "soundness_set.h"
 #include "test_data.h"
-#include <tbb/parallel_for.h>
 
 #include <atomic>
 #include <cmath>
@@ -33,8 +33,8 @@ using test::shading_points;
 
 // ---- test meshes
 
-// An open, gently curved sheet z = c (x^2 + y^2) (a dome for c < 0: convex edges) over [-1,1]^2 (n x n quads): bend angles
-// ~ 4c/n, above the flat threshold; boundary edges go to the always list.
+// An open, gently curved sheet z = c (x^2 + y^2) (a dome for c < 0: convex edges) over [-1,1]^2 (n x n quads): bend
+// angles ~ 4c/n, above the flat threshold; boundary edges go to the always list.
 TriangleMesh make_sheet(int n, double c) {
   TriangleMesh m;
   for (int j = 0; j <= n; ++j)
@@ -59,7 +59,7 @@ TriangleMesh transformed(TriangleMesh m, double scale, const Vec3& offset) {
 // ---- soundness check (shading points: tests/soundness_set.h)
 
 struct SoundnessResult {
-  long long tests = 0;          // (inner node, point) pairs with a silhouette
+  long long tests = 0;  // (inner node, point) pairs with a silhouette
   long long false_rejects_quadric = 0;
   long long false_rejects_box = 0;
   long long accepts_no_sil_quadric = 0, accepts_no_sil_box = 0, no_sil = 0;
@@ -96,7 +96,12 @@ SoundnessResult check_forest(const EdgeForest& f, const std::vector<Vec3>& pts) 
         }
       }
     }
-    tests += lt; frq += lq; frb += lb; aq += laq; ab += lab; ns += lns;
+    tests += lt;
+    frq += lq;
+    frb += lb;
+    aq += laq;
+    ab += lab;
+    ns += lns;
   });
   return {tests.load(), frq.load(), frb.load(), aq.load(), ab.load(), ns.load()};
 }
@@ -114,11 +119,12 @@ void expect_sound(const TriangleMesh& mesh, int npoints, unsigned seed, const st
   EXPECT_EQ(r.false_rejects_box, 0) << name << " box, of " << r.tests;
   // Not a soundness property, but a smoke check that the test rejects something at all.
   EXPECT_LT(r.accepts_no_sil_quadric, r.no_sil) << name;
-  std::printf("[%s] %lld (node, point) pairs with a silhouette, false rejects quadric %lld box "
-              "%lld; false-accept rate quadric %.3f box %.3f\n",
-              name.c_str(), r.tests, r.false_rejects_quadric, r.false_rejects_box,
-              r.no_sil ? double(r.accepts_no_sil_quadric) / r.no_sil : 0.0,
-              r.no_sil ? double(r.accepts_no_sil_box) / r.no_sil : 0.0);
+  std::printf(
+      "[%s] %lld (node, point) pairs with a silhouette, false rejects quadric %lld box "
+      "%lld; false-accept rate quadric %.3f box %.3f\n",
+      name.c_str(), r.tests, r.false_rejects_quadric, r.false_rejects_box,
+      r.no_sil ? double(r.accepts_no_sil_quadric) / r.no_sil : 0.0,
+      r.no_sil ? double(r.accepts_no_sil_box) / r.no_sil : 0.0);
 }
 
 // A test mesh by file name (test_data.h: a missing file fails the test with its path).
@@ -127,17 +133,13 @@ TriangleMesh mesh_file(const char* name) { return load_obj(test::mesh_file(name)
 // ---- quick suite (1e4 points per mesh)
 
 TEST(ForestSoundness, Spot) { expect_sound(mesh_file("spot.obj"), 10000, 1, "spot"); }
-TEST(ForestSoundness, TorusKeepConcave) {
-  expect_sound(mesh_file("torus.obj"), 10000, 2, "torus+concave", true);
-}
+TEST(ForestSoundness, TorusKeepConcave) { expect_sound(mesh_file("torus.obj"), 10000, 2, "torus+concave", true); }
 TEST(ForestSoundness, Cube) { expect_sound(make_cube(8), 10000, 3, "cube"); }
 TEST(ForestSoundness, SpotTranslated1e4) {
-  expect_sound(transformed(mesh_file("spot.obj"), 1.0, Vec3(1e4, -1e4, 1e4)), 10000, 4,
-               "spot+1e4");
+  expect_sound(transformed(mesh_file("spot.obj"), 1.0, Vec3(1e4, -1e4, 1e4)), 10000, 4, "spot+1e4");
 }
 TEST(ForestSoundness, SpotScaled1em4) {
-  expect_sound(transformed(mesh_file("spot.obj"), 1e-4, Vec3(0.3e-4, 0, 0)), 10000, 5,
-               "spot*1e-4");
+  expect_sound(transformed(mesh_file("spot.obj"), 1e-4, Vec3(0.3e-4, 0, 0)), 10000, 5, "spot*1e-4");
 }
 TEST(ForestSoundness, NearPlanarSheet) { expect_sound(make_sheet(24, -0.01), 10000, 6, "sheet"); }
 
@@ -148,10 +150,8 @@ TEST(SlowForestSoundness, Torus) { expect_sound(mesh_file("torus.obj"), 100000, 
 TEST(SlowForestSoundness, Bunny) { expect_sound(mesh_file("bunny.obj"), 100000, 13, "bunny"); }
 TEST(SlowForestSoundness, Cube) { expect_sound(make_cube(8), 100000, 14, "cube"); }
 TEST(SlowForestSoundness, Degenerate) {
-  expect_sound(transformed(mesh_file("torus.obj"), 1.0, Vec3(1e4, 1e4, -1e4)), 100000, 15,
-               "torus+1e4");
-  expect_sound(transformed(mesh_file("bunny.obj"), 1e-4, Vec3::Zero()), 100000, 16,
-               "bunny*1e-4");
+  expect_sound(transformed(mesh_file("torus.obj"), 1.0, Vec3(1e4, 1e4, -1e4)), 100000, 15, "torus+1e4");
+  expect_sound(transformed(mesh_file("bunny.obj"), 1e-4, Vec3::Zero()), 100000, 16, "bunny*1e-4");
   expect_sound(make_sheet(40, -0.003), 100000, 17, "sheet");
 }
 
@@ -163,8 +163,8 @@ Vec4 plane_of(const Vec3& n, const Vec3& x0) {
 }
 
 // Checks bound_may_have_silhouette against the wedge predicate for points near the wedges.
-void expect_bound_sound(const NodeFit& fit, const std::vector<Wedge>& wedges, double size,
-                        const Vec3& center, unsigned seed, const std::string& name) {
+void expect_bound_sound(const NodeFit& fit, const std::vector<Wedge>& wedges, double size, const Vec3& center,
+                        unsigned seed, const std::string& name) {
   if (fit.flags & kNodeUnrejectable) return;  // always accepts
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
@@ -222,8 +222,7 @@ TEST(ForestDegeneratePatch, SingleWedgeBoxAndInherited) {
   for (double scale : {1.0, 1e-4, 1e4}) {
     for (const Vec3& off : {Vec3(0, 0, 0), Vec3(1e4, 2e4, -1e4)}) {
       const Vec3 c = off + Vec3(0.1, 0.2, 0.3) * scale;
-      const std::vector<Wedge> w = {
-          {plane_of(Vec3(0, 0.3, 1), c), plane_of(Vec3(0, -0.3, 1), c)}};
+      const std::vector<Wedge> w = {{plane_of(Vec3(0, 0.3, 1), c), plane_of(Vec3(0, -0.3, 1), c)}};
       const NodeFit alone = fit_node(planes_of(w), w, box_of(c, 0.01 * scale), nullptr);
       EXPECT_TRUE(alone.flags & kNodeBoxOnly);
       expect_bound_sound(alone, w, 0.01 * scale, c, 1, "single wedge");

@@ -132,20 +132,23 @@ TEST(LTCTest, PolygonIntegralMatchesQuadrature) {
     for (int k = 0; k < 3; ++k) {
       // Quads near the lobe (sizes relative to the lobe width), one centred off the lobe.
       const double width = std::max(0.05, 1.5 * c.alpha);
-      const Vec3 off = Frame(lobe).to_world(dir_from_angles(width * (k == 2 ? 1.2 : 0.3) * rng.uniform(), 6.28 * rng.uniform()));
+      const Vec3 off =
+          Frame(lobe).to_world(dir_from_angles(width * (k == 2 ? 1.2 : 0.3) * rng.uniform(), 6.28 * rng.uniform()));
       const std::vector<Vec3> q = random_quad(rng, off, std::min(1.2, width * (1.0 + k)));
       const double exact = l.norm * ltc_polygon_integral(l, q);
       const double quad_ltc = l.norm * integrate_polygon(q, off, [&](const Vec3& w) { return ltc_eval(l, w); });
       const double quad_ggx =
           integrate_polygon(q, off, [&](const Vec3& w) { return ggx_eval_cos<double>(c.alpha, w.normalized(), wo); });
-      EXPECT_NEAR(exact, quad_ltc, 2e-3 * quad_ltc + 1e-6) << "alpha " << c.alpha << " theta " << c.theta_deg << " k " << k;
+      EXPECT_NEAR(exact, quad_ltc, 2e-3 * quad_ltc + 1e-6)
+          << "alpha " << c.alpha << " theta " << c.theta_deg << " k " << k;
       // LTC vs the true BSDF: judged relative to the albedo (a polygon holding a tiny part of the
       // lobe has a large relative error that does not matter for importance).
       const double err = std::abs(exact - quad_ggx) / l.norm;
       worst_ltc_vs_ggx = std::max(worst_ltc_vs_ggx, err);
       ++n_checked;
-      std::printf("[LTC] alpha %.3g theta %2.0f quad %d: LTC %.5f, quadrature of D %.5f, GGX %.5f (|diff|/albedo %.4f)\n",
-                  c.alpha, c.theta_deg, k, exact, quad_ltc, quad_ggx, err);
+      std::printf(
+          "[LTC] alpha %.3g theta %2.0f quad %d: LTC %.5f, quadrature of D %.5f, GGX %.5f (|diff|/albedo %.4f)\n",
+          c.alpha, c.theta_deg, k, exact, quad_ltc, quad_ggx, err);
       EXPECT_LT(err, 0.10) << "alpha " << c.alpha << " theta " << c.theta_deg << " k " << k;
     }
   }

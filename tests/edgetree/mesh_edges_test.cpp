@@ -82,24 +82,23 @@ TEST_P(EdgeClassification, MatchesMeshReadme) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(
-    Meshes, EdgeClassification,
-    ::testing::Values(MeshCounts{"spot.obj", 8784, 6174, 2602, 8},
-                      MeshCounts{"bob.obj", 16032, 9271, 4637, 2124},
-                      MeshCounts{"bunny.obj", 5511, 3778, 1731, 2},
-                      MeshCounts{"torus.obj", 6912, 3456, 1152, 2304},
-                      MeshCounts{"teapot.obj", 14157, 8278, 2510, 3369},
-                      MeshCounts{"wingnut.obj", 9135, 5386, 3635, 114}),
-    [](const auto& info) {
-      std::string s = info.param.file;
-      return s.substr(0, s.find('.'));
-    });
+INSTANTIATE_TEST_SUITE_P(Meshes, EdgeClassification,
+                         ::testing::Values(MeshCounts{"spot.obj", 8784, 6174, 2602, 8},
+                                           MeshCounts{"bob.obj", 16032, 9271, 4637, 2124},
+                                           MeshCounts{"bunny.obj", 5511, 3778, 1731, 2},
+                                           MeshCounts{"torus.obj", 6912, 3456, 1152, 2304},
+                                           MeshCounts{"teapot.obj", 14157, 8278, 2510, 3369},
+                                           MeshCounts{"wingnut.obj", 9135, 5386, 3635, 114}),
+                         [](const auto& info) {
+                           std::string s = info.param.file;
+                           return s.substr(0, s.find('.'));
+                         });
 
 // Open and non-manifold meshes: boundary and non-manifold edges are counted and go to the
 // always-candidate list; inconsistent windings are counted.
 TEST(EdgeClassificationSpecial, BoundaryNonManifoldInconsistent) {
   TriangleMesh m;
-  m.positions = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0),   Vec3(0, 0, 1),
+  m.positions = {Vec3(0, 0, 0),    Vec3(1, 0, 0), Vec3(0, 1, 0),  Vec3(0, 0, 1),
                  Vec3(0, -1, 0.5), Vec3(1, 1, 1), Vec3(2, 1, 0.3)};
   // Edge (0,1): faces 0, 1, 2, 4 -> non-manifold. Edge (1,2): faces 0, 3, 4 -> non-manifold.
   // Edge (2,5): faces 3 (2->5) and 5 (2->5) -> inconsistent winding.
@@ -112,9 +111,7 @@ TEST(EdgeClassificationSpecial, BoundaryNonManifoldInconsistent) {
   EXPECT_EQ(s.count(EdgeClass::Boundary), 7);
   int always = 0;
   for (const auto& e : s.edges)
-    if (e.cls == EdgeClass::Boundary || e.cls == EdgeClass::NonManifold ||
-        e.cls == EdgeClass::Inconsistent)
-      ++always;
+    if (e.cls == EdgeClass::Boundary || e.cls == EdgeClass::NonManifold || e.cls == EdgeClass::Inconsistent) ++always;
   EXPECT_EQ(int(s.always.size()), always);
   for (int i : s.always) EXPECT_TRUE(edge_is_silhouette(s.edges[i], Vec3(10, 10, 10)));
 }
@@ -137,9 +134,7 @@ TEST(EdgeClassificationSpecial, DihedralAngleOfCubeEdges) {
   EXPECT_EQ(s.count(EdgeClass::Convex), 12);
   EXPECT_EQ(s.count(EdgeClass::Flat), 6);
   for (const auto& e : s.edges)
-    if (e.cls == EdgeClass::Convex) {
-      EXPECT_NEAR(e.angle, kPi / 2, 1e-14);
-    }
+    if (e.cls == EdgeClass::Convex) { EXPECT_NEAR(e.angle, kPi / 2, 1e-14); }
 }
 
 }  // namespace

@@ -5,8 +5,8 @@
 /// sphere is within 2e-2 of it; the LP's rho matches a brute-force search over points; closed
 /// normal sets are detected as unrejectable. Fixed seeds.
 
-#include "edgetree/enclosing_sphere.h"
 #include "edgetree/offset_direction.h"
+#include "edgetree/enclosing_sphere.h"
 #include "edgetree/offset_lp.h"
 
 #include <gtest/gtest.h>
@@ -33,14 +33,20 @@ double brute_force_best(const std::vector<Vec3>& ns, std::mt19937_64& rng) {
     const double z = 1.0 - (i + 0.5) * 2.0 / n, r = std::sqrt(1 - z * z);
     const Vec3 d(r * std::cos(golden * i), r * std::sin(golden * i), z);
     const double v = min_dot(ns, d);
-    if (v > best) { best = v; best_d = d; }
+    if (v > best) {
+      best = v;
+      best_d = d;
+    }
   }
   std::normal_distribution<double> g;
   double step = 0.01;
   for (int it = 0; it < 20000; ++it) {
     const Vec3 d = (best_d + step * Vec3(g(rng), g(rng), g(rng))).normalized();
     const double v = min_dot(ns, d);
-    if (v > best) { best = v; best_d = d; }
+    if (v > best) {
+      best = v;
+      best_d = d;
+    }
     if (it % 2000 == 1999) step *= 0.3;
   }
   return best;

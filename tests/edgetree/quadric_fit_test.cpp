@@ -4,8 +4,8 @@
 /// sign normalisation); lambda extrema match a dense search refined by golden section to 1e-9
 /// relative to the largest |lambda| on the wedge. Fixed seeds.
 
-#include "edgetree/extremes.h"
 #include "edgetree/quadric_fit.h"
+#include "edgetree/extremes.h"
 #include "edgetree/quadric_offsets.h"
 
 #include <gtest/gtest.h>
@@ -77,8 +77,10 @@ Vec2 dense_range(const Mat4& Qf, const Vec4& D, const Vec4& q0, const Vec4& q1) 
     const double r = 0.5 * (std::sqrt(5.0) - 1.0);
     for (int it = 0; it < 200; ++it) {
       const double c = b - r * (b - a), d = a + r * (b - a);
-      if (sign * lam(c) < sign * lam(d)) b = d;
-      else a = c;
+      if (sign * lam(c) < sign * lam(d))
+        b = d;
+      else
+        a = c;
     }
     return lam(0.5 * (a + b));
   };
@@ -98,8 +100,7 @@ TEST(QuadricOffsets, ClosedFormMatchesDenseSearch) {
     Vec4 q0(g(rng), g(rng), g(rng), g(rng)), q1(g(rng), g(rng), g(rng), g(rng));
     if (D.dot(q0) < 0) q0 = -q0;
     if (D.dot(q1) < 0) q1 = -q1;
-    if (D.dot(q0) < 0.05 * D.norm() * q0.norm() || D.dot(q1) < 0.05 * D.norm() * q1.norm())
-      continue;
+    if (D.dot(q0) < 0.05 * D.norm() * q0.norm() || D.dot(q1) < 0.05 * D.norm() * q1.norm()) continue;
     const Vec2 closed = wedge_lambda_range(Qf, D, q0, q1);
     const Vec2 dense = dense_range(Qf, D, q0, q1);
     const double scale = std::max(std::abs(dense[0]), std::abs(dense[1]));

@@ -9,10 +9,10 @@
 // central difference of that deterministic formula; no Monte Carlo on the reference side. The
 // interior term is zero (black occluder, constant emission, fixed receiver normal), so the
 // boundary estimator alone must match.
+#include "integrators/boundary_setup.h"
 #include "qsil/edgetree/edge_forest.h"
 #include "qsil/edgetree/ltc.h"
 #include "qsil/integrators/boundary_term.h"
-#include "integrators/boundary_setup.h"
 #include "qsil/integrators/estimator.h"
 
 #include <algorithm>
@@ -41,7 +41,8 @@ inline Shape closed_box(const std::string& id, const Vec3& lo, const Vec3& hi, i
   Shape s;
   s.id = id;
   s.type = "obj";
-  for (int c = 0; c < 8; ++c) s.mesh.positions.emplace_back(c & 1 ? hi.x() : lo.x(), c & 2 ? hi.y() : lo.y(), c & 4 ? hi.z() : lo.z());
+  for (int c = 0; c < 8; ++c)
+    s.mesh.positions.emplace_back(c & 1 ? hi.x() : lo.x(), c & 2 ? hi.y() : lo.y(), c & 4 ? hi.z() : lo.z());
   const int quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
   for (const auto& q : quads) {
     s.mesh.triangles.emplace_back(q[0], q[1], q[2]);
@@ -94,7 +95,8 @@ inline std::vector<Vec2> clip_box(std::vector<Vec2> poly, double x0, double x1, 
 
 /// 2D convex hull (monotone chain), counter-clockwise.
 inline std::vector<Vec2> convex_hull(std::vector<Vec2> p) {
-  std::sort(p.begin(), p.end(), [](const Vec2& a, const Vec2& b) { return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y()); });
+  std::sort(p.begin(), p.end(),
+            [](const Vec2& a, const Vec2& b) { return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y()); });
   std::vector<Vec2> h(2 * p.size());
   int k = 0;
   auto cross = [](const Vec2& o, const Vec2& a, const Vec2& b) {

@@ -6,8 +6,8 @@
 //   different samples.
 // - Set-up builds only what the method samples from: no forest for vsphere, vsphere-solid and
 //   uniform, a forest without quadrics for quadric-box, quadrics for quadric.
-#include "qsil/error.h"
 #include "qsil/integrators/estimator.h"
+#include "qsil/error.h"
 #include "test_data.h"
 
 #include <gtest/gtest.h>
@@ -66,8 +66,8 @@ TEST(Estimator, HalfRangesMergeToTheFullRange) {
   const Scene scene = shadow_quad(32);
   const std::vector<ParameterSpec> params{parse_parameter("object:translate:1,0,0", scene)};
   expect_halves_merge_to_full(Estimator(scene, EstimatorConfig::primal()), "primal");
-  for (Method m : {Method::Quadric, Method::QuadricBox, Method::VSphere, Method::VSphereSolid, Method::Uniform,
-                   Method::None})
+  for (Method m :
+       {Method::Quadric, Method::QuadricBox, Method::VSphere, Method::VSphereSolid, Method::Uniform, Method::None})
     expect_halves_merge_to_full(Estimator(scene, EstimatorConfig::gradient(params, m)), std::string(method_name(m)));
   expect_halves_merge_to_full(Estimator(scene, EstimatorConfig::finite_differences(params)), "fd");
 }
@@ -97,8 +97,8 @@ TEST(Estimator, DisjointRangesDrawDifferentSamples) {
   const RenderResult a = e.run(range(0, 2)), b = e.run(range(2, 2));
   int differ = 0;
   for (int y = 0; y < 12; ++y)
-    for (int x = 0; x < 12; ++x) differ += a.film.mean(e.layout().derivative(0, 0), x, y) !=
-                                           b.film.mean(e.layout().derivative(0, 0), x, y);
+    for (int x = 0; x < 12; ++x)
+      differ += a.film.mean(e.layout().derivative(0, 0), x, y) != b.film.mean(e.layout().derivative(0, 0), x, y);
   EXPECT_GT(differ, 12 * 12 / 4);
 }
 

@@ -1,10 +1,10 @@
 // Image-level correctness of `qsil grad` (interior + quadric boundary term) against central finite
 // differences with common random numbers, on small images with fixed seeds. Criteria: the image
 // sums agree within 3 combined standard errors (two-sided, 99.7% for a correct estimator) and at
-// least 98% of pixel-channels lie within 4 combined standard errors (a correct estimator fails 0.006% of Gaussian pixel-channels; the slack is for
-// heavy-tailed pixels whose SE is itself noisy). The scenes and the statistics are shared with
-// `qsil-check_gradients` (tools/tool_check_gradients.cpp), which runs them at higher spp and
-// resolution; its output is docs/gradient-checks.md. The whole file runs in a few seconds.
+// least 98% of pixel-channels lie within 4 combined standard errors (a correct estimator fails 0.006% of Gaussian
+// pixel-channels; the slack is for heavy-tailed pixels whose SE is itself noisy). The scenes and the statistics are
+// shared with `qsil-check_gradients` (tools/tool_check_gradients.cpp), which runs them at higher spp and resolution;
+// its output is docs/gradient-checks.md. The whole file runs in a few seconds.
 #include "qsil/integrators/gradient_check.h"
 #include "qsil/scene.h"
 #include "test_data.h"
@@ -27,9 +27,7 @@ void expect_agreement(const std::string& name, int res, int grad_spp, int fd_spp
   const std::string text = gradcheck::describe(name, a);
   std::printf("%s", text.c_str());
   EXPECT_NEAR(a.grad.sum, a.fd.sum, 3 * a.sum_se) << text;
-  if (pixels == Pixels::Checked) {
-    EXPECT_GE(a.pixel_fraction_within_4se, 0.98) << text;
-  }
+  if (pixels == Pixels::Checked) { EXPECT_GE(a.pixel_fraction_within_4se, 0.98) << text; }
   // Not vacuous: the image sum, or at least 5% of the pixel-channels, clearly non-zero in FD.
   EXPECT_TRUE(std::abs(a.fd.sum) > 3 * a.fd.standard_error || a.fd_signal_fraction >= 0.05)
       << text << "the derivative must be clearly non-zero (signal fraction " << a.fd_signal_fraction << ")";
@@ -131,8 +129,10 @@ TEST(GradientSign, OccluderMovedTowardTheLightsSideDarkensThePenumbraOnThatSide)
   const RegionSum plus = floor_region_sum(scene, g.film, 0.40, 0.80, 0.30);
   const RegionSum minus = floor_region_sum(scene, g.film, -0.80, -0.40, 0.30);
   const RegionSum plus_interior = floor_region_sum(scene, interior.film, 0.40, 0.80, 0.30);
-  std::printf("+x penumbra: %d pixels, sum %.4g +- %.3g (%d negative); -x penumbra: %d pixels, sum %.4g +- %.3g (%d positive)\n",
-              plus.pixels, plus.sum, plus.se, plus.negative, minus.pixels, minus.sum, minus.se, minus.positive);
+  std::printf(
+      "+x penumbra: %d pixels, sum %.4g +- %.3g (%d negative); -x penumbra: %d pixels, sum %.4g +- %.3g (%d "
+      "positive)\n",
+      plus.pixels, plus.sum, plus.se, plus.negative, minus.pixels, minus.sum, minus.se, minus.positive);
   ASSERT_GE(plus.pixels, 10);
   ASSERT_GE(minus.pixels, 10);
   EXPECT_LT(plus.sum, -5 * plus.se) << "the +x penumbra must darken";

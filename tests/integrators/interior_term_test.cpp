@@ -1,11 +1,11 @@
 // Interior term (forward mode over geometry parameters, docs/architecture.md §4): the
 // differentiable pieces against central differences of the same function in double, the
 // detachment of sampled quantities, and exact zeros for unmoving geometry.
+#include "qsil/bsdf.h"
+#include "qsil/integrators/estimator.h"
 #include "qsil/integrators/geometry_view.h"
 #include "qsil/integrators/path_tracer.h"
-#include "qsil/integrators/estimator.h"
 #include "qsil/integrators/surface_interaction.h"
-#include "qsil/bsdf.h"
 #include "qsil/parameters.h"
 #include "test_scenes.h"
 
@@ -32,7 +32,8 @@ Scene one_shape_scene(const TriangleMesh& mesh) {
 
 /// Central difference of f at 0 with step h (double precision; f smooth).
 /// Evaluated into the value type of f (an Eigen expression would dangle).
-template <class F> auto central(F&& f, double h) {
+template <class F>
+auto central(F&& f, double h) {
   const auto a = f(h), b = f(-h);
   decltype(f(h)) r = (a - b) / (2 * h);
   return r;
@@ -90,8 +91,8 @@ TEST(InteriorTerm, DifferentiableHitMatchesCentralDifferences) {
       ad[9] = si.t.derivatives()[k];
       ad[10] = si.b1.derivatives()[k];
       ad[11] = si.b2.derivatives()[k];
-      EXPECT_LT((ad - fd).norm(), 1e-6 * (1 + fd.norm())) << "param " << specs[k] << "\nad " << ad.transpose()
-                                                         << "\nfd " << fd.transpose();
+      EXPECT_LT((ad - fd).norm(), 1e-6 * (1 + fd.norm()))
+          << "param " << specs[k] << "\nad " << ad.transpose() << "\nfd " << fd.transpose();
     }
   }
 }

@@ -2,8 +2,8 @@
 // interior term is the full derivative: `grad --boundary none` must agree with central finite
 // differences. Criteria: per pixel within 4 combined standard errors in at
 // least 99% of pixels, and the image sum within 3 combined standard errors. Fixed seeds.
-#include "qsil/integrators/estimator.h"
 #include "qsil/image.h"
+#include "qsil/integrators/estimator.h"
 #include "test_data.h"
 #include "test_scenes.h"
 

@@ -19,12 +19,12 @@
 //
 // Statistical tests use fixed seeds; each states its confidence where it asserts agreement.
 
+#include "qsil/area_lights.h"
 #include "qsil/edgetree/mesh_edges.h"
+#include "qsil/environment_light.h"
 #include "qsil/integrators/geometry_view.h"
 #include "qsil/integrators/gradient_check.h"
 #include "qsil/integrators/path_tracer.h"
-#include "qsil/area_lights.h"
-#include "qsil/environment_light.h"
 #include "qsil/ray_tracer.h"
 #include "qsil/scene.h"
 #include "test_data.h"

@@ -46,12 +46,11 @@ int main(int argc, char** argv) {
   app.add_option("meshes", meshes, "OBJ files (default: the six test meshes, paths relative to the repository root)");
   if (const auto code = qsil::cli::parse_arguments(app, argc, argv)) return *code;
   if (meshes.empty())
-    meshes = {"scenes/meshes/spot.obj",          "tests/data/meshes/bob.obj",
-              "scenes/meshes/bunny.obj",         "tests/data/meshes/torus.obj",
-              "scenes/stability/meshes/teapot.obj", "scenes/stability/meshes/wingnut.obj"};
-  std::printf("%-8s %6s %6s %6s %6s %5s %5s %8s %8s %7s %9s %9s %7s %7s\n", "mesh", "edges", "kept",
-              "nodes", "inner", "unrej", "boxo", "build1s", "build2s", "B/edge", "quad/s", "box/s",
-              "FA-quad", "FA-box");
+    meshes = {
+        "scenes/meshes/spot.obj",      "tests/data/meshes/bob.obj",          "scenes/meshes/bunny.obj",
+        "tests/data/meshes/torus.obj", "scenes/stability/meshes/teapot.obj", "scenes/stability/meshes/wingnut.obj"};
+  std::printf("%-8s %6s %6s %6s %6s %5s %5s %8s %8s %7s %9s %9s %7s %7s\n", "mesh", "edges", "kept", "nodes", "inner",
+              "unrej", "boxo", "build1s", "build2s", "B/edge", "quad/s", "box/s", "FA-quad", "FA-box");
   for (const std::string& path : meshes) {
     TriangleMesh m;
     try {
@@ -72,8 +71,7 @@ int main(int argc, char** argv) {
     const Box3 b = m.bounds();
     std::vector<Vec3> pts;
     for (int i = 0; i < 2000; ++i)
-      pts.push_back(b.center() + Vec3(u(rng) * b.extent().x(), u(rng) * b.extent().y(),
-                                      u(rng) * b.extent().z()));
+      pts.push_back(b.center() + Vec3(u(rng) * b.extent().x(), u(rng) * b.extent().y(), u(rng) * b.extent().z()));
     std::vector<int> inner;
     for (int i = 0; i < int(f.nodes().size()); ++i)
       if (!f.node(i).is_leaf()) inner.push_back(i);
@@ -93,11 +91,10 @@ int main(int argc, char** argv) {
         fa[1] += may_have_silhouette(f, i, p, Method::QuadricBox);
       }
     const double ntests = double(pts.size()) * double(inner.size());
-    std::printf("%-8s %6d %6d %6d %6d %5d %5d %8.4f %8.4f %7.1f %9.3g %9.3g %7.3f %7.3f\n", name,
-                st.edges_total, st.edges_kept, st.nodes, st.inner_nodes, st.unrejectable,
-                st.box_only, t1, t2, double(f.memory_bytes()) / st.edges_kept,
-                ntests / secs[0], ntests / secs[1], double(fa[0]) / double(acc[0]),
-                double(fa[1]) / double(acc[1]));
+    std::printf("%-8s %6d %6d %6d %6d %5d %5d %8.4f %8.4f %7.1f %9.3g %9.3g %7.3f %7.3f\n", name, st.edges_total,
+                st.edges_kept, st.nodes, st.inner_nodes, st.unrejectable, st.box_only, t1, t2,
+                double(f.memory_bytes()) / st.edges_kept, ntests / secs[0], ntests / secs[1],
+                double(fa[0]) / double(acc[0]), double(fa[1]) / double(acc[1]));
     std::fflush(stdout);
   }
   return 0;

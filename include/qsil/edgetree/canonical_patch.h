@@ -39,7 +39,7 @@ TriangleMesh make_canonical_patch(PatchKind kind);
 /// Ground truth and the verdicts of the four rejection tests of Fig. 7 (kRejectionMethods:
 /// quadric, quadric-box, vsphere, vsphere-solid) at one point.
 struct SliceVerdict {
-  bool truth = false;                           ///< some edge of the patch is a silhouette for p
+  bool truth = false;                                   ///< some edge of the patch is a silhouette for p
   std::array<bool, kRejectionMethods.size()> accept{};  ///< in kRejectionMethods order
   /// The verdict of `method` (one of kRejectionMethods).
   bool accepts(Method method) const;

@@ -59,10 +59,10 @@ inline bool is_discontinuity(const ForestEdge& e, const Vec3& p) { return e.crea
 /// inconsistent edge bounds a jump of the full radiance, like a silhouette of angle pi.
 inline double always_edge_weight(const ForestEdge& e) { return e.length * (e.crease ? e.angle : kPi); }
 
-/// A node of the edge set's hierarchy (and of the forest fitted over it). Inner nodes: children are nodes [first, first + count) (1..4 of them).
-/// Leaves (kNodeLeaf): edges [first, first + count) (1..4 of them) of EdgeSet::edges(), or
-/// of EdgeSet::always_edges() for a node of an always-candidate tree (kNodeAlways). Every node
-/// covers the contiguous edge range [edge_begin, edge_end) of the same array.
+/// A node of the edge set's hierarchy (and of the forest fitted over it). Inner nodes: children are nodes [first, first
+/// + count) (1..4 of them). Leaves (kNodeLeaf): edges [first, first + count) (1..4 of them) of EdgeSet::edges(), or of
+/// EdgeSet::always_edges() for a node of an always-candidate tree (kNodeAlways). Every node covers the contiguous edge
+/// range [edge_begin, edge_end) of the same array.
 struct ForestNode {
   Box3 bp;                  ///< primal box B_p of the patch's edge endpoints (world, scene units)
   double lw = 0.0;          ///< L_w = sum of edge length * exterior dihedral angle (units * rad);
@@ -116,9 +116,9 @@ std::vector<ForestShapeInput> forest_inputs(const Scene& scene);
 
 /// Options of the edge set: edge culling and the hierarchy.
 struct EdgeSetOptions {
-  EdgeOptions edges;         ///< edge culling (keep_concave)
-  int leaf_size = 4;         ///< maximum edges per leaf (1..4)
-  int sah_buckets = 10;      ///< SAH buckets along the largest centroid axis [QSS 4.1]
+  EdgeOptions edges;     ///< edge culling (keep_concave)
+  int leaf_size = 4;     ///< maximum edges per leaf (1..4)
+  int sah_buckets = 10;  ///< SAH buckets along the largest centroid axis [QSS 4.1]
   /// A shape's always-candidate edges get a tree of their own (box-only nodes, no rejection)
   /// when there are more than this many; fewer stay loose top-level candidates.
   int always_tree_min_edges = 8;
@@ -129,23 +129,23 @@ struct EdgeSetOptions {
 struct ForestShapeStats {
   int shape = 0;
   std::array<int, 6> edge_counts{};  ///< per EdgeClass
-  int edges_total = 0;       ///< unique undirected edges of the mesh
-  int edges_kept = 0;        ///< tree candidates
-  int edges_always = 0;      ///< always-candidate edges (boundary, non-manifold, inconsistent, creases)
-  int creases = 0;           ///< of which creases
-  int always_nodes = 0;      ///< nodes of the shape's always-candidate tree (0: its edges are loose)
-  int nodes = 0;             ///< stored nodes (inner + leaves; the discarded root not counted)
+  int edges_total = 0;               ///< unique undirected edges of the mesh
+  int edges_kept = 0;                ///< tree candidates
+  int edges_always = 0;              ///< always-candidate edges (boundary, non-manifold, inconsistent, creases)
+  int creases = 0;                   ///< of which creases
+  int always_nodes = 0;              ///< nodes of the shape's always-candidate tree (0: its edges are loose)
+  int nodes = 0;                     ///< stored nodes (inner + leaves; the discarded root not counted)
   int inner_nodes = 0;
   int leaves = 0;
-  int roots = 0;             ///< forest roots contributed (<= 4)
-  int depth = 0;             ///< maximum node depth + 1 (levels below the discarded root)
-  int fitted = 0;            ///< inner nodes with a fitted dual bound (EdgeForest)
-  int quadrics = 0;          ///< ...of which carry a bounding quadric pair (neither unrejectable nor box-only)
-  int unrejectable = 0;      ///< inner nodes marked unrejectable
-  int box_only = 0;          ///< inner nodes without a quadric
-  int inherited = 0;         ///< inner nodes with the parent's Q_f
-  int used_lp = 0;           ///< inner nodes whose D came from the LP
-  double build_seconds = 0.0;///< wall time of edge extraction and topology (+ fitting in a forest)
+  int roots = 0;               ///< forest roots contributed (<= 4)
+  int depth = 0;               ///< maximum node depth + 1 (levels below the discarded root)
+  int fitted = 0;              ///< inner nodes with a fitted dual bound (EdgeForest)
+  int quadrics = 0;            ///< ...of which carry a bounding quadric pair (neither unrejectable nor box-only)
+  int unrejectable = 0;        ///< inner nodes marked unrejectable
+  int box_only = 0;            ///< inner nodes without a quadric
+  int inherited = 0;           ///< inner nodes with the parent's Q_f
+  int used_lp = 0;             ///< inner nodes whose D came from the LP
+  double build_seconds = 0.0;  ///< wall time of edge extraction and topology (+ fitting in a forest)
 };
 
 /// The candidate edges of several shapes and their SAH hierarchy (see the file comment).

@@ -35,16 +35,16 @@ inline constexpr double kFlatAngle = 1e-4;
 
 /// One undirected mesh edge.
 struct MeshEdge {
-  int v0 = -1, v1 = -1;        ///< vertex indices into TriangleMesh::positions, v0 < v1
-  int f0 = -1, f1 = -1;        ///< adjacent faces (indices into TriangleMesh::triangles);
-                               ///< f1 = -1 for boundary edges; for non-manifold edges the first two
-  Vec4 q0 = Vec4::Zero();      ///< plane of f0, [n, -n.x0], unit n (world frame)
-  Vec4 q1 = Vec4::Zero();      ///< plane of f1 (zero vector when f1 = -1)
-  double length = 0.0;         ///< |x(v1) - x(v0)|, scene units
-  double angle = 0.0;          ///< exterior dihedral (bend) angle between n0 and n1 in [0, pi],
-                               ///< radians; 0 for boundary/non-manifold edges
+  int v0 = -1, v1 = -1;    ///< vertex indices into TriangleMesh::positions, v0 < v1
+  int f0 = -1, f1 = -1;    ///< adjacent faces (indices into TriangleMesh::triangles);
+                           ///< f1 = -1 for boundary edges; for non-manifold edges the first two
+  Vec4 q0 = Vec4::Zero();  ///< plane of f0, [n, -n.x0], unit n (world frame)
+  Vec4 q1 = Vec4::Zero();  ///< plane of f1 (zero vector when f1 = -1)
+  double length = 0.0;     ///< |x(v1) - x(v0)|, scene units
+  double angle = 0.0;      ///< exterior dihedral (bend) angle between n0 and n1 in [0, pi],
+                           ///< radians; 0 for boundary/non-manifold edges
   EdgeClass cls = EdgeClass::Convex;
-  int shape = 0;               ///< index of the shape this edge belongs to
+  int shape = 0;  ///< index of the shape this edge belongs to
 };
 
 /// Options of edge extraction.
@@ -56,13 +56,13 @@ struct EdgeOptions {
 
 /// Edges of one mesh and their classification counts.
 struct MeshEdgeSet {
-  std::vector<Vec4> face_planes;   ///< one plane per triangle, [n, -n.x0], unit n (zero if degenerate)
-  std::vector<MeshEdge> edges;     ///< every undirected edge, sorted by (v0, v1)
-  std::vector<int> kept;           ///< indices into `edges` of the tree candidates (convex, and
-                                   ///< concave when keep_concave), in `edges` order
-  std::vector<int> always;         ///< indices into `edges` of the always-candidate edges
-                                   ///< (boundary, non-manifold, inconsistent)
-  std::array<int, 6> counts{};     ///< number of edges per EdgeClass (indexed by the enum value)
+  std::vector<Vec4> face_planes;  ///< one plane per triangle, [n, -n.x0], unit n (zero if degenerate)
+  std::vector<MeshEdge> edges;    ///< every undirected edge, sorted by (v0, v1)
+  std::vector<int> kept;          ///< indices into `edges` of the tree candidates (convex, and
+                                  ///< concave when keep_concave), in `edges` order
+  std::vector<int> always;        ///< indices into `edges` of the always-candidate edges
+                                  ///< (boundary, non-manifold, inconsistent)
+  std::array<int, 6> counts{};    ///< number of edges per EdgeClass (indexed by the enum value)
   int count(EdgeClass c) const { return counts[static_cast<int>(c)]; }
 };
 
@@ -73,8 +73,7 @@ Vec4 face_plane(const TriangleMesh& mesh, int f);
 /// Builds the undirected edge list of a welded mesh with adjacency, planes, lengths, exterior
 /// dihedral angles and classes (docs/architecture.md §5 "Edges"). `shape` is stored in every edge.
 /// Cost O(T log T). The input mesh is not modified.
-MeshEdgeSet build_mesh_edges(const TriangleMesh& mesh, int shape = 0,
-                             const EdgeOptions& options = {});
+MeshEdgeSet build_mesh_edges(const TriangleMesh& mesh, int shape = 0, const EdgeOptions& options = {});
 
 /// Exact silhouette predicate of one edge for the shading point p (world frame) [QSS 3.1]:
 /// true iff (q0.x)(q1.x) <= 0 with x = [p, 1]; always true for boundary, non-manifold and

@@ -25,13 +25,13 @@ inline constexpr double kFitPad = 1e-9;
 /// (lambda1 - lambda0) D D^T is the constant delta = (lambda1 - lambda0) |D|^2 >= 0, so storing
 /// G0 and delta keeps Q0 <= Q1 exact).
 struct NodeBound {
-  LocalFrame frame;                  ///< p' = (p - c)/s
-  Mat4 A = Mat4::Identity();         ///< orthonormal basis [t1, t2, t3, Z] (columns), local frame
-  Vec3 bq_lo = Vec3::Zero();         ///< dual box B_q, lower corner
-  Vec3 bq_hi = Vec3::Zero();         ///< dual box B_q, upper corner
-  Mat4 G0 = Mat4::Zero();            ///< A^T Q0 A (symmetric); zero for box-only nodes
-  double delta = 0.0;                ///< A^T Q1 A - A^T Q0 A = delta e4 e4^T, delta >= 0
-  Vec4 D = Vec4::Zero();             ///< offset vector, local frame ([d,0] or [P,1])
+  LocalFrame frame;                     ///< p' = (p - c)/s
+  Mat4 A = Mat4::Identity();            ///< orthonormal basis [t1, t2, t3, Z] (columns), local frame
+  Vec3 bq_lo = Vec3::Zero();            ///< dual box B_q, lower corner
+  Vec3 bq_hi = Vec3::Zero();            ///< dual box B_q, upper corner
+  Mat4 G0 = Mat4::Zero();               ///< A^T Q0 A (symmetric); zero for box-only nodes
+  double delta = 0.0;                   ///< A^T Q1 A - A^T Q0 A = delta e4 e4^T, delta >= 0
+  Vec4 D = Vec4::Zero();                ///< offset vector, local frame ([d,0] or [P,1])
   double lambda0 = 0.0, lambda1 = 0.0;  ///< padded offsets (diagnostics)
   /// A^T Q1 A.
   Mat4 G1() const {
@@ -54,10 +54,10 @@ struct NodeFitOptions {
 
 /// Result of fit_node.
 struct NodeFit {
-  std::uint16_t flags = 0;   ///< kNodeUnrejectable, kNodeBoxOnly, kNodeInherited, kNodeUsedLp
-  NodeBound bound;           ///< valid unless kNodeUnrejectable
-  bool has_qf = false;       ///< qf is a usable fitted (or inherited) quadric
-  Mat4 qf = Mat4::Zero();    ///< Q_f in bound.frame, max |entry| = 1 (children may inherit it)
+  std::uint16_t flags = 0;  ///< kNodeUnrejectable, kNodeBoxOnly, kNodeInherited, kNodeUsedLp
+  NodeBound bound;          ///< valid unless kNodeUnrejectable
+  bool has_qf = false;      ///< qf is a usable fitted (or inherited) quadric
+  Mat4 qf = Mat4::Zero();   ///< Q_f in bound.frame, max |entry| = 1 (children may inherit it)
 };
 
 /// Fits the bound of one node from its unique face planes (world frame, unit normals), its
@@ -65,7 +65,7 @@ struct NodeFit {
 /// provides the Q_f to inherit when this node has fewer than options.min_fit_planes planes or
 /// the fit fails; the inherited quadric gets this node's own D, B_q and lambdas, so the bound
 /// stays sound. Degenerate input never throws: it yields an unrejectable or box-only node.
-NodeFit fit_node(std::span<const Vec4> planes, std::span<const Wedge> wedges, const Box3& bp,
-                 const NodeFit* parent, const NodeFitOptions& options = {});
+NodeFit fit_node(std::span<const Vec4> planes, std::span<const Wedge> wedges, const Box3& bp, const NodeFit* parent,
+                 const NodeFitOptions& options = {});
 
 }  // namespace qsil::edgetree

@@ -43,9 +43,9 @@ struct LightPolygon {
 
 /// Everything the traversal needs to know about the shading point.
 struct SilhouetteQuery {
-  Vec3 p = Vec3::Zero();       ///< shading point (world)
-  Frame frame;                 ///< local shading frame (z = shading normal), world -> local
-  LTC ltc;                     ///< the BSDF's LTC in that frame (norm = albedo weight)
+  Vec3 p = Vec3::Zero();  ///< shading point (world)
+  Frame frame;            ///< local shading frame (z = shading normal), world -> local
+  LTC ltc;                ///< the BSDF's LTC in that frame (norm = albedo weight)
   /// eligible[s]: edges of shape s may contribute (their velocity relative to p is non-zero).
   /// Null: every shape is eligible.
   const std::vector<bool>* eligible = nullptr;

@@ -150,7 +150,8 @@ bool edge_jump(const PathContext& ctx, const SceneVelocities& vel, const edgetre
 }
 
 /// The vertex hook of trace_path that adds the secondary boundary term (DualView<N> paths only).
-template <int N> struct BoundaryHook {
+template <int N>
+struct BoundaryHook {
   const PathContext* ctx;
   const BoundaryContext* bctx;
   Sampler* sampler;  ///< a stream of its own, so the path's own decisions equal the primal's
@@ -173,8 +174,7 @@ template <int N> struct BoundaryHook {
     const Vec3 wo_world = q.frame.to_world(wo_local);
     for (int sample = 0; sample < bctx->samples_per_vertex; ++sample) {
       ++stats.boundary_traversals;
-      const edgetree::SilhouetteSample s =
-          bctx->sampler->sample(q, [this] { return sampler->next(); });
+      const edgetree::SilhouetteSample s = bctx->sampler->sample(q, [this] { return sampler->next(); });
       if (!s.edge || !(s.pdf > 0)) {
         ++stats.boundary_zero;
         continue;
@@ -183,8 +183,9 @@ template <int N> struct BoundaryHook {
       const Color f = bsdf_eval<double>(*sp.bsdf, q.frame.to_local(w), wo_local);
       Color jump;
       Eigen::Matrix<double, 1, N> J;
-      if ((f == 0).all() || !edge_jump<N>(*ctx, *bctx->velocities, *s.edge, s.t, q.p, spawn_origin(si, w),
-                                          leaves_below(si, wo_world, w), dp, seg, *sampler, stats, jump, J) ||
+      if ((f == 0).all() ||
+          !edge_jump<N>(*ctx, *bctx->velocities, *s.edge, s.t, q.p, spawn_origin(si, w), leaves_below(si, wo_world, w),
+                        dp, seg, *sampler, stats, jump, J) ||
           (jump == 0).all()) {
         ++stats.boundary_zero;
         continue;

@@ -37,7 +37,7 @@ struct CandidatesOptions {
   std::vector<int> pixel;             ///< X,Y: the first hit through this pixel's centre (or empty)
   std::vector<double> point, normal;  ///< X,Y,Z each: a free shading point (when pixel is empty)
   std::vector<Method> methods{kEdgeSamplingMethods.begin(), kEdgeSamplingMethods.end()};
-  std::vector<std::string> shapes;    ///< eligible shape ids (empty: every shape)
+  std::vector<std::string> shapes;  ///< eligible shape ids (empty: every shape)
 };
 
 /// One method's candidates and statistics.
@@ -51,12 +51,12 @@ struct MethodCandidates {
 
 /// The result of find_candidates (see the file comment).
 struct CandidatesReport {
-  Vec3 p = Vec3::Zero(), n = Vec3::UnitZ();  ///< shading point and normal (world)
-  int shape = -1;                            ///< the hit shape (-1 for a free point)
-  std::string where;                         ///< "pixel X,Y" or "point"
+  Vec3 p = Vec3::Zero(), n = Vec3::UnitZ();        ///< shading point and normal (world)
+  int shape = -1;                                  ///< the hit shape (-1 for a free point)
+  std::string where;                               ///< "pixel X,Y" or "point"
   long long true_silhouettes = 0, true_upper = 0;  ///< ground truth over the eligible shapes
   std::vector<MethodCandidates> methods;
-  std::shared_ptr<const void> keep_alive;    ///< owns the edge structures the edge pointers point into
+  std::shared_ptr<const void> keep_alive;  ///< owns the edge structures the edge pointers point into
 };
 
 /// Finds the shading point and every method's candidates. Throws qsil::Error for a pixel

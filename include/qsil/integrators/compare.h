@@ -32,12 +32,12 @@ struct CompareOptions {
   std::vector<Method> methods;       ///< any of kAllMethods
   std::vector<double> targets;       ///< budgets in seconds (equal_time) or spp counts
   bool equal_time = true;
-  std::string reference;             ///< reference EXR (`qsil reference`); empty: render one
-  double reference_factor = 8;       ///< automatic reference: this times the largest target, quadric
-  std::vector<double> h;             ///< FD steps (fd_steps())
+  std::string reference;        ///< reference EXR (`qsil reference`); empty: render one
+  double reference_factor = 8;  ///< automatic reference: this times the largest target, quadric
+  std::vector<double> h;        ///< FD steps (fd_steps())
   int boundary_spp = 1;
-  std::filesystem::path out;         ///< output directory (created)
-  uint64_t seed = 0;                 ///< base seed: every method, target and the reference derive theirs
+  std::filesystem::path out;  ///< output directory (created)
+  uint64_t seed = 0;          ///< base seed: every method, target and the reference derive theirs
   int threads = 0;
 };
 
@@ -48,7 +48,7 @@ struct CompareRow {
   int order = 0;      ///< position in the run sequence
   ProgressiveResult run;
   ErrorMetrics err;
-  double zero_rate = 0;    ///< boundary samples that contributed nothing (NaN for fd/none)
+  double zero_rate = 0;  ///< boundary samples that contributed nothing (NaN for fd/none)
   uint64_t traversals = 0;
 };
 

@@ -68,14 +68,14 @@ struct RenderOptions {
 /// What a run produced and what it cost (set-up excluded: Estimator::setup()).
 struct RenderResult {
   Film film{1, 1, FilmLayout()};
-  int first_sample = 0;      ///< first sample index of the run
-  int spp = 0;               ///< samples per pixel (summed over merged runs)
-  double seconds = 0;        ///< wall time of the pixel loop and the primary boundary term
-  uint64_t rays = 0;         ///< ray queries issued
-  uint64_t nonfinite = 0;    ///< samples with a NaN/inf value (replaced by 0 and reported)
-  double boundary_seconds = 0;  ///< wall time attributed to the boundary term (thread-time share)
-  uint64_t traversals = 0;      ///< boundary-term samples drawn (secondary and primary)
-  uint64_t zero_traversals = 0; ///< ...that contributed nothing
+  int first_sample = 0;          ///< first sample index of the run
+  int spp = 0;                   ///< samples per pixel (summed over merged runs)
+  double seconds = 0;            ///< wall time of the pixel loop and the primary boundary term
+  uint64_t rays = 0;             ///< ray queries issued
+  uint64_t nonfinite = 0;        ///< samples with a NaN/inf value (replaced by 0 and reported)
+  double boundary_seconds = 0;   ///< wall time attributed to the boundary term (thread-time share)
+  uint64_t traversals = 0;       ///< boundary-term samples drawn (secondary and primary)
+  uint64_t zero_traversals = 0;  ///< ...that contributed nothing
 
   /// Adds the film and the counters of a run over a disjoint sample range of the same estimator
   /// (first_sample becomes the smaller one). Throws nothing; films must have the same layout.

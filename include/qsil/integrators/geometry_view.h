@@ -20,7 +20,8 @@ struct PrimalView {
 };
 
 /// Geometry with forward-mode derivatives of N parameters (N >= velocities->num_params).
-template <int N> struct DualView {
+template <int N>
+struct DualView {
   using Real = Dual<N>;
   const Scene* scene;
   const SceneVelocities* velocities;
@@ -29,8 +30,7 @@ template <int N> struct DualView {
                    velocities->position[shape][v].template leftCols<N>().eval());
   }
   Vec3T<Real> normal(int shape, int v) const {
-    return lift<N>(scene->shapes[shape].mesh.normals[v],
-                   velocities->normal[shape][v].template leftCols<N>().eval());
+    return lift<N>(scene->shapes[shape].mesh.normals[v], velocities->normal[shape][v].template leftCols<N>().eval());
   }
   bool moving(int shape) const { return velocities->moving[shape]; }
 };

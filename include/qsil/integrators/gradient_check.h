@@ -32,10 +32,10 @@ namespace qsil::gradcheck {
 /// One configuration {scene, parameter, FD step}, as in Mitsuba 3's test_ad_integrators.py.
 struct Case {
   std::string name;
-  std::string file;                              ///< relative to the repository root (or resolved)
-  std::map<std::string, std::string> defaults;   ///< -D overrides except res/spp (set per run)
+  std::string file;                             ///< relative to the repository root (or resolved)
+  std::map<std::string, std::string> defaults;  ///< -D overrides except res/spp (set per run)
   std::string param;
-  double h = 0;                                  ///< FD step (scene units of theta)
+  double h = 0;  ///< FD step (scene units of theta)
   /// A copy whose `file` is `root / file` (an absolute `file` stays as it is).
   Case resolved(const std::filesystem::path& root) const;
 };
@@ -54,7 +54,7 @@ Scene load_case(const Case& c, int res, int spp);
 
 /// One pixel-channel that disagrees, for localisation.
 struct Outlier {
-  int x = 0, y = 0, channel = 0;   ///< pixel (0,0 top-left) and channel (0 R, 1 G, 2 B)
+  int x = 0, y = 0, channel = 0;  ///< pixel (0,0 top-left) and channel (0 R, 1 G, 2 B)
   double grad = 0, grad_se = 0, fd = 0, fd_se = 0, interior = 0;
   /// (grad - fd) / combined standard error.
   double z() const;
@@ -64,8 +64,8 @@ struct Outlier {
 struct Agreement {
   int res = 0, grad_spp = 0, fd_spp = 0;
   double h = 0;
-  ImageSum grad, fd, interior;   ///< image sums (interior: --boundary none, same seed as grad)
-  double sum_se = 0;             ///< combined standard error of the sums
+  ImageSum grad, fd, interior;  ///< image sums (interior: --boundary none, same seed as grad)
+  double sum_se = 0;            ///< combined standard error of the sums
   double pixel_fraction_within_4se = 0;
   int pixel_channels = 0, pixel_channels_outside = 0;
   /// The same fraction over the pixel-channels FD resolved (its estimate or its standard error is
@@ -74,7 +74,7 @@ struct Agreement {
   int resolved_pixel_channels = 0;
   /// Fraction of pixel-channels where FD is clearly non-zero (|fd| > 4 se): the test has signal.
   double fd_signal_fraction = 0;
-  std::vector<Outlier> worst;    ///< the largest |z| first (up to 8)
+  std::vector<Outlier> worst;  ///< the largest |z| first (up to 8)
   double grad_seconds = 0, fd_seconds = 0, interior_seconds = 0;
   uint64_t traversals = 0, zero_traversals = 0;  ///< boundary-term samples of grad, and the zero ones
   uint64_t nonfinite = 0;

@@ -15,11 +15,11 @@
 /// Depth follows Mitsuba 3: max_depth counts path segments (1 = directly seen emitters,
 /// 2 = direct illumination); -1 means unbounded, capped at kUnboundedDepthCap segments.
 
-#include "qsil/integrators/surface_interaction.h"
 #include "qsil/area_lights.h"
 #include "qsil/bsdf.h"
 #include "qsil/dual.h"
 #include "qsil/environment_light.h"
+#include "qsil/integrators/surface_interaction.h"
 #include "qsil/ray_tracer.h"
 #include "qsil/rng.h"
 #include "qsil/scene.h"
@@ -35,8 +35,8 @@ struct PathContext {
   const RayTracer* tracer = nullptr;
   const EnvironmentLight* environment = nullptr;
   const AreaLights* area_lights = nullptr;
-  int max_depth = 3;          ///< segments; already resolved (never -1)
-  double p_environment = 0;   ///< probability that NEE samples the environment (else area lights)
+  int max_depth = 3;         ///< segments; already resolved (never -1)
+  double p_environment = 0;  ///< probability that NEE samples the environment (else area lights)
 
   static int resolve_depth(int max_depth) { return max_depth < 0 ? kUnboundedDepthCap : max_depth; }
 };
@@ -44,9 +44,9 @@ struct PathContext {
 /// Counters of one thread's work (summed for the final report).
 struct PathStats {
   uint64_t rays = 0;
-  uint64_t boundary_traversals = 0;   ///< edge-forest traversals (boundary-term samples)
-  uint64_t boundary_zero = 0;         ///< ...that contributed nothing (no edge, not a silhouette, occluded, f = 0)
-  double boundary_seconds = 0;        ///< thread time spent in the boundary term
+  uint64_t boundary_traversals = 0;  ///< edge-forest traversals (boundary-term samples)
+  uint64_t boundary_zero = 0;        ///< ...that contributed nothing (no edge, not a silhouette, occluded, f = 0)
+  double boundary_seconds = 0;       ///< thread time spent in the boundary term
 };
 
 /// Power heuristic weight of a strategy with pdf a against one with pdf b (Veach 1997). Detached.
@@ -66,10 +66,11 @@ inline double nee_area_pdf(const PathContext& ctx, double dist, const Vec3& dir,
 }
 
 /// The BSDF of a surface interaction, with the shading frame over T.
-template <class T> struct ShadingPoint {
+template <class T>
+struct ShadingPoint {
   const BSDFDesc* bsdf;
-  FrameT<T> frame;     ///< shading frame over T (moves with the surface)
-  Frame frame_value;   ///< its detached value (sampling happens here)
+  FrameT<T> frame;    ///< shading frame over T (moves with the surface)
+  Frame frame_value;  ///< its detached value (sampling happens here)
 };
 
 /// Smallest cosine between wo and the adapted shading normal (see make_shading_point).
@@ -115,7 +116,8 @@ ShadingPoint<T> make_shading_point(const PathContext& ctx, const SurfaceInteract
 /// direction `wo_world` (a "sliver" direction, reachable only through a shading normal tilted
 /// past the geometric one). Such rays pass through back faces (IgnoreSet::through_back_faces:
 /// why is explained there); the test is on detached values.
-template <class T> bool leaves_below(const SurfaceInteraction<T>& si, const Vec3& wo_world, const Vec3& w) {
+template <class T>
+bool leaves_below(const SurfaceInteraction<T>& si, const Vec3& wo_world, const Vec3& w) {
   const Vec3 ng = value(si.ng);
   return ng.dot(w) * ng.dot(wo_world) < 0;
 }
@@ -123,20 +125,22 @@ template <class T> bool leaves_below(const SurfaceInteraction<T>& si, const Vec3
 /// The hook of a path vertex for estimators that add a term there (the boundary term); the primal
 /// path tracer has none.
 struct NoVertexHook {
-  template <class... Args> void operator()(Args&&...) const {}
+  template <class... Args>
+  void operator()(Args&&...) const {}
 };
 
 /// Radiance arriving at `origin` from fixed direction `dir` along a path, plus its forward-mode
 /// derivative when T is a dual. At every vertex that may still scatter (segments < max_depth),
-/// `hook(si, sp, wo_local_value, beta, segments_so_far, sampler, stats, L)` may add to L. `first_hit` is the already-traced hit of that ray (so the caller
-/// can reuse it); `segments` is the number of segments already used before this one (0 for a
-/// camera ray); `prev_bsdf_pdf` is the detached solid-angle pdf with which `dir` was chosen by
+/// `hook(si, sp, wo_local_value, beta, segments_so_far, sampler, stats, L)` may add to L. `first_hit` is the
+/// already-traced hit of that ray (so the caller can reuse it); `segments` is the number of segments already used
+/// before this one (0 for a camera ray); `prev_bsdf_pdf` is the detached solid-angle pdf with which `dir` was chosen by
 /// BSDF sampling (0: the direction was not BSDF-sampled, so emission found along it is counted
 /// with weight 1).
 template <class View, class Hook = NoVertexHook>
-ColorT<typename View::Real> trace_path(const PathContext& ctx, const View& view, const Vec3T<typename View::Real>& origin,
-                                       const Vec3& dir, const Hit& first_hit, int segments, double prev_bsdf_pdf,
-                                       Sampler& sampler, PathStats& stats, const Hook& hook = {}) {
+ColorT<typename View::Real> trace_path(const PathContext& ctx, const View& view,
+                                       const Vec3T<typename View::Real>& origin, const Vec3& dir, const Hit& first_hit,
+                                       int segments, double prev_bsdf_pdf, Sampler& sampler, PathStats& stats,
+                                       const Hook& hook = {}) {
   using T = typename View::Real;
   ColorT<T> L = lift<T>(Color::Zero().eval());
   ColorT<T> beta = lift<T>(Color::Ones().eval());

@@ -37,7 +37,7 @@ struct ProgressiveOptions {
 
 /// What progressive rendering produced.
 struct ProgressiveResult {
-  RenderResult result;      ///< merged film over samples [0, result.spp); rays, nonfinite etc. summed
+  RenderResult result;  ///< merged film over samples [0, result.spp); rays, nonfinite etc. summed
   int passes = 0;
   double wall_seconds = 0;  ///< wall time of all passes
 };

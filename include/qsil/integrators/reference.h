@@ -23,9 +23,9 @@ Image reference_image(const RenderResult& r);
 struct Reference {
   Image image;
   int num_params = 0;
-  std::vector<double> sum, sum_se;   ///< per parameter: image sum and its standard error
-  double noise_floor = 0;            ///< mean over pixels and derivative channels of se^2
-  double mean_sq = 0;                ///< mean over pixels and derivative channels of ref^2
+  std::vector<double> sum, sum_se;  ///< per parameter: image sum and its standard error
+  double noise_floor = 0;           ///< mean over pixels and derivative channels of se^2
+  double mean_sq = 0;               ///< mean over pixels and derivative channels of ref^2
 };
 
 /// Reads and checks a reference EXR (derivative channels and their .se channels for
@@ -41,10 +41,10 @@ void summarize_reference(Reference& ref);
 /// (dtheta<k>.R/G/B for all k); pixels with a non-finite estimate are counted and left out.
 struct ErrorMetrics {
   double mse = 0;
-  double rel_mse = 0;            ///< mse / mean(ref^2)
-  std::vector<double> sum;       ///< per parameter: estimate's image sum
-  std::vector<double> sum_se;    ///< ...its standard error
-  std::vector<double> sum_error; ///< ...minus the reference's image sum
+  double rel_mse = 0;             ///< mse / mean(ref^2)
+  std::vector<double> sum;        ///< per parameter: estimate's image sum
+  std::vector<double> sum_se;     ///< ...its standard error
+  std::vector<double> sum_error;  ///< ...minus the reference's image sum
   long long nonfinite_pixels = 0;
 };
 

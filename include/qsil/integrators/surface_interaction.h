@@ -12,14 +12,15 @@
 namespace qsil {
 
 /// A surface point over scalar type T.
-template <class T> struct SurfaceInteraction {
+template <class T>
+struct SurfaceInteraction {
   int shape = -1, triangle = -1;
-  T t;              ///< distance from the ray origin along the unit direction
-  T b1, b2;         ///< barycentrics of vertices 1 and 2
-  Vec3T<T> p;       ///< world position
-  Vec3T<T> ng;      ///< unit geometric normal (counter-clockwise winding = outward)
-  Vec3T<T> ns;      ///< unit shading normal (interpolated vertex normals, or ng for face_normals)
-  double scale = 0; ///< largest absolute vertex coordinate of the triangle (ray offsets)
+  T t;               ///< distance from the ray origin along the unit direction
+  T b1, b2;          ///< barycentrics of vertices 1 and 2
+  Vec3T<T> p;        ///< world position
+  Vec3T<T> ng;       ///< unit geometric normal (counter-clockwise winding = outward)
+  Vec3T<T> ns;       ///< unit shading normal (interpolated vertex normals, or ng for face_normals)
+  double scale = 0;  ///< largest absolute vertex coordinate of the triangle (ray offsets)
   /// For a point given exactly (Hit::exact: a sampled edge point, on the triangle's boundary):
   /// the unit in-plane direction from p toward the triangle's centroid, else zero. Rays leaving
   /// such a point start a relative offset inside the triangle (spawn_origin), so that what they
@@ -77,8 +78,8 @@ SurfaceInteraction<typename View::Real> make_interaction(const View& view, const
     si.ns = value(len) > 0 ? Vec3T<T>(n / len) : si.ng;
   }
   const auto& P = shape.mesh.positions;
-  si.scale = std::max({P[tri[0]].cwiseAbs().maxCoeff(), P[tri[1]].cwiseAbs().maxCoeff(),
-                       P[tri[2]].cwiseAbs().maxCoeff()});
+  si.scale =
+      std::max({P[tri[0]].cwiseAbs().maxCoeff(), P[tri[1]].cwiseAbs().maxCoeff(), P[tri[2]].cwiseAbs().maxCoeff()});
   return si;
 }
 
@@ -91,7 +92,8 @@ SurfaceInteraction<typename View::Real> make_interaction(const View& view, const
 /// neighbouring face B at a convex edge, which stops it when B is twosided (one-sided back faces
 /// let such rays through, IgnoreSet::through_back_faces); from the edge point itself the same ray
 /// would slip past the edge (docs/design-notes.md "Smooth shading").
-template <class T> Vec3 spawn_origin(const SurfaceInteraction<T>& si, const Vec3& dir) {
+template <class T>
+Vec3 spawn_origin(const SurfaceInteraction<T>& si, const Vec3& dir) {
   const Vec3 p = value(si.p);
   Vec3 o = offset_ray_origin(p, value(si.ng), dir, si.scale);
   if (si.inward != Vec3::Zero()) o += kRayOffsetRelative * std::max(si.scale, p.cwiseAbs().maxCoeff()) * si.inward;
