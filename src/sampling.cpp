@@ -91,12 +91,33 @@ Distribution1D::Distribution1D(std::span<const double> f) : f_(f.begin(), f.end(
     for (size_t i = 1; i < n; ++i) cdf_[i] /= sum_;
     cdf_[n] = 1.0;
   }
+  // Guide table (the indexed search of Chen & Asau 1974): guide_[k] = the largest i with
+  // cdf[i] <= k/n, so the bin of u in [k/n, (k+1)/n) lies in [guide_[k], guide_[k+1]].
+  guide_.assign(n + 1, 0);
+  size_t i = 0;
+  for (size_t k = 0; k <= n; ++k) {
+    const double level = double(k) / double(n);
+    while (i + 1 <= n && cdf_[i + 1] <= level) ++i;
+    guide_[k] = int(i);
+  }
 }
 
 int Distribution1D::find_bin(double u) const {
   const int n = size();
-  // Largest i with cdf[i] <= u, clamped to [0, n-1].
-  int i = int(std::upper_bound(cdf_.begin(), cdf_.end(), u) - cdf_.begin()) - 1;
+  // Largest i with cdf[i] <= u, clamped to [0, n-1]: searched between the guide table's bounds
+  // (one or two steps for most u), and over the whole CDF when rounding of u n put u outside them
+  // (the answer is the same as a binary search over the whole CDF, so sampling is unchanged).
+  int i = -1;
+  const double un = u * double(n);
+  if (un >= 0.0 && un < double(n)) {
+    const size_t k = size_t(un);
+    const auto lo = cdf_.begin() + guide_[k];
+    const auto hi = cdf_.begin() + std::min<ptrdiff_t>(ptrdiff_t(n) + 1, ptrdiff_t(guide_[k + 1]) + 2);
+    i = int(std::upper_bound(lo, hi, u) - cdf_.begin()) - 1;
+    const bool found = i >= 0 && cdf_[size_t(i)] <= u && (i == n || u < cdf_[size_t(i) + 1]);
+    if (!found) i = -1;
+  }
+  if (i < 0) i = int(std::upper_bound(cdf_.begin(), cdf_.end(), u) - cdf_.begin()) - 1;
   i = std::clamp(i, 0, n - 1);
   if (is_zero_ || f_[size_t(i)] > 0.0) return i;
   // Rounding put u on a zero-width bin (u at or beyond the top of the CDF, or on a plateau):

@@ -132,6 +132,28 @@ TEST(SamplingDistribution1D, PmfPdfAndIntegral) {
   EXPECT_EQ(d.pdf(1.0), 0.0);
 }
 
+TEST(SamplingDistribution1D, GuideTableFindsTheSameBinAsABinarySearch) {
+  // Weights spanning nine decades (every bin positive), so the guide table's intervals hold from
+  // one to hundreds of bins; u at random, at every CDF value and k/n and one ulp either side.
+  TestRng rng(11);
+  std::vector<double> w(1000);
+  for (double& x : w) x = std::pow(10.0, -9.0 * rng.uniform());
+  const Distribution1D d(w);
+  std::vector<double> us;
+  for (int i = 0; i < 20000; ++i) us.push_back(rng.uniform());
+  for (double c : d.cdf()) us.insert(us.end(), {c, std::nextafter(c, 0.0), std::nextafter(c, 2.0)});
+  for (int k = 0; k <= d.size(); ++k) {
+    const double c = double(k) / d.size();
+    us.insert(us.end(), {c, std::nextafter(c, 0.0), std::nextafter(c, 2.0)});
+  }
+  for (double u : us) {
+    const double uc = std::clamp(u, 0.0, std::nextafter(1.0, 0.0));
+    const int expected =
+        std::clamp(int(std::upper_bound(d.cdf().begin(), d.cdf().end(), uc) - d.cdf().begin()) - 1, 0, d.size() - 1);
+    ASSERT_EQ(d.sample(u).index, expected) << "u = " << u;
+  }
+}
+
 TEST(SamplingDistribution1D, NeverReturnsZeroProbabilityBin) {
   const Distribution1D d(kGappy);
   // u at every CDF value, one ulp either side, and the extremes, including 1 - epsilon, 1 and

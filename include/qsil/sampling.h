@@ -107,6 +107,7 @@ class Distribution1D {
   int find_bin(double u) const;
   std::vector<double> f_;
   std::vector<double> cdf_;
+  std::vector<int> guide_;  ///< n + 1 entries: the largest i with cdf[i] <= k/n (find_bin)
   double sum_ = 0;
   bool is_zero_ = true;
 };
