@@ -50,7 +50,8 @@ double segment_param(double la, double lb, double Psi, double psi) {
 
 }  // namespace
 
-EdgePointSampler::EdgePointSampler(const Vec3& w0, const Vec3& w1, const LTC& ltc, double defensive)
+EdgePointSampler::EdgePointSampler(const Vec3& w0, const Vec3& w1, const LTC& ltc, double defensive, double t_lo,
+                                   double t_hi)
     : w0_(w0), w1_(w1), ltc_(ltc) {
   const Vec3 c = w0.cross(w1);
   cross01_ = c.norm();
@@ -62,7 +63,7 @@ EdgePointSampler::EdgePointSampler(const Vec3& w0, const Vec3& w1, const LTC& lt
 
   u0_ = ltc.M_inv * w0;
   u1_ = ltc.M_inv * w1;
-  double lo = 0.0, hi = 1.0;
+  double lo = std::max(0.0, t_lo), hi = std::min(1.0, t_hi);
   restrict_positive(w0.z(), w1.z(), lo, hi);
   restrict_positive(u0_.z(), u1_.z(), lo, hi);
   if (!(hi > lo)) return;
@@ -105,7 +106,7 @@ EdgePointSampler::EdgePointSampler(const Vec3& w0, const Vec3& w1, const LTC& lt
 }
 
 double EdgePointSampler::ltc_pdf(double t) const {
-  if (!(ltc_scale_ > 0.0)) return 0.0;
+  if (!(ltc_scale_ > 0.0) || !(t >= ta_ && t <= tb_)) return 0.0;
   const Vec3 w = w0_ + t * (w1_ - w0_);
   if (!(w.z() > 0.0)) return 0.0;
   const Vec3 u = u0_ + t * (u1_ - u0_);

@@ -53,8 +53,11 @@ class EdgePointSampler {
  public:
   /// w0, w1: endpoints relative to the shading point, local shading frame, scene units.
   /// ltc: the BSDF's LTC in the same frame (ltc_ggx or ltc_diffuse; a zero norm disables the LTC
-  /// part). defensive: the share eps in (0, 1] (clamped to [1e-3, 1]).
-  EdgePointSampler(const Vec3& w0, const Vec3& w1, const LTC& ltc, double defensive = kEdgeDefensiveShare);
+  /// part). defensive: the share eps in (0, 1] (clamped to [1e-3, 1]). [t_lo, t_hi]: the part of
+  /// the edge the LTC part covers (e.g. the part in front of a light; default the whole edge); the
+  /// angle-uniform part always covers [0, 1].
+  EdgePointSampler(const Vec3& w0, const Vec3& w1, const LTC& ltc, double defensive = kEdgeDefensiveShare,
+                   double t_lo = 0.0, double t_hi = 1.0);
 
   /// One sample from a uniform number u in [0, 1).
   EdgePointSample sample(double u) const;
@@ -74,12 +77,16 @@ class EdgePointSampler {
   /// The defensive share actually used (1 when the LTC part vanishes).
   double defensive_share() const { return eps_; }
 
- private:
+  /// The LTC part alone (for mixtures of several samplers of one edge): its normalised density
+  /// at t (0 outside [t_lo, t_hi] and everywhere when target_integral() == 0), and its sample
+  /// from u in [0, 1) (only when target_integral() > 0).
   double ltc_pdf(double t) const;
-  double angle_pdf(double t) const;
   double sample_ltc(double u) const;
+  /// The angle-uniform part alone: its density at t in [0, 1] and its sample from u in [0, 1).
+  double angle_pdf(double t) const;
   double sample_angle(double u) const;
 
+ private:
   Vec3 w0_, w1_;
   LTC ltc_;
   double eps_ = 1.0;

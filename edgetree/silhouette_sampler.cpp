@@ -4,7 +4,7 @@
 #include "qsil/edgetree/silhouette_sampler.h"
 
 #include "edgetree/discrete_choice.h"
-#include "edgetree/edge_point_sampler.h"
+#include "edgetree/edge_mixture.h"
 
 #include <array>
 
@@ -31,11 +31,6 @@ double edge_defensive(const ForestEdge& e, const Vec3& p) {
   return d2 > 0 ? e.length / d2 : e.length;
 }
 
-NodeWeight edge_weight(const ForestEdge& e, const SilhouetteQuery& q) {
-  const EdgePointSampler s(q.frame.to_local(e.p0 - q.p), q.frame.to_local(e.p1 - q.p), q.ltc);
-  return {q.ltc.norm * s.target_integral(), edge_defensive(e, q.p)};
-}
-
 /// The candidates at the top level: accepted, eligible forest roots, the roots of the
 /// always-candidate trees (never rejected) and the loose always-candidate edges.
 int top_candidates(const EdgeForest& f, const SilhouetteQuery& q, Method method, std::vector<Candidate>& out,
@@ -52,7 +47,7 @@ int top_candidates(const EdgeForest& f, const SilhouetteQuery& q, Method method,
   for (int i : f.loose_always()) {
     const ForestEdge& e = f.always_edges()[size_t(i)];
     if (!q.is_eligible(e.shape)) continue;
-    out.push_back({-1, &e, edge_weight(e, q)});
+    out.push_back({-1, &e, loose_edge_weight(e, q)});
   }
   return int(out.size());
 }
@@ -76,11 +71,34 @@ int child_candidates(const EdgeForest& f, int n, const SilhouetteQuery& q, Metho
 int leaf_candidates(const EdgeForest& f, int n, const SilhouetteQuery& q, std::array<Candidate, 4>& out) {
   int k = 0;
   for (const ForestEdge& e : f.leaf_edges(n))
-    if (is_discontinuity(e, q.p)) out[k++] = {-1, &e, edge_weight(e, q)};
+    if (is_discontinuity(e, q.p)) out[k++] = {-1, &e, leaf_edge_weight(e, q)};
   return k;
 }
 
 }  // namespace
+
+double velocity_factor(const ForestEdge& e, const SilhouetteQuery& q) {
+  if (!q.velocities) return 1.0;
+  const Vec3 n = (e.p0 - q.p).cross(e.p1 - q.p);
+  const double len = n.norm();
+  if (!(len > 0)) return 0.0;  // p on the edge's line: no plane, J = 0
+  const auto& V = q.velocities->position[size_t(e.shape)];
+  const SceneVelocities::Block v0 = V[size_t(e.v0)] - q.dp, v1 = V[size_t(e.v1)] - q.dp;
+  double f = 0;
+  for (int k = 0; k < q.velocities->num_params; ++k)
+    f += 0.5 * (std::abs(n.dot(v0.col(k))) + std::abs(n.dot(v1.col(k)))) * q.velocity_scale[size_t(k)];
+  return f / len;
+}
+
+NodeWeight leaf_edge_weight(const ForestEdge& e, const SilhouetteQuery& q) {
+  const EdgeMixture m(e, q);
+  return {m.total() * velocity_factor(e, q), edge_defensive(e, q.p)};
+}
+
+NodeWeight loose_edge_weight(const ForestEdge& e, const SilhouetteQuery& q) {
+  const EdgeMixture m(e, q);
+  return {kPi * m.total(), kPi * edge_defensive(e, q.p)};
+}
 
 NodeWeight node_weight(const ForestNode& node, const SilhouetteQuery& q) {
   const Vec3 c = node.bp.center();
@@ -91,12 +109,18 @@ NodeWeight node_weight(const ForestNode& node, const SilhouetteQuery& q) {
   const BoxSilhouette sil = box_silhouette_polygon(node.bp, q.p);
   double fbar = 0;
   if (sil.inside) {
-    // The box surrounds p: the average over the whole sphere, with every light's weight (each may
-    // lie anywhere in the box's solid angle).
-    double weight = q.env_weight;
+    // The box surrounds p: the average over the whole sphere of f_s cos times the radiance: the
+    // environment's, and each light's over its own solid angle (its LTC integral; a light can lie
+    // anywhere in the box's solid angle).
+    double integral = q.env_weight;
     if (q.lights)
-      for (const LightPolygon& light : *q.lights) weight += light.weight;
-    fbar = weight * q.ltc.norm / (4.0 * kPi);
+      for (const LightPolygon& light : *q.lights) {
+        if (!(light.weight > 0) || light.normal.dot(q.p - light.corners[0]) <= 0) continue;
+        std::array<Vec3, 4> c;
+        for (int i = 0; i < 4; ++i) c[size_t(i)] = q.frame.to_local(light.corners[size_t(i)] - q.p);
+        integral += light.weight * ltc_polygon_integral(q.ltc, c, true);
+      }
+    fbar = integral * q.ltc.norm / (4.0 * kPi);
   } else if (sil.polygon.count >= 3) {
     SmallPolygon local;
     for (int i = 0; i < sil.polygon.count; ++i) local.push(q.frame.to_local(sil.polygon.v[size_t(i)]));
@@ -162,8 +186,7 @@ SilhouetteSample sample_on_edge(const ForestEdge& e, double pmf, const Silhouett
   SilhouetteSample s;
   s.rejection_tests = rejection_tests;
   if (!is_discontinuity(e, query.p)) return s;
-  const EdgePointSampler ps(query.frame.to_local(e.p0 - query.p), query.frame.to_local(e.p1 - query.p), query.ltc);
-  const EdgePointSample ts = ps.sample(u);
+  const EdgePointSample ts = EdgeMixture(e, query).sample(u);
   QSIL_DCHECK_MSG(pmf > 0 && ts.pdf > 0, "edge probability " << pmf << ", density of t " << ts.pdf);
   s.edge = &e;
   s.t = ts.t;

@@ -49,6 +49,16 @@ void set_light_importance(const Scene& scene, const EnvironmentLight& environmen
     light.weight = luminance(s.radiance);
     context.lights.push_back(light);
   }
+  context.emission.clear();
+  for (const Shape& s : scene.shapes) context.emission.push_back(s.is_emitter ? luminance(s.radiance) : 0.0);
+  context.velocity_scale.fill(0.0);
+  if (context.velocities)
+    for (int k = 0; k < context.velocities->num_params; ++k) {
+      double vmax = 0;
+      for (const auto& shape_v : context.velocities->position)
+        for (const auto& v : shape_v) vmax = std::max(vmax, v.col(k).norm());
+      context.velocity_scale[size_t(k)] = vmax > 0 ? 1.0 / vmax : 0.0;
+    }
   context.env_weight = environment.present() ? luminance(environment.average_radiance()) : 0.0;
   if (context.lights.empty() && context.env_weight == 0) context.env_weight = 1.0;  // plain [QSS 3.5] importance
 }

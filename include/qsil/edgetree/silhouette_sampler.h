@@ -27,6 +27,7 @@
 #include "qsil/edgetree/ltc.h"
 #include "qsil/edgetree/node_rejection.h"
 #include "qsil/math.h"
+#include "qsil/parameters.h"
 
 #include <array>
 #include <functional>
@@ -55,6 +56,15 @@ struct SilhouetteQuery {
   /// default, so plain [QSS 3.5] importance).
   const std::vector<LightPolygon>* lights = nullptr;
   double env_weight = 1.0;
+  /// Per shape: the luminance of its emitted radiance (0 for a shape that does not emit), or
+  /// null. The outline of an emitter bounds a jump of that radiance: its edges weigh it.
+  const std::vector<double>* emission = nullptr;
+  /// Velocities for the leaves' normal-velocity factor (velocity_factor), or null (factor 1).
+  const SceneVelocities* velocities = nullptr;
+  SceneVelocities::Block dp = SceneVelocities::Block::Zero();  ///< dp/dtheta of p (world, 3 x kMaxParameters)
+  /// Per parameter: 1 / the largest |dx/dtheta_k| over the scene's vertices (0: unused), so that
+  /// parameters of different units weigh alike in velocity_factor.
+  std::array<double, kMaxParameters> velocity_scale{};
 
   /// True when edges of shape `shape` may contribute (see `eligible`).
   bool is_eligible(int shape) const {
@@ -77,7 +87,8 @@ SilhouetteSample sample_silhouette(const EdgeForest& forest, const SilhouetteQue
                                    const std::function<double()>& next, Method method = Method::Quadric);
 
 /// Completes a sample on a chosen edge e (chosen with discrete probability pmf): t from the
-/// EdgePointSampler of the query ([QSS Eq. 4] x LTC, defensive in angle) with u, pdf = pmf x
+/// light-aware EdgeMixture of the query ([QSS Eq. 4] x LTC, weighted by the radiance that can
+/// jump at each part of the edge, defensive in angle) with u, pdf = pmf x
 /// pdf(t). Returns no edge when e is not a discontinuity for the query point (is_discontinuity):
 /// samplers without an exact leaf test (vsphere, uniform) land there, a zero-contribution sample.
 /// `rejection_tests` (the tests the choice of e took) is stored in the result.
@@ -90,6 +101,24 @@ struct NodeWeight {
   double defensive = 0;
 };
 NodeWeight node_weight(const ForestNode& node, const SilhouetteQuery& query);
+
+/// Importance of an edge in a leaf (docs/architecture.md §5 "Importance"): the radiance-weighted
+/// LTC integral of EdgeMixture (the [QSS Eq. 4] term with f_s cos, weighted by the environment, by
+/// each light over the part of the edge in front of it, and for an emitter's outline by its own
+/// radiance) times velocity_factor; defensive weight: length / distance² of its midpoint.
+NodeWeight leaf_edge_weight(const ForestEdge& e, const SilhouetteQuery& q);
+
+/// Importance of a loose always-candidate edge, which competes with the forest roots: on the
+/// roots' scale (a node's I is about π times the radiance-weighted integral over its silhouettes),
+/// π × the radiance-weighted LTC integral; defensive weight π × length / distance².
+NodeWeight loose_edge_weight(const ForestEdge& e, const SilhouetteQuery& q);
+
+/// The normal-velocity factor of an edge for the query (1 without velocities): the mean over its
+/// endpoints of sum_k |n . (v_k - dp_k)| velocity_scale[k], n the unit normal of the plane through
+/// p and the edge. J of [QSS Eq. 3] is proportional to n . (v(t) - dp), which is linear in t, so
+/// this bounds its mean over the edge: 0 only where every point of the edge moves within that
+/// plane (e.g. an edge of p's own triangle under a rigid motion), where the integrand is 0 too.
+double velocity_factor(const ForestEdge& e, const SilhouetteQuery& q);
 
 /// Probability with which sample_silhouette (with `method`) picks `edge` (an element of
 /// forest.edges() or forest.always_edges()) for the query, by walking the same choices (for

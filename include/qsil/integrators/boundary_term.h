@@ -27,6 +27,7 @@
 #include "qsil/integrators/geometry_view.h"
 #include "qsil/integrators/path_tracer.h"
 
+#include <array>
 #include <chrono>
 
 namespace qsil {
@@ -40,6 +41,10 @@ struct BoundaryContext {
   int samples_per_vertex = 1;
   std::vector<edgetree::LightPolygon> lights;  ///< quad area lights for I_light [QSS 3.6]
   double env_weight = 1.0;                     ///< environment intensity (luminance of its mean)
+  std::vector<double> emission;                ///< per shape: luminance of its emission (0: none)
+  /// Per parameter: 1 / the largest |dx/dtheta_k| over all vertices (0: unused parameter), so that
+  /// the leaves' normal-velocity factor weighs parameters of different units alike.
+  std::array<double, kMaxParameters> velocity_scale{};
 };
 
 /// The LTC of a shading point's BSDF toward wo (local frame), with the albedo weight in norm.
@@ -170,6 +175,11 @@ struct BoundaryHook {
     q.eligible = p_moving ? &bctx->all : &bctx->moving;
     q.lights = &bctx->lights;
     q.env_weight = bctx->env_weight;
+    q.emission = &bctx->emission;
+    q.velocities = bctx->velocities;
+    q.dp.setZero();
+    q.dp.template leftCols<N>() = dp;
+    q.velocity_scale = bctx->velocity_scale;
     const Color T = value(beta);
     const Vec3 wo_world = q.frame.to_world(wo_local);
     for (int sample = 0; sample < bctx->samples_per_vertex; ++sample) {

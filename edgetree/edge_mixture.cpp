@@ -1,0 +1,101 @@
+/// @file edge_mixture.cpp
+/// See edge_mixture.h.
+
+#include "edgetree/edge_mixture.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace qsil::edgetree {
+
+namespace {
+
+const EdgePointSampler kEmpty(Vec3::Zero(), Vec3::Zero(), LTC{});
+
+/// The interval [lo, hi] of t where w0 + t (w1 − w0) lies inside the pyramid from the origin over
+/// the quad c (all local, relative to p); hi < lo when the segment misses it.
+void pyramid_interval(const std::array<Vec3, 4>& c, const Vec3& w0, const Vec3& w1, double& lo, double& hi) {
+  const Vec3 inside = c[0] + c[1] + c[2] + c[3];
+  lo = 0.0;
+  hi = 1.0;
+  for (int i = 0; i < 4 && hi >= lo; ++i) {
+    Vec3 n = c[size_t(i)].cross(c[size_t((i + 1) % 4)]);
+    if (n.dot(inside) < 0) n = -n;
+    const double a = n.dot(w0), b = n.dot(w1);  // n . w(t) >= 0 on the light's side
+    if (a >= 0 && b >= 0) continue;
+    if (a < 0 && b < 0) {
+      hi = -1.0;
+      return;
+    }
+    const double tc = a / (a - b);
+    if (a >= 0)
+      hi = std::min(hi, tc);
+    else
+      lo = std::max(lo, tc);
+  }
+}
+
+}  // namespace
+
+EdgeMixture::EdgeMixture(const ForestEdge& e, const SilhouetteQuery& q)
+    : comp_{kEmpty, kEmpty, kEmpty, kEmpty, kEmpty} {
+  const Vec3 w0 = q.frame.to_local(e.p0 - q.p), w1 = q.frame.to_local(e.p1 - q.p);
+  double base = q.env_weight;
+  if (q.emission && e.shape >= 0 && e.shape < int(q.emission->size())) base += (*q.emission)[size_t(e.shape)];
+  add(EdgePointSampler(w0, w1, q.ltc), base);  // also the angle-uniform part (comp_[0])
+  if (q.lights) {
+    int used = 0;
+    for (const LightPolygon& light : *q.lights) {
+      if (used == kMaxLights) break;
+      if (!(light.weight > 0) || light.normal.dot(q.p - light.corners[0]) <= 0) continue;
+      std::array<Vec3, 4> c;
+      for (int i = 0; i < 4; ++i) c[size_t(i)] = q.frame.to_local(light.corners[size_t(i)] - q.p);
+      double lo, hi;
+      pyramid_interval(c, w0, w1, lo, hi);
+      if (!(hi > lo)) continue;
+      add(EdgePointSampler(w0, w1, q.ltc, kEdgeDefensiveShare, lo, hi), light.weight);
+      ++used;
+    }
+  }
+  eps_ = total_ > 0 ? kEdgeDefensiveShare : 1.0;
+}
+
+void EdgeMixture::add(const EdgePointSampler& s, double radiance) {
+  const double w = radiance * s.target_integral();
+  comp_[size_t(n_)] = s;
+  weight_[size_t(n_)] = std::isfinite(w) && w > 0 ? w : 0.0;
+  total_ += weight_[size_t(n_)];
+  ++n_;
+}
+
+EdgePointSample EdgeMixture::sample(double u) const {
+  u = std::clamp(u, 0.0, 1.0);
+  double t;
+  if (u < 1.0 - eps_) {
+    // Choose a component in proportion to W_i, then reuse what is left of u within it.
+    double v = u / (1.0 - eps_) * total_;
+    int pick = -1;
+    for (int i = 0; i < n_; ++i) {
+      if (!(weight_[size_t(i)] > 0)) continue;
+      pick = i;  // the last positive component takes what rounding leaves over
+      if (v < weight_[size_t(i)]) break;
+      v -= weight_[size_t(i)];
+    }
+    t = comp_[size_t(pick)].sample_ltc(std::clamp(v / weight_[size_t(pick)], 0.0, std::nextafter(1.0, 0.0)));
+  } else {
+    const double v = (u - (1.0 - eps_)) / eps_;
+    t = comp_[0].sample_angle(std::min(v, std::nextafter(1.0, 0.0)));
+  }
+  return {t, pdf(t)};
+}
+
+double EdgeMixture::pdf(double t) const {
+  if (!(t >= 0.0 && t <= 1.0)) return 0.0;
+  double p = eps_ * comp_[0].angle_pdf(t);
+  if (eps_ < 1.0)
+    for (int i = 0; i < n_; ++i)
+      if (weight_[size_t(i)] > 0) p += (1.0 - eps_) * weight_[size_t(i)] / total_ * comp_[size_t(i)].ltc_pdf(t);
+  return p;
+}
+
+}  // namespace qsil::edgetree

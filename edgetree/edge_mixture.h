@@ -1,0 +1,48 @@
+#pragma once
+/// @file edge_mixture.h
+/// The light-aware density of the point on a sampled edge, and the radiance-weighted edge
+/// importance that comes with it (docs/architecture.md §5 "Importance" and "The point on the
+/// edge"). Private to edgetree/.
+
+#include "edgetree/edge_point_sampler.h"
+#include "qsil/edgetree/silhouette_sampler.h"
+
+#include <array>
+
+namespace qsil::edgetree {
+
+/// The density of t on edge e seen from the query point: the [QSS Eq. 4] × LTC target (f_s cos
+/// over the edge, EdgePointSampler's LTC part) weighted by the radiance that can jump there,
+///   p(t) = (1 − ε) Σ_i (W_i / W) p_i(t) + ε p_angle(t),   W_i = radiance_i × ∫ p_i's target,
+/// with components: the environment's radiance (env_weight) plus, for the outline of an
+/// emitter, its own (SilhouetteQuery::emission) over the whole edge; each quad light's radiance
+/// over the part of the edge inside the light's pyramid from p (an interval of t: four linear
+/// constraints), for the first kMaxLights lights whose emitting side faces p. ε =
+/// kEdgeDefensiveShare (1 when W = 0) of angle-uniform samples over [0, 1] keeps p(t) > 0 on
+/// the whole edge. W estimates the edge's radiance-weighted term: the edge's importance.
+/// Construction costs one EdgePointSampler per component (a few dozen flops each).
+class EdgeMixture {
+ public:
+  /// Lights beyond this many are not components (their part of the edge keeps the environment
+  /// component and the defensive share).
+  static constexpr int kMaxLights = 4;
+
+  EdgeMixture(const ForestEdge& e, const SilhouetteQuery& q);
+
+  /// W: the radiance-weighted LTC integral over the edge (luminance × per scene unit, ≥ 0).
+  double total() const { return total_; }
+  /// One sample from u in [0, 1): t in [0, 1] and its density pdf(t) > 0.
+  EdgePointSample sample(double u) const;
+  /// The density at t (per unit t): > 0 on [0, 1], 0 outside.
+  double pdf(double t) const;
+
+ private:
+  void add(const EdgePointSampler& s, double radiance);
+
+  std::array<EdgePointSampler, 1 + kMaxLights> comp_;
+  std::array<double, 1 + kMaxLights> weight_{};
+  int n_ = 0;
+  double total_ = 0, eps_ = 1.0;
+};
+
+}  // namespace qsil::edgetree
