@@ -12,6 +12,7 @@
 
 #include "edgetree/edge_mixture.h"
 
+#include "bin_quadrature.h"
 #include "chi2.h"
 
 #include <gtest/gtest.h>
@@ -24,26 +25,9 @@ namespace {
 
 using test::TestRng;
 
-constexpr int kBins = 100;
-constexpr int kSub = 2000;
-
-template <class F>
-std::vector<double> bin_integrals(const F& f) {
-  std::vector<double> out(kBins, 0.0);
-  const double h = 1.0 / (double(kBins) * kSub);
-  for (int b = 0; b < kBins; ++b) {
-    double s = 0;
-    for (int k = 0; k < kSub; ++k) s += f((b * kSub + k + 0.5) * h);
-    out[size_t(b)] = s * h;
-  }
-  return out;
-}
-
-double sum(const std::vector<double>& v) {
-  double s = 0;
-  for (double x : v) s += x;
-  return s;
-}
+using test::bin_integrals;
+using test::kBins;
+using test::sum;
 
 /// Ray from the origin along d hits the quad c (two triangles; Möller-Trumbore without culling).
 bool ray_hits_quad(const Vec3& d, const std::array<Vec3, 4>& c) {

@@ -12,6 +12,7 @@
 #include "edgetree/edge_point_sampler.h"
 #include "qsil/bsdf.h"
 
+#include "bin_quadrature.h"
 #include "chi2.h"
 
 #include <gtest/gtest.h>
@@ -116,27 +117,9 @@ double true_integrand(const EdgeCase& c, double t) {
   return c.w0.cross(c.w1).norm() / (l * l * l) * fcos;
 }
 
-constexpr int kBins = 100;
-constexpr int kSub = 2000;
-
-/// Integral of f over each of kBins equal bins of [0, 1] (midpoint rule, kSub points per bin).
-template <class F>
-std::vector<double> bin_integrals(const F& f) {
-  std::vector<double> out(kBins, 0.0);
-  const double h = 1.0 / (double(kBins) * kSub);
-  for (int b = 0; b < kBins; ++b) {
-    double s = 0;
-    for (int k = 0; k < kSub; ++k) s += f((b * kSub + k + 0.5) * h);
-    out[size_t(b)] = s * h;
-  }
-  return out;
-}
-
-double sum(const std::vector<double>& v) {
-  double s = 0;
-  for (double x : v) s += x;
-  return s;
-}
+using test::bin_integrals;
+using test::kBins;
+using test::sum;
 
 TEST(EdgePointSamplerTest, PdfIsNormalisedAndPositive) {
   for (const EdgeCase& c : cases()) {
