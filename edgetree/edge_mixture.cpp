@@ -47,9 +47,8 @@ EdgeMixture::EdgeMixture(const ForestEdge& e, const SilhouetteQuery& q)
     int used = 0;
     for (const LightPolygon& light : *q.lights) {
       if (used == kMaxLights) break;
-      if (!(light.weight > 0) || light.normal.dot(q.p - light.corners[0]) <= 0) continue;
       std::array<Vec3, 4> c;
-      for (int i = 0; i < 4; ++i) c[size_t(i)] = q.frame.to_local(light.corners[size_t(i)] - q.p);
+      if (!light_toward(light, q, c)) continue;
       double lo, hi;
       pyramid_interval(c, w0, w1, lo, hi);
       if (!(hi > lo)) continue;

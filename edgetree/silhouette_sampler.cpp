@@ -115,9 +115,8 @@ NodeWeight node_weight(const ForestNode& node, const SilhouetteQuery& q) {
     double integral = q.env_weight;
     if (q.lights)
       for (const LightPolygon& light : *q.lights) {
-        if (!(light.weight > 0) || light.normal.dot(q.p - light.corners[0]) <= 0) continue;
         std::array<Vec3, 4> c;
-        for (int i = 0; i < 4; ++i) c[size_t(i)] = q.frame.to_local(light.corners[size_t(i)] - q.p);
+        if (!light_toward(light, q, c)) continue;
         integral += light.weight * ltc_polygon_integral(q.ltc, c, true);
       }
     fbar = integral * q.ltc.norm / (4.0 * kPi);
@@ -131,9 +130,8 @@ NodeWeight node_weight(const ForestNode& node, const SilhouetteQuery& q) {
       if (q.lights) {
         for (const LightPolygon& light : *q.lights) {
           // Only the emitting side of a light is bright; clip the box's cone by the light's.
-          if (!(light.weight > 0) || light.normal.dot(q.p - light.corners[0]) <= 0) continue;
           std::array<Vec3, 4> c;
-          for (int i = 0; i < 4; ++i) c[size_t(i)] = q.frame.to_local(light.corners[size_t(i)] - q.p);
+          if (!light_toward(light, q, c)) continue;
           const Vec3 inside = c[0] + c[1] + c[2] + c[3];
           SmallPolygon clipped = local;
           for (int i = 0; i < 4 && clipped.count >= 3; ++i) {

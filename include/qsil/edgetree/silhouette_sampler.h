@@ -72,6 +72,15 @@ struct SilhouetteQuery {
   }
 };
 
+/// The corners of `light` relative to the query point in its local shading frame (`local`), when
+/// the light emits toward that point (positive weight, emitting side facing it); false otherwise
+/// (`local` untouched). The light-aware importance's per-light set-up [QSS 3.6].
+inline bool light_toward(const LightPolygon& light, const SilhouetteQuery& q, std::array<Vec3, 4>& local) {
+  if (!(light.weight > 0) || light.normal.dot(q.p - light.corners[0]) <= 0) return false;
+  for (int i = 0; i < 4; ++i) local[size_t(i)] = q.frame.to_local(light.corners[size_t(i)] - q.p);
+  return true;
+}
+
 /// A sampled edge point and its probability.
 struct SilhouetteSample {
   const ForestEdge* edge = nullptr;  ///< nullptr: no edge (every candidate was rejected)
