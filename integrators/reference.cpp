@@ -5,6 +5,7 @@
 
 #include "qsil/error.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -113,6 +114,65 @@ ErrorMetrics measure_error(const Film& film, const Reference& ref) {
     m.sum_error.push_back(s.sum - ref.sum[size_t(k)]);
   }
   return m;
+}
+
+double Agreement::chi2_limit() const { return tests > 0 ? 1.0 + 5.0 * std::sqrt(2.0 / double(tests)) + 0.25 : 0.0; }
+
+bool Agreement::agrees() const {
+  for (double z : sum_z)
+    if (!(std::abs(z) <= 3)) return false;
+  return unequal_exact == 0 && chi2_per_dof <= chi2_limit();
+}
+
+Agreement agreement(const Reference& a, const Reference& b, int block) {
+  if (block < 1) throw Error("agreement: block size " + std::to_string(block) + " < 1");
+  if (a.image.width != b.image.width || a.image.height != b.image.height)
+    throw Error("agreement: the references are " + std::to_string(a.image.width) + "x" +
+                std::to_string(a.image.height) + " and " + std::to_string(b.image.width) + "x" +
+                std::to_string(b.image.height));
+  if (a.num_params != b.num_params)
+    throw Error("agreement: the references have " + std::to_string(a.num_params) + " and " +
+                std::to_string(b.num_params) + " parameters");
+  Agreement g;
+  g.block = block;
+  for (int k = 0; k < a.num_params; ++k) {
+    const double var = a.sum_se[size_t(k)] * a.sum_se[size_t(k)] + b.sum_se[size_t(k)] * b.sum_se[size_t(k)];
+    const double d = a.sum[size_t(k)] - b.sum[size_t(k)];
+    g.sum_z.push_back(var > 0 ? d / std::sqrt(var) : (d == 0 ? 0.0 : INFINITY));
+  }
+  const int W = a.image.width, H = a.image.height;
+  double chi2 = 0;
+  long long above = 0;
+  for (int k = 0; k < a.num_params; ++k)
+    for (int c = 0; c < 3; ++c) {
+      const std::string name = FilmLayout::derivative_name(k, c);
+      const int va = a.image.channel_index(name), sa = a.image.channel_index(name + ".se");
+      const int vb = b.image.channel_index(name), sb = b.image.channel_index(name + ".se");
+      for (int y0 = 0; y0 < H; y0 += block)
+        for (int x0 = 0; x0 < W; x0 += block) {
+          double sum_a = 0, sum_b = 0, var = 0;
+          for (int y = y0; y < std::min(H, y0 + block); ++y)
+            for (int x = x0; x < std::min(W, x0 + block); ++x) {
+              sum_a += a.image.at(va, x, y);
+              sum_b += b.image.at(vb, x, y);
+              const double ea = a.image.at(sa, x, y), eb = b.image.at(sb, x, y);
+              var += ea * ea + eb * eb;
+            }
+          const double d = sum_a - sum_b;
+          if (var == 0) {
+            if (std::abs(d) > 1e-6 * (std::abs(sum_a) + std::abs(sum_b))) ++g.unequal_exact;
+            continue;
+          }
+          const double z = d / std::sqrt(var);
+          chi2 += z * z;
+          g.max_abs_z = std::max(g.max_abs_z, std::abs(z));
+          if (std::abs(z) > 3) ++above;
+          ++g.tests;
+        }
+    }
+  g.chi2_per_dof = g.tests ? chi2 / double(g.tests) : 0.0;
+  g.frac_above_3 = g.tests ? double(above) / double(g.tests) : 0.0;
+  return g;
 }
 
 }  // namespace qsil

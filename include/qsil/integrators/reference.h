@@ -51,4 +51,37 @@ struct ErrorMetrics {
 /// Computes ErrorMetrics of `film` (a gradient film of ref.num_params parameters).
 ErrorMetrics measure_error(const Film& film, const Reference& ref);
 
+/// Whether two independent references of the same scene and parameters (e.g. finite differences
+/// and the quadric method, or finite differences at steps h and h/2) estimate the same images,
+/// judged by their own standard errors (`qsil agree`, tools/references.py).
+///
+/// Tests, for two-sided Gaussian z = (a - b) / sqrt(se_a^2 + se_b^2):
+/// - the image sum of every parameter (sum_z, from the references' sum and sum_se);
+/// - every block of block x block pixels, every derivative channel dtheta<k>.R/G/B: the block's
+///   sum, with the variance the sum of its pixels' se^2 (pixels are independent). Block sums
+///   average out the heavy per-pixel tails that make single-pixel z unreliable at finite spp.
+///   Blocks where both variances are 0 (no sample moved there) must be equal (up to 1e-6
+///   relative), otherwise they count as disagreeing (infinite z).
+/// agrees(): every |sum_z| <= 3 (99.7 % each, if the references agree) and the mean z^2 over the
+/// block tests (chi^2 / dof; 1 for agreeing references) <= 1 + 5 sqrt(2 / dof) + 0.25 (five
+/// chi^2 standard deviations plus slack for standard errors estimated from the samples
+/// themselves). Power: tests/integrators/reference_test.cpp (a 3 % scale error between
+/// references whose block z has unit variance is refused; independent ones agree).
+struct Agreement {
+  int block = 8;                ///< block size in pixels
+  std::vector<double> sum_z;    ///< per parameter: image-sum z
+  long long tests = 0;          ///< block tests with a non-zero variance (blocks x 3 x K)
+  long long unequal_exact = 0;  ///< zero-variance blocks whose sums differ
+  double chi2_per_dof = 0;      ///< mean z^2 over the block tests
+  double max_abs_z = 0;         ///< largest block |z|
+  double frac_above_3 = 0;      ///< share of block tests with |z| > 3 (0.27 % if Gaussian)
+  double chi2_limit() const;    ///< the agrees() bound on chi2_per_dof
+  bool agrees() const;          ///< see above
+};
+
+/// Computes the Agreement of two references with the same size and number of parameters;
+/// `block` >= 1 (blocks at the right and bottom edges may be smaller). Throws qsil::Error if the
+/// sizes or parameter counts differ or block < 1.
+Agreement agreement(const Reference& a, const Reference& b, int block = 8);
+
 }  // namespace qsil
