@@ -31,6 +31,20 @@ double edge_defensive(const ForestEdge& e, const Vec3& p) {
   return d2 > 0 ? e.length / d2 : e.length;
 }
 
+/// Inner nodes of the quadric method with at most this many edges are tested edge by edge
+/// (node_has_silhouette) instead of by their bound: exact (no false accept, so no traversal dies
+/// in a subtree without silhouettes) and, at this size, cheaper than the bound's polygon and conic
+/// tests. QuadricBox keeps the bound alone (the paper's ablation). Measured in the issue note.
+constexpr int kExactTestEdges = 64;
+
+/// Whether node n may lead to a silhouette for the query (the test of a non-always node).
+bool accepted(const EdgeForest& f, int n, const SilhouetteQuery& q, Method method) {
+  const ForestNode& node = f.node(n);
+  if (method == Method::Quadric && !node.is_leaf() && node.edge_end - node.edge_begin <= kExactTestEdges)
+    return node_has_silhouette(f, n, q.p);
+  return may_have_silhouette(f, n, q.p, method);
+}
+
 /// The candidates at the top level: accepted, eligible forest roots, the roots of the
 /// always-candidate trees (never rejected) and the loose always-candidate edges.
 int top_candidates(const EdgeForest& f, const SilhouetteQuery& q, Method method, std::vector<Candidate>& out,
@@ -39,7 +53,7 @@ int top_candidates(const EdgeForest& f, const SilhouetteQuery& q, Method method,
   for (int r : f.roots()) {
     if (!q.is_eligible(f.node(r).shape)) continue;
     ++tests;
-    if (!may_have_silhouette(f, r, q.p, method)) continue;
+    if (!accepted(f, r, q, method)) continue;
     out.push_back({r, nullptr, node_weight(f.node(r), q)});
   }
   for (int r : f.always_roots())
@@ -60,7 +74,7 @@ int child_candidates(const EdgeForest& f, int n, const SilhouetteQuery& q, Metho
   for (int c = node.first; c < node.first + node.count; ++c) {
     if (!f.node(c).always()) {  // always-candidate trees have no rejection test
       ++tests;
-      if (!may_have_silhouette(f, c, q.p, method)) continue;
+      if (!accepted(f, c, q, method)) continue;
     }
     out[k++] = {c, nullptr, node_weight(f.node(c), q)};
   }
