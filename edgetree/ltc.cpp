@@ -172,7 +172,11 @@ double polygon_solid_angle(std::span<const Vec3> poly, bool fast) {
   return std::abs(sum);
 }
 
-BoxSilhouette box_silhouette_polygon(const Box3& box, const Vec3& p) {
+namespace {
+
+/// The outline of `box` from p by the convex hull of the 8 corners in a central projection
+/// (Andrew's monotone chain): the construction of the region table below, run once per region.
+BoxSilhouette box_silhouette_hull(const Box3& box, const Vec3& p) {
   BoxSilhouette out;
   if (box.empty()) return out;
   // An axis along which p is outside the slab: every corner lies strictly in front of the plane
@@ -235,6 +239,70 @@ BoxSilhouette box_silhouette_polygon(const Box3& box, const Vec3& p) {
   }
   --h;  // the last point repeats the first
   for (int i = 0; i < h; ++i) out.polygon.push(rel[size_t(hull[size_t(i)].corner)]);
+  return out;
+}
+
+/// Region of p against an axis-aligned box: per axis 0 inside the closed slab, 1 below, 2 above;
+/// code = sum_k region_k 3^k (0: p in the closed box).
+int box_region(const Box3& box, const Vec3& p) {
+  int code = 0;
+  for (int k = 2; k >= 0; --k) code = 3 * code + (p[k] < box.lo[k] ? 1 : (p[k] > box.hi[k] ? 2 : 0));
+  return code;
+}
+
+/// Per region code, the outline's corners (bit k of a corner index: hi on axis k) in order, -1
+/// terminated. Within a region the set of faces p sees is fixed (a face is seen iff p lies
+/// beyond its plane), so the outline's corners and their cyclic order are too: each entry is the
+/// hull construction's answer for one point of its region and the unit box (Schmalstieg &
+/// Tobler 1999, "Fast projected area computation for three-dimensional bounding boxes", JGT 4(2),
+/// tabulate the same outlines by hand).
+const std::array<std::array<int, 7>, 27>& box_outline_table() {
+  static const std::array<std::array<int, 7>, 27> table = [] {
+    std::array<std::array<int, 7>, 27> t{};
+    Box3 unit;
+    unit.expand(Vec3::Zero());
+    unit.expand(Vec3::Ones());
+    const double coord[3] = {0.5, -1.0, 2.0};  // inside the slab, below, above
+    for (int code = 0; code < 27; ++code) {
+      t[size_t(code)].fill(-1);
+      if (code == 0) continue;
+      const Vec3 p(coord[code % 3], coord[(code / 3) % 3], coord[code / 9]);
+      const BoxSilhouette s = box_silhouette_hull(unit, p);
+      for (int i = 0; i < s.polygon.count; ++i) {
+        const Vec3 c = s.polygon.v[size_t(i)] + p;
+        t[size_t(code)][size_t(i)] = (c.x() > 0.5 ? 1 : 0) | (c.y() > 0.5 ? 2 : 0) | (c.z() > 0.5 ? 4 : 0);
+      }
+    }
+    return t;
+  }();
+  return table;
+}
+
+}  // namespace
+
+BoxSilhouette box_silhouette_polygon(const Box3& box, const Vec3& p) {
+  BoxSilhouette out;
+  if (box.empty()) return out;
+  const int code = box_region(box, p);
+  if (code == 0) {
+    out.inside = true;
+    return out;
+  }
+  // The region's corners relative to p; a flat box's coinciding corners (always neighbours on
+  // the outline: they are the ends of a zero-length box edge) are kept once.
+  std::array<Vec3, 6> v;
+  int n = 0;
+  for (int c : box_outline_table()[size_t(code)]) {
+    if (c < 0) break;
+    const Vec3 r =
+        Vec3((c & 1) ? box.hi.x() : box.lo.x(), (c & 2) ? box.hi.y() : box.lo.y(), (c & 4) ? box.hi.z() : box.lo.z()) -
+        p;
+    if (n > 0 && r == v[size_t(n - 1)]) continue;
+    v[size_t(n++)] = r;
+  }
+  while (n > 1 && v[size_t(n - 1)] == v[0]) --n;
+  if (n < 3) return out;  // seen edge-on: no solid angle
+  for (int i = 0; i < n; ++i) out.polygon.push(v[size_t(i)]);
   return out;
 }
 

@@ -114,8 +114,11 @@ SmallPolygon clip_polygon_to_halfspace(std::span<const Vec3> poly, const Vec3& n
 ///   directions; the caller must treat Omega(B_p) as the whole sphere); the polygon is empty.
 /// - Otherwise `polygon` holds the 4 or 6 corners (relative to p, i.e. corner - p, scene units)
 ///   on the silhouette of the box from p, counter-clockwise about the direction from p to the
-///   box; its spherical polygon is exactly Omega(B_p). Computed as the convex hull of the 8
-///   corners in the central projection onto a plane the whole box lies in front of.
+///   box; its spherical polygon is exactly Omega(B_p). The corners come from a table over the
+///   26 regions of space around the box (which faces p sees; Schmalstieg & Tobler 1999), built
+///   once by the convex hull of the 8 corners in a central projection; a flat box's coinciding
+///   corners are kept once, and a box seen edge-on (fewer than 3 distinct corners) gives an
+///   empty polygon.
 /// An empty box gives inside = false and an empty polygon.
 struct BoxSilhouette {
   bool inside = false;
