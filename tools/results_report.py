@@ -1,14 +1,18 @@
 #!/usr/bin/env python3
 """Regenerates docs/results.md: equal-time comparisons of the gradient methods on spot-mirror,
-shadow-quad and direct (charts in docs/images/compare/<scene>/).
+shadow-quad and direct, judged by independent finite-difference references (charts in
+docs/images/compare/<scene>-<k>/).
 
-Usage: python3 tools/results_report.py [--qsil PATH] [--budgets 0.5,1,2] [--res 64]
-       [--ref-spp 256] [--threads 2]
+Usage: python3 tools/references.py ...              # first: make or reuse the references
+       python3 tools/results_report.py [--qsil PATH] [--res 256] [--budgets 4,15,60]
+       [--k8-res 128] [--k8-budgets 2,8,15] [--k8-scenes LIST] [--threads 2]
 
-For each scene: `qsil reference --method quadric` at --ref-spp, then `qsil compare` with
-quadric, quadric-box, vsphere, uniform and fd at each budget (methods interleaved), whose
-plot_compare.py draws the charts. Whole run: a few minutes on 2 cores. qsil runs in the
-repository root with repository-relative paths, so results.csv/json carry no absolute paths.
+For each scene: the cached FD reference of tools/references.py (out/references/index.json; the
+report stops if it is missing), then `qsil compare` with quadric, vsphere, uniform and fd at each
+budget (methods interleaved), whose plot_compare.py draws the charts; the same with eight
+parameters (k8) on --k8-scenes. FD in the charts uses qsil's default step (what a user gets);
+the reference uses the step its study chose. qsil runs in the repository root with
+repository-relative paths, so results.csv/json carry no absolute paths.
 """
 import argparse
 import json
@@ -22,7 +26,7 @@ import time
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SCENES = [("spot-mirror", "spot:translate:0,1,0"), ("shadow-quad", "object:translate:0,1,0"),
           ("direct", "spot:translate:1,0,0")]
-METHODS = ["quadric", "quadric-box", "vsphere", "uniform", "fd"]
+METHODS = ["quadric", "vsphere", "uniform", "fd"]
 
 
 def run(cmd):
@@ -42,67 +46,105 @@ def cpu_model():
     return platform.processor() or "unknown"
 
 
+def compare(args, scene, kset, res, budgets, entry):
+    """Runs `qsil compare` for one scene and parameter set against its reference; returns results.json."""
+    xml = os.path.join("scenes", scene + ".xml")
+    name = f"{scene}-{kset}"
+    d = os.path.join("out", "results", name)
+    cmd = [args.qsil, "compare", xml, "-D", f"res={res}", *sum((["--param", p] for p in entry["params"]), []),
+           "--threads", str(args.threads), "--methods", ",".join(METHODS), "--budgets", budgets,
+           "--reference", entry["file"], "-q", "--out", d]
+    run(cmd)
+    dst = os.path.join(ROOT, "docs", "images", "compare", name)
+    os.makedirs(dst, exist_ok=True)
+    for f in ("error_vs_time.png", "grid.png", "results.csv", "results.json"):
+        shutil.copy(os.path.join(ROOT, d, f), os.path.join(dst, f))
+    return json.load(open(os.path.join(ROOT, d, "results.json")))
+
+
+def reference_text(entry, res_json):
+    """One paragraph: how the reference was made and whether it can judge."""
+    study = entry["step_study"]
+    pairs = "; ".join(f"h0·{p['h_factor']:g} vs h0·{p['smaller_factor']:g}: {'agree' if p['agree'] else 'DIFFER'}"
+                      for p in study["pairs"])
+    last = max(res_json["targets"])
+    best = min((r["rel_mse"] for r in res_json["rows"] if r["target"] == last and r["rel_mse"]), default=float("nan"))
+    floor = entry["rel_noise_floor"]
+    ok = floor <= 0.1 * best
+    qc = entry["quadric_check"]
+    return (f"Reference: FD with common random numbers, {entry['spp']} spp, step h = "
+            f"{', '.join(f'{h:.4g}' for h in entry['steps'])} (h0·{study['chosen_factor']:g}), "
+            f"{entry['seconds']:.0f} s, relative noise floor {floor:.3g} — "
+            f"{'≤' if ok else '**above**'} 1/10 of the best method's relative MSE at {last:g} s ({best:.3g})"
+            f"{'' if ok else ': the smallest errors here are partly the reference’s'}. "
+            f"Step study ({study['runs'][0]['spp']} spp each): {pairs}. Independence check at "
+            f"{qc['res']}², {qc['spp']} spp each: quadric and FD {'agree' if qc['agree'] else '**disagree**'} "
+            f"({qc['stats']}).")
+
+
 def main():
     """Runs the comparisons and writes docs/results.md."""
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--qsil", default=os.path.join(ROOT, "build", "qsil"))
-    ap.add_argument("--budgets", default="0.5,1,2")
-    ap.add_argument("--res", type=int, default=64)
-    ap.add_argument("--ref-spp", type=int, default=256)
+    ap.add_argument("--budgets", default="4,15,60")
+    ap.add_argument("--res", type=int, default=256)
+    ap.add_argument("--k8-budgets", default="2,8,15")
+    ap.add_argument("--k8-res", type=int, default=128)
+    ap.add_argument("--k8-scenes", default="spot-mirror,shadow-quad,direct")
     ap.add_argument("--threads", type=int, default=2)
     args = ap.parse_args()
     args.qsil = os.path.abspath(args.qsil)
-    out_root = os.path.join(ROOT, "docs", "images", "compare")
-    work = os.path.join("out", "results")  # relative to ROOT, where qsil runs
-    os.makedirs(os.path.join(ROOT, work), exist_ok=True)
+    index_path = os.path.join(ROOT, "out", "references", "index.json")
+    index = json.load(open(index_path)) if os.path.exists(index_path) else {}
+    jobs = [(scene, "k1", args.res, args.budgets) for scene, _ in SCENES]
+    jobs += [(scene, "k8", args.k8_res, args.k8_budgets) for scene in args.k8_scenes.split(",") if scene]
     started = time.time()
     results = {}
-    for scene, param in SCENES:
-        xml = os.path.join("scenes", scene + ".xml")
-        ref = os.path.join(work, scene + "-ref.exr")
-        d = os.path.join(work, scene)
-        common = ["-D", f"res={args.res}", "--param", param, "--threads", str(args.threads)]
-        run([args.qsil, "reference", xml, *common, "--method", "quadric", "--spp", str(args.ref_spp), "-q", "-o", ref])
-        run([args.qsil, "compare", xml, *common, "--methods", ",".join(METHODS), "--budgets", args.budgets,
-             "--reference", ref, "-q", "--out", d])
-        dst = os.path.join(out_root, scene)
-        os.makedirs(dst, exist_ok=True)
-        for f in ("error_vs_time.png", "grid.png", "results.csv", "results.json"):
-            shutil.copy(os.path.join(ROOT, d, f), os.path.join(dst, f))
-        results[scene] = json.load(open(os.path.join(ROOT, d, "results.json")))
+    for scene, kset, res, budgets in jobs:
+        entry = index.get(f"{scene}-{kset}-{res}")
+        if not entry:
+            raise SystemExit(f"results_report: no reference {scene}-{kset}-{res} in {index_path}; run "
+                             f"python3 tools/references.py --scenes {scene} --params {kset} --res {res}")
+        results[(scene, kset)] = (entry, compare(args, scene, kset, res, budgets, entry))
     elapsed = time.time() - started
 
     lines = ["# Equal-time comparisons", "",
-             "Generated by `tools/results_report.py` (do not edit by hand). Each method renders the gradient "
-             "progressively (sample passes, fresh seed per pass) until its wall-clock budget; methods are "
-             "interleaved per budget so machine noise hits all alike. Error is measured against a high-spp "
-             f"quadric reference (`qsil reference`, {args.ref_spp} spp) over every pixel and derivative channel; "
-             "relative MSE = MSE / mean(reference²). The dashed line is the reference's own noise floor "
-             "(mean of its squared per-pixel standard errors): measured MSE cannot go below it.", "",
+             "Generated by `tools/results_report.py` from the references of `tools/references.py` (do not edit "
+             "by hand). Each method renders the gradient progressively (sample passes, fresh seed per pass) until "
+             "its wall-clock budget; methods are interleaved per budget so machine noise hits all alike. Error is "
+             "measured against an **independent reference: central finite differences with common random "
+             "numbers**, at a step chosen by a step study (the largest of h0, h0/2, h0/4, h0/8 that agrees with "
+             "every smaller one under `qsil agree`'s image-sum and block z-tests), over every pixel and derivative "
+             "channel; relative MSE = MSE / mean(reference²). The dashed line is the reference's own noise floor "
+             "(mean of its squared per-pixel standard errors): a measured MSE is the method's plus the floor. "
+             "FD in the charts uses qsil's default step h0 and is charged for its 2k renders (k parameters).", "",
              f"Machine: {cpu_model()}, {os.cpu_count()} hardware threads, {args.threads} render threads, shared "
              "with other jobs (**timings are noisy**: treat ratios within a factor ~1.5 as ties). "
-             f"Resolution {args.res}², budgets {args.budgets} s; whole report took {elapsed:.0f} s.", ""]
+             f"k = 1: {args.res}², budgets {args.budgets} s; k = 8: {args.k8_res}², budgets {args.k8_budgets} s; "
+             f"the comparisons took {elapsed:.0f} s.", ""]
     lines += ["## Relative MSE at the largest budget", "",
-              "| scene | parameter | " + " | ".join(METHODS) + " | vsphere / quadric | fd / quadric | ref. noise floor |",
-              "|---" * (len(METHODS) + 5) + "|"]
-    for scene, param in SCENES:
-        res = results[scene]
+              "| scene | k | " + " | ".join(METHODS) + " | fd / quadric | vsphere / quadric | uniform / quadric "
+              "| ref. floor |", "|---" * (len(METHODS) + 6) + "|"]
+    for (scene, kset), (entry, res) in results.items():
         last = max(res["targets"])
         rel = {r["method"]: r for r in res["rows"] if r["target"] == last}
         cells = [f"{rel[m]['rel_mse']:.3g} ({rel[m]['spp']} spp)" if m in rel and rel[m]["rel_mse"] is not None
                  else "–" for m in METHODS]
         q = rel.get("quadric", {}).get("rel_mse")
         ratio = lambda m: f"{rel[m]['rel_mse'] / q:.2f}" if q and m in rel and rel[m]["rel_mse"] is not None else "–"
-        lines.append(f"| {scene} | `{param}` | " + " | ".join(cells) +
-                     f" | {ratio('vsphere')} | {ratio('fd')} | {res['reference']['rel_noise_floor']:.3g} |")
+        lines.append(f"| {scene} | {len(entry['params'])} | " + " | ".join(cells) +
+                     f" | {ratio('fd')} | {ratio('vsphere')} | {ratio('uniform')} | {entry['rel_noise_floor']:.3g} |")
     lines.append("")
-    for scene, param in SCENES:
-        lines += [f"## {scene} (`{param}`)", "",
-                  f"![error vs time](images/compare/{scene}/error_vs_time.png)", "",
-                  f"![grid](images/compare/{scene}/grid.png)", "",
-                  f"Data: [results.csv](images/compare/{scene}/results.csv).", ""]
-    with open(os.path.join(ROOT, "docs", "results.md"), "w") as f:
+    for (scene, kset), (entry, res) in results.items():
+        name = f"{scene}-{kset}"
+        params = ", ".join(f"`{p}`" for p in entry["params"])
+        lines += [f"## {scene}, k = {len(entry['params'])} ({params})", "", reference_text(entry, res), "",
+                  f"![error vs time](images/compare/{name}/error_vs_time.png)", "",
+                  f"![grid](images/compare/{name}/grid.png)", "",
+                  f"Data: [results.csv](images/compare/{name}/results.csv).", ""]
+    with open(os.path.join(ROOT, "docs", "results.md.tmp"), "w") as f:
         f.write("\n".join(lines))
+    os.replace(os.path.join(ROOT, "docs", "results.md.tmp"), os.path.join(ROOT, "docs", "results.md"))
     print(f"results_report: docs/results.md ({elapsed:.0f} s)")
     return 0
 

@@ -2,8 +2,8 @@
 """Stability study: every gradient method at equal (small) time on scenes/stability/*.xml, where
 methods are known or expected to fail; writes docs/stability.md and docs/images/stability/.
 
-Usage: python3 tools/stability_study.py [--qsil PATH] [--budget 1] [--res 48]
-       [--ref-spp 128] [--threads 2] [--only NAME,...]
+Usage: python3 tools/stability_study.py [--qsil PATH] [--budget 2] [--res 48]
+       [--ref-spp 2048] [--threads 2] [--only NAME,...]
 
 Per scene (scenes/stability/params.txt lists name, parameter, question): an FD reference
 (`qsil reference --method fd`, per-pixel standard errors), then one `qsil compare` process per
@@ -41,6 +41,7 @@ def run_methods(args, xml, common, ref, work, img_root, name):
             row = res["rows"][0]
             se = (row["sum_se"][0] ** 2 + res["reference"]["sum_se"][0] ** 2) ** 0.5
             row["z"] = row["sum_error"][0] / se if se > 0 else float("nan")
+            row["rel_noise_floor"] = res["reference"]["rel_noise_floor"]
             per[m] = row
             os.makedirs(os.path.join(img_root, name), exist_ok=True)
         print(f"{name} {m}: {per[m].get('error', 'rel MSE %.3g' % per[m].get('rel_mse') if per[m].get('rel_mse') is not None else '?')}", flush=True)
@@ -83,6 +84,15 @@ def cell(row):
             + (f"{100 * zr:.0f}%" if zr is not None else "–") + f" ({row['spp']} spp)")
 
 
+def floor_cell(per):
+    """The reference's relative noise floor over the best relative MSE, flagged when above 0.1."""
+    rows = [r for r in per.values() if "error" not in r and r.get("rel_mse")]
+    if not rows or rows[0].get("rel_noise_floor") is None:
+        return "–"
+    ratio = rows[0]["rel_noise_floor"] / min(r["rel_mse"] for r in rows)
+    return f"{ratio:.2f}" + ("" if ratio <= 0.1 else " **high**")
+
+
 def write_report(args, table, elapsed, img_root):
     """Writes docs/stability.md from the per-scene results."""
     lines = ["# Stability study", "",
@@ -95,9 +105,13 @@ def write_report(args, table, elapsed, img_root):
              "Each cell: non-finite pixels (must be 0) / relative MSE vs the reference / z = image-sum error "
              "over its combined standard error (|z| < 3: agrees) / zero-contribution rate of the boundary samples "
              "(spp reached). Machine: shared 2-core VM, timings noisy.", "",
-             "| scene | parameter | " + " | ".join(METHODS) + " |", "|---" * (len(METHODS) + 2) + "|"]
+             "The last column is the reference's relative noise floor over the best method's relative MSE: "
+             "a reference can judge where it is ≤ 0.1 (marked **high** otherwise: the smallest errors there "
+             "are partly the reference's).", "",
+             "| scene | parameter | " + " | ".join(METHODS) + " | ref. floor / best |",
+             "|---" * (len(METHODS) + 3) + "|"]
     for name, param, question, per in table:
-        lines.append(f"| {name} | `{param}` | " + " | ".join(cell(per[m]) for m in METHODS) + " |")
+        lines.append(f"| {name} | `{param}` | " + " | ".join(cell(per[m]) for m in METHODS) + f" | {floor_cell(per)} |")
     lines += ["", f"Whole study: {elapsed:.0f} s.", ""]
     for name, param, question, per in table:
         lines += [f"## {name}", "", question, ""]
@@ -111,9 +125,9 @@ def main():
     """Runs the study and writes docs/stability.md."""
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--qsil", default=os.path.join(ROOT, "build", "qsil"))
-    ap.add_argument("--budget", type=float, default=1.0)
+    ap.add_argument("--budget", type=float, default=2.0)
     ap.add_argument("--res", type=int, default=48)
-    ap.add_argument("--ref-spp", type=int, default=128)
+    ap.add_argument("--ref-spp", type=int, default=2048)
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--only", default="")
     args = ap.parse_args()

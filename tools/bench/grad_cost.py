@@ -1,0 +1,92 @@
+#!/usr/bin/env python3
+"""Cost of a gradient against the primal image on every bundled scene (a benchmark, not a test).
+
+Usage: python3 tools/bench/grad_cost.py [--qsil build/qsil] [--res 256] [--spp 16] [--threads 2]
+       [--perf]
+
+For each scenes/*.xml with its chart parameter: `qsil render` and `qsil grad` (quadric) at the same
+resolution and spp, run back to back (render, grad, render, grad: the machine's noise hits both),
+and prints a table: render and grad wall time (the faster of two), grad / render, grad's split into
+interior and boundary time, its traversals and their zero-contribution share. With --perf (Debian's
+linux-perf), `perf record` of one more grad run gives the share of its samples inside Embree
+(libembree3) and the five hottest qsil functions.
+"""
+import argparse
+import os
+import re
+import subprocess
+import sys
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+SCENES = [("spot-mirror", "spot:translate:0,1,0"), ("shadow-quad", "object:translate:0,1,0"),
+          ("direct", "spot:translate:1,0,0")]
+
+
+def run(cmd):
+    """Runs a command in the repository root; returns its stdout (raises on failure)."""
+    return subprocess.run(cmd, cwd=ROOT, check=True, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                          text=True).stdout
+
+
+def render_seconds(qsil, xml, common):
+    """Wall time of `qsil render` from its summary line."""
+    out = run([qsil, "render", xml, *common, "-o", os.path.join("out", "bench-render.exr")])
+    return float(re.search(r"spp, ([0-9.]+) s", out).group(1))
+
+
+def grad_stats(qsil, xml, param, common):
+    """(wall, interior, boundary seconds, traversals, zero share %) of `qsil grad`."""
+    out = run([qsil, "grad", xml, *common, "--param", param, "-o", os.path.join("out", "bench-grad.exr")])
+    m = re.search(r"([0-9.]+) s \(set-up ([0-9.]+) s, interior ([0-9.]+) s, boundary ([0-9.]+) s\).*?"
+                  r"(\d+) traversals, ([0-9.]+)% zero", out)
+    return float(m.group(1)), float(m.group(3)), float(m.group(4)), int(m.group(5)), float(m.group(6))
+
+
+def embree_share(qsil, xml, param, common):
+    """(% of perf samples in libembree3, top five symbols) of one grad run."""
+    data = os.path.join(ROOT, "out", "bench-perf.data")
+    subprocess.run(["perf", "record", "-q", "-F", "499", "-o", data, qsil, "grad", xml, *common, "--param", param,
+                    "-o", os.path.join("out", "bench-grad.exr")], cwd=ROOT, check=True, stdout=subprocess.DEVNULL,
+                   stderr=subprocess.DEVNULL)
+    dso = run(["perf", "report", "-i", data, "--no-children", "--sort", "dso", "--stdio"])
+    share = sum(float(m.group(1)) for m in re.finditer(r"([0-9.]+)%\s+libembree", dso))
+    sym = run(["perf", "report", "-i", data, "--no-children", "--sort", "symbol", "--stdio"])
+    top = [f"{m.group(2).strip()[:48]} {m.group(1)}%" for m in re.finditer(r"^\s+([0-9.]+)%\s+\[\.\]\s+(.*)$", sym,
+                                                                            re.M)][:5]
+    return share, top
+
+
+def main():
+    """Prints the table."""
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--qsil", default=os.path.join(ROOT, "build", "qsil"))
+    ap.add_argument("--res", type=int, default=256)
+    ap.add_argument("--spp", type=int, default=16)
+    ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--perf", action="store_true", help="also the share of grad's time inside Embree (perf)")
+    args = ap.parse_args()
+    qsil = os.path.abspath(args.qsil)
+    os.makedirs(os.path.join(ROOT, "out"), exist_ok=True)
+    common = ["-D", f"res={args.res}", "--spp", str(args.spp), "--threads", str(args.threads), "-q"]
+    print(f"grad_cost: {args.res}², {args.spp} spp, {args.threads} threads, quadric boundary term")
+    print("| scene | render s | grad s | grad / render | interior s | boundary s | traversals | zero % |"
+          + (" Embree % | hottest |" if args.perf else ""))
+    print("|---|---|---|---|---|---|---|---|" + ("---|---|" if args.perf else ""))
+    for scene, param in SCENES:
+        xml = os.path.join("scenes", scene + ".xml")
+        r, g = [], []
+        for _ in range(2):
+            r.append(render_seconds(qsil, xml, common))
+            g.append(grad_stats(qsil, xml, param, common))
+        rs, gs = min(r), min(g)
+        row = (f"| {scene} | {rs:.2f} | {gs[0]:.2f} | {gs[0] / rs:.1f} | {gs[1]:.2f} | {gs[2]:.2f} | {gs[3]} | "
+               f"{gs[4]:.1f} |")
+        if args.perf:
+            share, top = embree_share(qsil, xml, param, common)
+            row += f" {share:.1f} | {'; '.join(top)} |"
+        print(row, flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

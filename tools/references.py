@@ -1,0 +1,186 @@
+#!/usr/bin/env python3
+"""Makes (or reuses) the independent references that docs/results.md judges against.
+
+Usage: python3 tools/references.py [--qsil build/qsil] [--res 256] [--seconds 600]
+       [--scenes spot-mirror,shadow-quad,direct] [--params k1|k8] [--force]
+
+For each chart scene and parameter set, three steps, each logged and recorded:
+
+1. Step study. Central finite differences with common random numbers (`qsil reference --method
+   fd`) at steps h0, h0/2, h0/4, h0/8 (h0: qsil's default step, 1e-3 of the scene's diagonal for
+   translations), at the chart resolution, independent seeds. `qsil agree` (image-sum and 8x8
+   block z-tests) compares each step with every smaller one; the chosen step is the largest h
+   whose image agrees with all of them (its O(h^2) bias is below the study's noise). If no pair agrees, the
+   script stops with an error: no reference can be trusted there.
+2. Reference. FD at the chosen step with as many spp as fit in --seconds (from the study's time
+   per spp), 2 threads, written to out/references/<scene>-<params>.exr with its record. It is
+   cached: rerunning with the same scene files, parameters, resolution, step and spp reuses it
+   (--force recomputes).
+3. Independence check. At 64x64 the quadric method at high spp (`qsil reference --method
+   quadric`) must agree with FD at the chosen step (`qsil agree`); a disagreement is a bug to find
+   and is recorded as such (the charts then say so).
+
+Writes out/references/index.json: per reference its file, spp, step, seconds, relative noise
+floor (mean se^2 / mean ref^2), the step study and the agreement check. tools/results_report.py
+reads it. qsil runs in the repository root with repository-relative paths.
+"""
+import argparse
+import hashlib
+import json
+import os
+import re
+import subprocess
+import sys
+import time
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+OUT = os.path.join("out", "references")  # relative to ROOT
+
+# Chart scenes: one parameter (k1) and eight (k8: translations, rotations, a scale, a vertex).
+SCENES = {
+    "spot-mirror": ("spot", "spot:translate:0,1,0"),
+    "shadow-quad": ("object", "object:translate:0,1,0"),
+    "direct": ("spot", "spot:translate:1,0,0"),
+}
+
+
+def param_set(scene, which):
+    """The --param specs of a chart scene: k1 (the chart parameter) or k8 (eight parameters)."""
+    shape, first = SCENES[scene]
+    if which == "k1":
+        return [first]
+    rest = [f"{shape}:translate:1,0,0", f"{shape}:translate:0,1,0", f"{shape}:translate:0,0,1",
+            f"{shape}:rotate:1,0,0", f"{shape}:rotate:0,1,0", f"{shape}:rotate:0,0,1", f"{shape}:scale",
+            f"{shape}:vertex:0:0,1,0"]
+    return [first] + [p for p in rest if p != first][:7]
+
+
+def run(cmd, check=True):
+    """Runs a qsil command in the repository root; returns (exit code, stdout, seconds)."""
+    print("+", " ".join(cmd), flush=True)
+    t = time.time()
+    p = subprocess.run(cmd, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    sys.stdout.write(p.stdout)
+    if check and p.returncode != 0:
+        sys.stderr.write(p.stderr)
+        raise SystemExit(f"references: command failed with exit code {p.returncode}: {' '.join(cmd)}")
+    return p.returncode, p.stdout, time.time() - t
+
+
+def scene_digest(xml):
+    """sha256 of the scene file and of every file it names (meshes, env maps)."""
+    h = hashlib.sha256()
+    path = os.path.join(ROOT, xml)
+    text = open(path, "rb").read()
+    h.update(text)
+    for name in sorted(set(re.findall(rb'value="([^"]+\.(?:obj|exr))"', text))):
+        f = os.path.join(os.path.dirname(path), name.decode())
+        if os.path.exists(f):
+            h.update(open(f, "rb").read())
+    return h.hexdigest()
+
+
+def default_steps(qsil, xml, params, res):
+    """qsil's default FD step h0 per parameter (printed by a 1-spp `qsil fd` run)."""
+    _, out, _ = run([qsil, "fd", xml, "-D", f"res={res}", *sum((["--param", p] for p in params), []), "--spp", "1",
+                     "-q", "-o", os.path.join(OUT, "h0.exr")])
+    return [float(x) for x in re.findall(r"h\d+ = ([0-9.eE+-]+)", out)]
+
+
+def reference(qsil, xml, params, res, method, spp, seed, path, steps=None, threads=2):
+    """Renders a `qsil reference`; returns (seconds, relative noise floor)."""
+    cmd = [qsil, "reference", xml, "-D", f"res={res}", *sum((["--param", p] for p in params), []),
+           "--method", method, "--spp", str(spp), "--seed", str(seed), "--threads", str(threads), "-q", "-o", path]
+    if steps:
+        cmd += ["--h", *[f"{h:.9g}" for h in steps]]
+    _, out, seconds = run(cmd)
+    m = re.search(r"= ([0-9.eE+-]+) x mean\(ref\^2\)", out)
+    return seconds, float(m.group(1)) if m else float("nan")
+
+
+def agree(qsil, a, b):
+    """`qsil agree A B`: (agrees, the statistics line)."""
+    code, out, _ = run([qsil, "agree", a, b], check=False)
+    if code not in (0, 1):
+        raise SystemExit(f"references: qsil agree {a} {b} failed (exit {code})")
+    stats = " ".join(l.strip() for l in out.splitlines()[1:-1])
+    return code == 0, stats
+
+
+def step_study(qsil, xml, params, res, spp, name):
+    """FD at h0, h0/2, h0/4, h0/8 and the agreement of each with every smaller step; returns the record."""
+    h0 = default_steps(qsil, xml, params, res)
+    factors = [1, 0.5, 0.25, 0.125]
+    runs = []
+    for i, f in enumerate(factors):
+        path = os.path.join(OUT, f"{name}-step{i}.exr")
+        seconds, floor = reference(qsil, xml, params, res, "fd", spp, 1000 + i, path, [h * f for h in h0])
+        runs.append({"factor": f, "steps": [h * f for h in h0], "spp": spp, "seconds": seconds,
+                     "rel_noise_floor": floor, "file": path})
+    pairs = []
+    for i, a in enumerate(runs):
+        for b in runs[i + 1:]:
+            ok, stats = agree(qsil, a["file"], b["file"])
+            pairs.append({"h_factor": a["factor"], "smaller_factor": b["factor"], "agree": ok, "stats": stats})
+    # The largest step that agrees with every smaller one (the smallest has nothing to agree with).
+    chosen = next((r["factor"] for r in runs[:-1]
+                   if all(p["agree"] for p in pairs if p["h_factor"] == r["factor"])), None)
+    if chosen is None:
+        raise SystemExit(f"references: {name}: no step agrees with the smaller ones ({pairs}); no FD reference "
+                         "can judge")
+    return {"h0": h0, "runs": runs, "pairs": pairs, "chosen_factor": chosen,
+            "steps": [h * chosen for h in h0],
+            "seconds_per_spp": sum(r["seconds"] for r in runs) / len(runs) / spp}
+
+
+def main():
+    """Makes or reuses every reference and writes out/references/index.json."""
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--qsil", default=os.path.join(ROOT, "build", "qsil"))
+    ap.add_argument("--res", type=int, default=256)
+    ap.add_argument("--seconds", type=float, default=600, help="time of each reference render")
+    ap.add_argument("--study-spp", type=int, default=32, help="spp of each step-study render")
+    ap.add_argument("--check-spp", type=int, default=4096, help="spp of the 64x64 independence check (each method)")
+    ap.add_argument("--scenes", default=",".join(SCENES))
+    ap.add_argument("--params", default="k1", choices=["k1", "k8"])
+    ap.add_argument("--force", action="store_true", help="recompute cached references")
+    args = ap.parse_args()
+    qsil = os.path.abspath(args.qsil)
+    os.makedirs(os.path.join(ROOT, OUT), exist_ok=True)
+    index_path = os.path.join(ROOT, OUT, "index.json")
+    index = json.load(open(index_path)) if os.path.exists(index_path) else {}
+    for scene in args.scenes.split(","):
+        if scene not in SCENES:
+            raise SystemExit(f"references: unknown scene '{scene}' (one of {', '.join(SCENES)})")
+        xml = os.path.join("scenes", scene + ".xml")
+        params = param_set(scene, args.params)
+        name = f"{scene}-{args.params}-{args.res}"
+        key = {"scene_sha256": scene_digest(xml), "params": params, "res": args.res, "seconds": args.seconds,
+               "study_spp": args.study_spp, "check_spp": args.check_spp}
+        old = index.get(name)
+        if old and not args.force and old.get("key") == key and os.path.exists(os.path.join(ROOT, old["file"])):
+            print(f"references: {name}: cached ({old['file']}, {old['spp']} spp)")
+            continue
+        study = step_study(qsil, xml, params, args.res, args.study_spp, name)
+        spp = max(args.study_spp, int(args.seconds / study["seconds_per_spp"]))
+        path = os.path.join(OUT, name + ".exr")
+        seconds, floor = reference(qsil, xml, params, args.res, "fd", spp, 7, path, study["steps"])
+        qa = os.path.join(OUT, f"{name}-check-quadric.exr")
+        fa = os.path.join(OUT, f"{name}-check-fd.exr")
+        reference(qsil, xml, params, 64, "quadric", args.check_spp, 11, qa)
+        reference(qsil, xml, params, 64, "fd", args.check_spp, 12, fa, study["steps"])
+        ok, stats = agree(qsil, qa, fa)
+        index[name] = {"key": key, "scene": xml, "params": params, "res": args.res, "file": path, "method": "fd",
+                       "spp": spp, "steps": study["steps"], "seconds": seconds, "rel_noise_floor": floor,
+                       "step_study": study,
+                       "quadric_check": {"res": 64, "spp": args.check_spp, "agree": ok, "stats": stats}}
+        with open(index_path + ".tmp", "w") as f:
+            json.dump(index, f, indent=1)
+        os.replace(index_path + ".tmp", index_path)
+        print(f"references: {name}: {spp} spp, steps {study['steps']}, {seconds:.0f} s, rel. floor {floor:.3g}, "
+              f"quadric agrees at 64x64: {ok}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
