@@ -158,7 +158,8 @@ class GradientEstimator final : public Estimator::Impl {
     if (with_boundary) {
       const auto t0 = Clock::now();
       PathStats primary_stats;
-      add_primary_boundary(r.film, ctx, vel, primary, first, count, options.seed, options.threads, primary_stats);
+      add_primary_boundary(r.film, ctx, vel, primary, first, count, options.seed, options.threads, primary_stats,
+                           options.part, options.parts, options.parts > 1 ? &r.splats : nullptr);
       const double dt = seconds_since(t0);
       r.seconds += dt;
       r.rays += primary_stats.rays;
@@ -331,6 +332,9 @@ RenderResult Estimator::run(const RenderOptions& options) const {
   if (count <= 0) throw Error("spp must be positive (got " + std::to_string(count) + ")");
   if (options.first_sample < 0)
     throw Error("the first sample index must be >= 0 (got " + std::to_string(options.first_sample) + ")");
+  if (options.parts < 1 || options.part < 0 || options.part >= options.parts)
+    throw Error("part " + std::to_string(options.part) + " of " + std::to_string(options.parts) +
+                " parts: expected 0 <= part < parts");
   RenderResult r;
   impl_->run(options, options.first_sample, count, r);
   QSIL_DCHECK(r.film.channels() == impl_->layout.channels());

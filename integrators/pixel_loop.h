@@ -23,13 +23,15 @@
 namespace qsil {
 
 /// Calls body(x, y) for every pixel of a width x height image, in parallel over 16x16 tiles on
-/// `threads` threads (0 = all cores). `label` prefixes the progress bar ("" = no bar).
+/// `threads` threads (0 = all cores). `label` prefixes the progress bar ("" = no bar). With
+/// parts > 1 only for the pixels of part `part` (Film::part_of), in parallel over runs of them.
 void for_each_pixel(int width, int height, int threads, const std::string& label,
-                    const std::function<void(int x, int y)>& body);
+                    const std::function<void(int x, int y)>& body, int part = 0, int parts = 1);
 
 /// One estimator run over samples [first, first + count) of every pixel of `camera`'s image:
 /// `sample(x, y, s, sampler, stats, out)` fills out[0 .. layout.channels()) for sample s of
-/// pixel (x, y), drawing from `sampler` = Sampler(seed, pixel, s). A sample with a non-finite
+/// pixel (x, y), drawing from `sampler` = Sampler(seed, pixel, s), for the pixels of part
+/// options.part of options.parts (every pixel when parts = 1). A sample with a non-finite
 /// value is replaced by zeros and counted. Fills result.film, spp, first_sample, seconds, rays and
 /// nonfinite; adds every thread's counters to `total`.
 template <class SampleFn>
@@ -43,22 +45,25 @@ void run_pixels(const Camera& camera, const FilmLayout& layout, const RenderOpti
   tbb::enumerable_thread_specific<PathStats> stats;
   std::atomic<uint64_t> nonfinite{0};
   const auto t0 = std::chrono::steady_clock::now();
-  for_each_pixel(W, H, options.threads, options.progress ? label : "", [&](int x, int y) {
-    std::vector<double> out(static_cast<size_t>(channels));
-    PathStats& st = stats.local();
-    const uint64_t pixel = uint64_t(y) * W + x;
-    for (int s = first; s < first + count; ++s) {
-      Sampler sampler(options.seed, pixel, uint64_t(s));
-      sample(x, y, s, sampler, st, out.data());
-      bool finite = true;
-      for (double v : out) finite = finite && std::isfinite(v);
-      if (!finite) {
-        nonfinite.fetch_add(1);
-        std::fill(out.begin(), out.end(), 0.0);
-      }
-      result.film.add_sample(x, y, out.data());
-    }
-  });
+  for_each_pixel(
+      W, H, options.threads, options.progress ? label : "",
+      [&](int x, int y) {
+        std::vector<double> out(static_cast<size_t>(channels));
+        PathStats& st = stats.local();
+        const uint64_t pixel = uint64_t(y) * W + x;
+        for (int s = first; s < first + count; ++s) {
+          Sampler sampler(options.seed, pixel, uint64_t(s));
+          sample(x, y, s, sampler, st, out.data());
+          bool finite = true;
+          for (double v : out) finite = finite && std::isfinite(v);
+          if (!finite) {
+            nonfinite.fetch_add(1);
+            std::fill(out.begin(), out.end(), 0.0);
+          }
+          result.film.add_sample(x, y, out.data());
+        }
+      },
+      options.part, options.parts);
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   for (const PathStats& st : stats) {
     result.rays += st.rays;

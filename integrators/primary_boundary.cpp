@@ -28,16 +28,10 @@ bool clip(const Vec3& c0, const Vec3& c1, const Vec3& n, double d, double& ta, d
   return ta < tb;
 }
 
-/// Splats of one chunk of primary samples: (pixel, channel, value).
-struct Splat {
-  int x, y, channel;
-  double value;
-};
-
 template <int N>
 void run_chunk(const PathContext& ctx, const SceneVelocities& vel, const std::vector<PrimaryEdge>& edges,
                const std::vector<double>& cdf, long long count, double per_sample, uint64_t seed, long long chunk,
-               int range_key, std::vector<Splat>& out, PathStats& stats) {
+               int range_key, std::vector<FilmSplat>& out, PathStats& stats) {
   const Camera& cam = ctx.scene->camera;
   const Vec2 tanf = cam.tan_half_fov();
   const double fx = cam.width / (2.0 * tanf.x()), fy = cam.height / (2.0 * tanf.y());
@@ -118,7 +112,7 @@ std::vector<PrimaryEdge> find_primary_edges(const Scene& scene, const edgetree::
 
 void add_primary_boundary(Film& film, const PathContext& ctx, const SceneVelocities& velocities,
                           const std::vector<PrimaryEdge>& edges, int first_sample, int spp, uint64_t seed, int threads,
-                          PathStats& stats) {
+                          PathStats& stats, int part, int parts, std::vector<FilmSplat>* deferred) {
   const Camera& cam = ctx.scene->camera;
   const long long per_index = (long long)cam.width * cam.height;  // primary samples per sample index
   const long long num_samples = per_index * spp;
@@ -132,8 +126,11 @@ void add_primary_boundary(Film& film, const PathContext& ctx, const SceneVelocit
   // A chunk cut by the start of this range draws its part from (seed, c, first_sample, 2).
   const long long chunk_size = 1024;
   const long long g0 = per_index * first_sample, g1 = g0 + num_samples;
-  const long long c0 = g0 / chunk_size, chunks = (g1 + chunk_size - 1) / chunk_size - c0;
-  std::vector<std::vector<Splat>> splats{static_cast<size_t>(chunks)};
+  const long long first_chunk = g0 / chunk_size, all_chunks = (g1 + chunk_size - 1) / chunk_size - first_chunk;
+  // ---- This part's share of the chunks: a contiguous run of them, in order.
+  const long long c0 = first_chunk + all_chunks * part / parts;
+  const long long chunks = first_chunk + all_chunks * (part + 1) / parts - c0;
+  std::vector<std::vector<FilmSplat>> splats{static_cast<size_t>(chunks)};
   std::vector<PathStats> chunk_stats{static_cast<size_t>(chunks)};
   const int K = velocities.num_params;
   auto body = [&](long long j) {
@@ -151,9 +148,14 @@ void add_primary_boundary(Film& film, const PathContext& ctx, const SceneVelocit
     tbb::task_arena(threads).execute(run);
   else
     run();
-  // Merge in chunk order: the same sums whatever the thread count.
+  // Merge in chunk order: the same sums whatever the thread count (or hand them on in that order).
   for (long long c = 0; c < chunks; ++c) {
-    for (const Splat& s : splats[size_t(c)]) film.splat(s.x, s.y, s.channel, s.value);
+    if (deferred) {
+      deferred->insert(deferred->end(), splats[size_t(c)].begin(), splats[size_t(c)].end());
+      std::vector<FilmSplat>().swap(splats[size_t(c)]);
+    } else {
+      for (const FilmSplat& s : splats[size_t(c)]) film.splat(s.x, s.y, s.channel, s.value);
+    }
     stats.rays += chunk_stats[size_t(c)].rays;
     stats.boundary_traversals += chunk_stats[size_t(c)].boundary_traversals;
     stats.boundary_zero += chunk_stats[size_t(c)].boundary_zero;

@@ -53,8 +53,11 @@ std::vector<PrimaryEdge> find_primary_edges(const Scene& scene, const edgetree::
 /// ranges that partition [0, spp) draw exactly the samples of the run over [0, spp) (their films
 /// merge into its film up to the rounding of the sums). Deterministic for a seed whatever the
 /// thread count (chunks are merged in order). Counts rays and zero contributions in `stats`.
+/// Part `part` of `parts` (RenderOptions::parts) draws only the part-th of `parts` contiguous
+/// shares of the range's chunks (each exactly as the whole run draws it); with `deferred` its
+/// splats are appended there in the order the whole run adds them, instead of to `film`.
 void add_primary_boundary(Film& film, const PathContext& ctx, const SceneVelocities& velocities,
                           const std::vector<PrimaryEdge>& edges, int first_sample, int spp, uint64_t seed, int threads,
-                          PathStats& stats);
+                          PathStats& stats, int part = 0, int parts = 1, std::vector<FilmSplat>* deferred = nullptr);
 
 }  // namespace qsil

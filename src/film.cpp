@@ -5,6 +5,7 @@
 
 #include "qsil/dual.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace qsil {
@@ -91,6 +92,36 @@ void Film::merge(const Film& other) {
     splat_sq_[i] += other.splat_sq_[i];
   }
   for (size_t i = 0; i < count_.size(); ++i) count_[i] += other.count_[i];
+}
+
+void Film::copy_part(const Film& other, int part, int parts) {
+  QSIL_CHECK(other.width_ == width_ && other.height_ == height_ && other.channels_ == channels_);
+  QSIL_CHECK(parts >= 1 && part >= 0 && part < parts);
+  const size_t C = size_t(channels_);
+  for (size_t p = size_t(part); p < count_.size(); p += size_t(parts)) {
+    std::copy_n(&other.sum_[p * C], C, &sum_[p * C]);
+    std::copy_n(&other.sum_sq_[p * C], C, &sum_sq_[p * C]);
+    count_[p] = other.count_[p];
+  }
+}
+
+std::vector<double> Film::state() const {
+  std::vector<double> s;
+  s.reserve(state_size());
+  for (const std::vector<double>* v : {&sum_, &sum_sq_, &splat_sum_, &splat_sq_})
+    s.insert(s.end(), v->begin(), v->end());
+  for (long long n : count_) s.push_back(double(n));
+  return s;
+}
+
+void Film::set_state(const std::vector<double>& s) {
+  QSIL_CHECK(s.size() == state_size());
+  auto it = s.begin();
+  for (std::vector<double>* v : {&sum_, &sum_sq_, &splat_sum_, &splat_sq_}) {
+    std::copy_n(it, v->size(), v->begin());
+    it += std::ptrdiff_t(v->size());
+  }
+  for (long long& n : count_) n = (long long)*it++;
 }
 
 ImageSum Film::derivative_sum(int k) const {

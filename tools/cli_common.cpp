@@ -24,6 +24,22 @@ extern char** environ;
 
 namespace qsil::cli {
 
+namespace {
+const ProcessGroup* g_group = nullptr;
+}  // namespace
+
+void set_process_group(const ProcessGroup& group) { g_group = &group; }
+
+const ProcessGroup& process_group() {
+  static const ProcessGroup single;
+  return g_group ? *g_group : single;
+}
+
+std::string processes_note() {
+  const int n = process_group().size();
+  return n > 1 ? ", " + std::to_string(n) + " processes" : std::string();
+}
+
 void add_scene_options(CLI::App& app, std::string& scene, std::vector<std::string>& defines) {
   app.add_option("scene", scene, "Scene file (Mitsuba 3 XML subset)")->required();
   app.add_option("-D", defines, "Override a scene <default>: -D name=value (repeatable)")->allow_extra_args(false);
@@ -67,7 +83,8 @@ void add_fd_step_option(CLI::App& app, std::vector<double>& h) {
 Scene load_scene_with_flags(const std::string& scene_path, const std::vector<std::string>& defines) {
   std::vector<std::string> warnings;
   Scene scene = load_scene(scene_path, parse_defines(defines), &warnings);
-  for (const auto& w : warnings) std::cerr << "warning: " << w << "\n";
+  if (process_group().root())
+    for (const auto& w : warnings) std::cerr << "warning: " << w << "\n";
   return scene;
 }
 
@@ -79,15 +96,18 @@ void add_render_attributes(Image& image, const CommonFlags& flags, const RenderR
   std::string defs;
   for (const auto& d : flags.defines) defs += (defs.empty() ? "" : " ") + d;
   if (!defs.empty()) image.attributes["qsil:defines"] = defs;
+  if (process_group().size() > 1) image.attributes["qsil:processes"] = std::to_string(process_group().size());
 }
 
-void report_nonfinite(const RenderResult& r) {
+void report_nonfinite(const RenderResult& r, uint64_t invalid_rays) {
   if (r.nonfinite > 0)
     std::cerr << "warning: " << r.nonfinite << " sample(s) had a non-finite value and were replaced by 0\n";
-  if (const uint64_t invalid = RayTracer::total_invalid_rays(); invalid > 0)
-    std::cerr << "warning: " << invalid << " ray(s) had a non-finite or out-of-range origin, direction or length "
+  if (invalid_rays > 0)
+    std::cerr << "warning: " << invalid_rays << " ray(s) had a non-finite or out-of-range origin, direction or length "
               << "and were treated as misses\n";
 }
+
+uint64_t group_invalid_rays() { return process_group().sum(RayTracer::total_invalid_rays()); }
 
 double mrays_per_second(const RenderResult& r) { return r.seconds > 0 ? double(r.rays) / r.seconds * 1e-6 : 0.0; }
 

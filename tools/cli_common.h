@@ -1,10 +1,11 @@
 #pragma once
 /// @file cli_common.h
 /// Pieces shared by the subcommands of `qsil`: the common flags and options (CLI11), scene
-/// loading with -D overrides and warnings, EXR output with metadata, warnings, and running the
-/// chart scripts.
+/// loading with -D overrides and warnings, EXR output with metadata, warnings, running the
+/// chart scripts, and the process group of an MPI job (qsil/integrators/distributed.h).
 
 #include "qsil/image.h"
+#include "qsil/integrators/distributed.h"
 #include "qsil/integrators/estimator.h"
 #include "qsil/method.h"
 #include "qsil/parameters.h"
@@ -17,6 +18,21 @@
 #include <vector>
 
 namespace qsil::cli {
+
+/// Sets the process group of this program (main() makes it first; it must outlive every command).
+void set_process_group(const ProcessGroup& group);
+/// The process group set by set_process_group, or a group of one process.
+const ProcessGroup& process_group();
+
+/// Collective: runs `step` on rank 0 only (printing, writing outputs), and agrees on its outcome
+/// (ProcessGroup::all_or_none), so that a failure there ends every rank with the same exit code.
+template <class F>
+void on_root(F&& step) {
+  const ProcessGroup& group = process_group();
+  group.all_or_none([&] {
+    if (group.root()) step();
+  });
+}
 
 /// Flags every rendering subcommand has.
 struct CommonFlags {
@@ -43,15 +59,24 @@ void add_boundary_spp_option(CLI::App& app, int& boundary_spp);
 /// Adds --h H (finite-difference steps: one for all, or one per --param).
 void add_fd_step_option(CLI::App& app, std::vector<double>& h);
 
-/// Parses the -D list and loads the scene, printing counted warnings to stderr. Throws qsil::Error.
+/// Parses the -D list and loads the scene, printing counted warnings to stderr (on rank 0 of the
+/// process group only). Throws qsil::Error.
 Scene load_scene_with_flags(const std::string& scene, const std::vector<std::string>& defines);
 
-/// Standard EXR attributes (scene, spp, seed, seconds, defines).
+/// Standard EXR attributes (scene, spp, seed, seconds, defines; processes when the process group
+/// has more than one).
 void add_render_attributes(Image& image, const CommonFlags& flags, const RenderResult& r);
 
-/// Prints a warning line if samples were non-finite (they were replaced by 0), and one if rays
-/// were invalid for Embree (RayTracer::total_invalid_rays(): treated as misses).
-void report_nonfinite(const RenderResult& r);
+/// Prints a warning line if samples were non-finite (they were replaced by 0), and one if
+/// `invalid_rays` rays were invalid for Embree (RayTracer::total_invalid_rays(), summed over the
+/// process group: treated as misses).
+void report_nonfinite(const RenderResult& r, uint64_t invalid_rays);
+
+/// Collective: RayTracer::total_invalid_rays() summed over the process group (every rank).
+uint64_t group_invalid_rays();
+
+/// ", N processes" when the process group has N > 1 processes, else "" (for summary lines).
+std::string processes_note();
 
 /// Mrays/s of a run (0 for a run without time).
 double mrays_per_second(const RenderResult& r);

@@ -7,15 +7,18 @@
 #include <CLI/CLI.hpp>
 
 #include <optional>
+#include <sstream>
 
 namespace qsil::cli {
 
 /// Parses argv with `app`. Returns std::nullopt when the program should go on, else the exit code.
-inline std::optional<int> parse_arguments(CLI::App& app, int argc, char** argv) {
+/// `silent`: print neither help nor errors (ranks other than 0 of an MPI job: rank 0 prints).
+inline std::optional<int> parse_arguments(CLI::App& app, int argc, char** argv, bool silent = false) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    const int code = app.exit(e);
+    std::ostringstream sink;
+    const int code = silent ? app.exit(e, sink, sink) : app.exit(e);
     return code == 0 ? 0 : 2;
   }
   return std::nullopt;

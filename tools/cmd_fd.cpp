@@ -1,11 +1,13 @@
 /// @file cmd_fd.cpp
 /// `qsil fd SCENE.xml --param SPEC... [--h H] [--spp N]`: central finite differences with common
 /// random numbers, in the same EXR layout as `qsil grad`; the reference for every gradient test.
+/// Under an MPI launcher every rank renders its part and rank 0 writes the image.
 
 #include "cli_common.h"
 #include "commands.h"
 
 #include <cstdio>
+#include <optional>
 
 namespace qsil::cli {
 namespace {
@@ -23,17 +25,25 @@ const CommandRegistrar registrar{
        add_fd_step_option(app, flags->h);
        app.add_option("--preview-dir", flags->preview_dir, "Write primal.png and one diverging PNG per parameter here");
        return [flags]() {
-         const Scene scene = load_scene_with_flags(flags->scene, flags->defines);
-         const auto params = parse_parameters(flags->params, scene);
-         const Estimator estimator(scene,
-                                   EstimatorConfig::finite_differences(params, fd_steps(scene, params, flags->h)));
-         const RenderResult r = estimator.run(flags->render);
-         report_nonfinite(r);
-         std::printf("fd: %s %dx%d, %d spp, %zu parameter(s), %.3f s (set-up %.3f s) -> %s\n", flags->scene.c_str(),
-                     r.film.width(), r.film.height(), r.spp, params.size(), estimator.setup().seconds + r.seconds,
-                     estimator.setup().seconds, flags->output.c_str());
-         for (size_t k = 0; k < params.size(); ++k) std::printf("  h%zu = %.6g\n", k, estimator.fd_steps()[k]);
-         write_gradient_outputs(*flags, params, r, flags->preview_dir, "fd");
+         const ProcessGroup& group = process_group();
+         std::optional<Scene> scene;
+         std::optional<Estimator> estimator;
+         std::vector<ParameterSpec> params;
+         group.all_or_none([&] {
+           scene.emplace(load_scene_with_flags(flags->scene, flags->defines));
+           params = parse_parameters(flags->params, *scene);
+           estimator.emplace(*scene, EstimatorConfig::finite_differences(params, fd_steps(*scene, params, flags->h)));
+         });
+         const RenderResult r = group.run(*estimator, flags->render);
+         const uint64_t invalid_rays = group_invalid_rays();
+         on_root([&] {
+           report_nonfinite(r, invalid_rays);
+           std::printf("fd: %s %dx%d, %d spp%s, %zu parameter(s), %.3f s (set-up %.3f s) -> %s\n", flags->scene.c_str(),
+                       r.film.width(), r.film.height(), r.spp, processes_note().c_str(), params.size(),
+                       estimator->setup().seconds + r.seconds, estimator->setup().seconds, flags->output.c_str());
+           for (size_t k = 0; k < params.size(); ++k) std::printf("  h%zu = %.6g\n", k, estimator->fd_steps()[k]);
+           write_gradient_outputs(*flags, params, r, flags->preview_dir, "fd");
+         });
          return 0;
        };
      }}};

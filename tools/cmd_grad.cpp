@@ -1,12 +1,14 @@
 /// @file cmd_grad.cpp
 /// `qsil grad SCENE.xml --param SPEC... [--spp N] [--seed S] [--boundary METHOD] [-o grad.exr]
 /// [--preview-dir DIR]`: the primal image and its derivatives with respect to geometry parameters
-/// (interior term in forward mode + boundary term), from the same paths.
+/// (interior term in forward mode + boundary term), from the same paths. Under an MPI launcher
+/// every rank renders its part and rank 0 writes the image (qsil/integrators/distributed.h).
 
 #include "cli_common.h"
 #include "commands.h"
 
 #include <cstdio>
+#include <optional>
 
 namespace qsil::cli {
 namespace {
@@ -32,22 +34,31 @@ const CommandRegistrar registrar{
        add_boundary_spp_option(app, flags->boundary_spp);
        app.add_option("--preview-dir", flags->preview_dir, "Write primal.png and one diverging PNG per parameter here");
        return [flags]() {
-         const Method method = parse_method(flags->boundary, "--boundary", kBoundaryMethods);
-         const Scene scene = load_scene_with_flags(flags->scene, flags->defines);
-         const Estimator estimator(
-             scene, EstimatorConfig::gradient(parse_parameters(flags->params, scene), method, flags->boundary_spp));
-         const RenderResult r = estimator.run(flags->render);
-         report_nonfinite(r);
-         const SetupReport& setup = estimator.setup();
-         std::printf(
-             "grad: %s %dx%d, %d spp, %zu parameter(s), boundary %s, %.3f s (set-up %.3f s, interior %.3f s, "
-             "boundary %.3f s), %.2f Mrays/s, %llu traversals, %.1f%% zero-contribution -> %s\n",
-             flags->scene.c_str(), r.film.width(), r.film.height(), r.spp, estimator.config().params.size(),
-             flags->boundary.c_str(), setup.seconds + r.seconds, setup.seconds, r.seconds - r.boundary_seconds,
-             r.boundary_seconds, mrays_per_second(r), (unsigned long long)r.traversals,
-             r.traversals ? 100.0 * double(r.zero_traversals) / double(r.traversals) : 0.0, flags->output.c_str());
-         std::printf("  set-up: %s\n", setup.describe().c_str());
-         write_gradient_outputs(*flags, estimator.config().params, r, flags->preview_dir, "grad/" + flags->boundary);
+         const ProcessGroup& group = process_group();
+         std::optional<Scene> scene;
+         std::optional<Estimator> estimator;
+         group.all_or_none([&] {
+           const Method method = parse_method(flags->boundary, "--boundary", kBoundaryMethods);
+           scene.emplace(load_scene_with_flags(flags->scene, flags->defines));
+           estimator.emplace(
+               *scene, EstimatorConfig::gradient(parse_parameters(flags->params, *scene), method, flags->boundary_spp));
+         });
+         const RenderResult r = group.run(*estimator, flags->render);
+         const uint64_t invalid_rays = group_invalid_rays();
+         on_root([&] {
+           report_nonfinite(r, invalid_rays);
+           const SetupReport& setup = estimator->setup();
+           std::printf(
+               "grad: %s %dx%d, %d spp%s, %zu parameter(s), boundary %s, %.3f s (set-up %.3f s, interior %.3f s, "
+               "boundary %.3f s), %.2f Mrays/s, %llu traversals, %.1f%% zero-contribution -> %s\n",
+               flags->scene.c_str(), r.film.width(), r.film.height(), r.spp, processes_note().c_str(),
+               estimator->config().params.size(), flags->boundary.c_str(), setup.seconds + r.seconds, setup.seconds,
+               r.seconds - r.boundary_seconds, r.boundary_seconds, mrays_per_second(r),
+               (unsigned long long)r.traversals,
+               r.traversals ? 100.0 * double(r.zero_traversals) / double(r.traversals) : 0.0, flags->output.c_str());
+           std::printf("  set-up: %s\n", setup.describe().c_str());
+           write_gradient_outputs(*flags, estimator->config().params, r, flags->preview_dir, "grad/" + flags->boundary);
+         });
          return 0;
        };
      }}};

@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Installs qsil's build and test dependencies from Debian 12 packages (idempotent: packages that are
 # already installed are skipped, and apt-get is not called at all when nothing is missing).
+# Open MPI (libopenmpi-dev, openmpi-bin) is optional for the build (CMake option QSIL_MPI) and
+# installed so that the MPI build and its tests (tests/mpi_cli_test.cpp) run in CI.
 set -euo pipefail
 packages=(
   build-essential cmake pkg-config
@@ -8,6 +10,7 @@ packages=(
   libtinyobjloader-dev libtbb-dev libcli11-dev libpugixml-dev
   libgtest-dev libgmock-dev libbenchmark-dev libstb-dev libpcg-cpp-dev nlohmann-json3-dev
   python3 python3-matplotlib python3-numpy
+  libopenmpi-dev openmpi-bin
 )
 missing=()
 for p in "${packages[@]}"; do

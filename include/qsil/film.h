@@ -61,6 +61,14 @@ class FilmLayout {
   int num_params_ = 0;
 };
 
+/// One splatted estimate, the arguments of Film::splat: `value` added to channel `channel` of pixel
+/// (x, y). The primary boundary term of a part run keeps its splats as a list of these, in the
+/// order a whole run adds them (RenderOptions::parts, qsil/integrators/distributed.h).
+struct FilmSplat {
+  int x, y, channel;
+  double value;
+};
+
 /// Image sum over pixels of the mean of a parameter's R, G, B derivative, and its standard error
 /// (pixels are independent: the variances add).
 struct ImageSum {
@@ -97,6 +105,22 @@ class Film {
   /// same estimator merge into the film of their union (sums add, so the result equals one run
   /// over the union up to the rounding of the additions).
   void merge(const Film& other);
+  /// The part (0 .. parts - 1) that pixel index y W + x belongs to when a run is split into
+  /// `parts` parts (RenderOptions::parts): index mod parts, interleaved so that every part gets an
+  /// even share of the image's costly regions.
+  static int part_of(long long pixel, int parts) { return int(pixel % parts); }
+  /// Copies the samples (sums, squared sums and counts; not the splats) of the pixels of part
+  /// `part` of `parts` (part_of) from `other` (same size and layout): copied, not added, so they
+  /// are bit for bit the other film's.
+  void copy_part(const Film& other, int part, int parts);
+  /// The film's whole state as one array of state_size() doubles (sums, squared sums, splat sums,
+  /// splat squared sums, then sample counts, exact below 2^53), to send it between processes;
+  /// set_state() restores it bit for bit.
+  std::vector<double> state() const;
+  /// Size of state(): W H (4 channels() + 1).
+  size_t state_size() const { return size_t(width_) * height_ * (4 * size_t(channels_) + 1); }
+  /// Restores a state() of a film of the same size and layout (a wrong size is a bug: checked).
+  void set_state(const std::vector<double>& state);
   /// Image sum of parameter k's derivative (its hidden mean channel) and its standard error.
   ImageSum derivative_sum(int k) const;
 

@@ -63,6 +63,14 @@ struct RenderOptions {
   uint64_t seed = 0;     ///< PCG32 seed; results are bit-identical for any thread count
   int threads = 0;       ///< 0 = all cores
   bool progress = true;  ///< progress bar on stderr (runs > 1 s)
+  /// A run split into `parts` parts, one per process (qsil/integrators/distributed.h): this run is
+  /// part `part` (0 <= part < parts). It renders every sample of the range, but only for the pixels
+  /// of its part (Film::part_of: pixel index mod parts), and the part-th of `parts` contiguous
+  /// shares of the primary boundary term's chunks, whose splats it returns in RenderResult::splats
+  /// instead of adding them to its film. Combining parts 0, 1, ..., parts - 1 in order (merge_part)
+  /// gives the whole run's result bit for bit. parts = 1: the whole run.
+  int part = 0;
+  int parts = 1;
 };
 
 /// What a run produced and what it cost (set-up excluded: Estimator::setup()).
@@ -76,6 +84,9 @@ struct RenderResult {
   double boundary_seconds = 0;   ///< wall time attributed to the boundary term (thread-time share)
   uint64_t traversals = 0;       ///< boundary-term samples drawn (secondary and primary)
   uint64_t zero_traversals = 0;  ///< ...that contributed nothing
+  /// Part runs (RenderOptions::parts > 1) only: the primary boundary term's splats of this part's
+  /// chunks, in the order the whole run adds them to its film; they are not in `film`.
+  std::vector<FilmSplat> splats;
 
   /// Adds the film and the counters of a run over a disjoint sample range of the same estimator
   /// (first_sample becomes the smaller one). Throws nothing; films must have the same layout.
@@ -112,8 +123,9 @@ class Estimator {
   Estimator& operator=(Estimator&&) noexcept;
 
   /// Renders samples [options.first_sample, options.first_sample + spp) of every pixel (spp =
-  /// options.spp, or the scene's sample_count when it is <= 0). Throws qsil::Error when the range
-  /// is empty or starts below 0.
+  /// options.spp, or the scene's sample_count when it is <= 0), or of its part options.part of
+  /// options.parts. Throws qsil::Error when the range is empty or starts below 0, or the part is
+  /// not 0 <= part < parts.
   RenderResult run(const RenderOptions& options) const;
 
   /// The channel layout of every film this estimator renders (K = params.size()).
