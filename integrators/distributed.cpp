@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <string>
+#include <thread>
 #include <vector>
 
 #ifdef QSIL_HAVE_MPI
@@ -117,6 +118,18 @@ void send_result(const RenderResult& r, int dest) {
     MPI_Send(state.data() + i, int(std::min(kPiece, state.size() - i)), MPI_DOUBLE, dest, kTagFilm, MPI_COMM_WORLD);
 }
 
+/// Waits for `request` without spinning a core: Open MPI's blocking calls poll, which on a
+/// machine whose cores are all busy (oversubscribed ranks, other jobs) takes a core from the ranks
+/// still rendering. For small messages only: a sleeping process does not advance a transfer.
+void wait_politely(MPI_Request& request) {
+  int done = 0;
+  for (int i = 0;; ++i) {
+    MPI_Test(&request, &done, MPI_STATUS_IGNORE);
+    if (done) return;
+    std::this_thread::sleep_for(std::chrono::microseconds(i < 100 ? 10 : 1000));
+  }
+}
+
 /// Receives what send_result sent from rank `source`.
 RenderResult receive_result(int source) {
   uint64_t counters[9];
@@ -166,7 +179,10 @@ void ProcessGroup::agree(const std::string& local_error, int local_code) const {
   // The lowest failing rank (size_ when none failed) ...
   const int mine = local_error.empty() ? size_ : rank_;
   int first = size_;
-  MPI_Allreduce(&mine, &first, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
+  // Ranks that finish a step early (a render) wait here for the others: politely.
+  MPI_Request request;
+  MPI_Iallreduce(&mine, &first, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD, &request);
+  wait_politely(request);
   if (first == size_) return;
   // ... tells every rank its message and exit code.
   int header[2] = {int(local_error.size()), local_code};
