@@ -91,8 +91,8 @@ def reference(qsil, xml, params, res, method, spp, seed, path, steps=None, threa
     """Renders a `qsil reference`; returns (seconds, relative noise floor)."""
     cmd = [qsil, "reference", xml, "-D", f"res={res}", *sum((["--param", p] for p in params), []),
            "--method", method, "--spp", str(spp), "--seed", str(seed), "--threads", str(threads), "-q", "-o", path]
-    if steps:
-        cmd += ["--h", *[f"{h:.9g}" for h in steps]]
+    for h in steps or []:
+        cmd += ["--h", f"{h:.9g}"]
     _, out, seconds = run(cmd)
     m = re.search(r"= ([0-9.eE+-]+) x mean\(ref\^2\)", out)
     return seconds, float(m.group(1)) if m else float("nan")
