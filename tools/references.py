@@ -140,6 +140,7 @@ def main():
     ap.add_argument("--res", type=int, default=256)
     ap.add_argument("--seconds", type=float, default=600, help="time of each reference render")
     ap.add_argument("--study-spp", type=int, default=32, help="spp of each step-study render")
+    ap.add_argument("--spp", type=int, default=0, help="spp of the reference (instead of filling --seconds)")
     ap.add_argument("--check-spp", type=int, default=4096, help="spp of the 64x64 independence check (each method)")
     ap.add_argument("--scenes", default=",".join(SCENES))
     ap.add_argument("--params", default="k1", choices=["k1", "k8"])
@@ -156,13 +157,14 @@ def main():
         params = param_set(scene, args.params)
         name = f"{scene}-{args.params}-{args.res}"
         key = {"scene_sha256": scene_digest(xml), "params": params, "res": args.res, "seconds": args.seconds,
+               "spp": args.spp,
                "study_spp": args.study_spp, "check_spp": args.check_spp}
         old = index.get(name)
         if old and not args.force and old.get("key") == key and os.path.exists(os.path.join(ROOT, old["file"])):
             print(f"references: {name}: cached ({old['file']}, {old['spp']} spp)")
             continue
         study = step_study(qsil, xml, params, args.res, args.study_spp, name)
-        spp = max(args.study_spp, int(args.seconds / study["seconds_per_spp"]))
+        spp = args.spp or max(args.study_spp, int(args.seconds / study["seconds_per_spp"]))
         path = os.path.join(OUT, name + ".exr")
         seconds, floor = reference(qsil, xml, params, args.res, "fd", spp, 7, path, study["steps"])
         qa = os.path.join(OUT, f"{name}-check-quadric.exr")

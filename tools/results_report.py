@@ -47,19 +47,35 @@ def cpu_model():
 
 
 def compare(args, scene, kset, res, budgets, entry):
-    """Runs `qsil compare` for one scene and parameter set against its reference; returns results.json."""
+    """Runs `qsil compare` for one scene and parameter set against its reference; returns results.json.
+    With --reuse, an earlier run's results.json against the same reference file and budgets is kept."""
     xml = os.path.join("scenes", scene + ".xml")
     name = f"{scene}-{kset}"
     d = os.path.join("out", "results", name)
+    done = os.path.join(ROOT, d, "results.json")
+    if args.reuse and os.path.exists(done):
+        old = json.load(open(done))
+        if old["reference"]["path"] == entry["file"] and old["targets"] == [float(b) for b in budgets.split(",")]:
+            print(f"results_report: {name}: reusing {d}/results.json", flush=True)
+            if not os.path.exists(os.path.join(ROOT, d, "grid.png")):
+                run([sys.executable, os.path.join("tools", "plot_compare.py"), d])
+            copy_charts(d, name)
+            return old
     cmd = [args.qsil, "compare", xml, "-D", f"res={res}", *sum((["--param", p] for p in entry["params"]), []),
            "--threads", str(args.threads), "--methods", ",".join(METHODS), "--budgets", budgets,
            "--reference", entry["file"], "-q", "--out", d]
+    os.environ.setdefault("QSIL_PYTHON", sys.executable)  # compare draws its charts with this python
     run(cmd)
+    copy_charts(d, name)
+    return json.load(open(os.path.join(ROOT, d, "results.json")))
+
+
+def copy_charts(d, name):
+    """Copies a comparison's charts and data into docs/images/compare/NAME/."""
     dst = os.path.join(ROOT, "docs", "images", "compare", name)
     os.makedirs(dst, exist_ok=True)
     for f in ("error_vs_time.png", "grid.png", "results.csv", "results.json"):
         shutil.copy(os.path.join(ROOT, d, f), os.path.join(dst, f))
-    return json.load(open(os.path.join(ROOT, d, "results.json")))
 
 
 def reference_text(entry, res_json):
@@ -82,6 +98,36 @@ def reference_text(entry, res_json):
             f"({qc['stats']}).")
 
 
+def targets_text(results):
+    """The efficiency targets (quadric against FD, vsphere and uniform at the largest budget, the
+    references' floors subtracted) and why finite differences win where they do."""
+    lines = ["## Targets", "",
+             "Ratios of relative MSE at the largest budget with the reference's floor subtracted (the "
+             "methods' own error); equal time, so a ratio is an efficiency ratio.", "",
+             "| scene | k | FD / quadric | vsphere / quadric | uniform / quadric | target |", "|---|---|---|---|---|---|"]
+    for (scene, kset), (entry, res) in results.items():
+        last = max(res["targets"])
+        floor = entry["rel_noise_floor"]
+        own = {r["method"]: max(r["rel_mse"] - floor, 1e-12) for r in res["rows"]
+               if r["target"] == last and r["rel_mse"] is not None}
+        q = own.get("quadric")
+        if not q:
+            continue
+        k = len(entry["params"])
+        f = lambda m: f"{own[m] / q:.3g}" if m in own else "–"
+        goal = "FD / quadric ≥ 1 (≥ 0.5 on shadow-quad)" if k == 1 else "FD / quadric ≥ 5"
+        lines.append(f"| {scene} | {k} | {f('fd')} | {f('vsphere')} | {f('uniform')} | {goal}; vsphere ≥ 10 with secondary silhouettes; uniform ≥ 1 |")
+    lines += ["", "Where FD / quadric is below its target, finite differences are the more efficient estimator "
+              "today. Why, measured: the boundary term takes 80–90 % of `grad`'s time (node importance: the box's "
+              "silhouette polygon, its LTC integral and clipping, and the rejection tests; Embree is under 10 %), "
+              "`grad` costs about 9× `render` per sample, and its per-pixel samples are heavy-tailed (a pixel's "
+              "edge sample is rare and large), while FD with common random numbers subtracts two almost equal "
+              "renders: soft shadows, glossy reflections and diffuse shading are smooth in θ, so its noise is "
+              "small. FD's weaknesses are elsewhere: it needs 2k renders for k parameters, and a step per scene "
+              "(O(h²) bias; `docs/gradient-checks.md`).", ""]
+    return lines
+
+
 def main():
     """Runs the comparisons and writes docs/results.md."""
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -92,6 +138,8 @@ def main():
     ap.add_argument("--k8-res", type=int, default=128)
     ap.add_argument("--k8-scenes", default="spot-mirror,shadow-quad,direct")
     ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--reuse", action="store_true",
+                    help="keep earlier comparisons against the same reference and budgets (out/results/)")
     args = ap.parse_args()
     args.qsil = os.path.abspath(args.qsil)
     index_path = os.path.join(ROOT, "out", "references", "index.json")
@@ -131,10 +179,11 @@ def main():
         cells = [f"{rel[m]['rel_mse']:.3g} ({rel[m]['spp']} spp)" if m in rel and rel[m]["rel_mse"] is not None
                  else "–" for m in METHODS]
         q = rel.get("quadric", {}).get("rel_mse")
-        ratio = lambda m: f"{rel[m]['rel_mse'] / q:.2f}" if q and m in rel and rel[m]["rel_mse"] is not None else "–"
+        ratio = lambda m: f"{rel[m]['rel_mse'] / q:.3g}" if q and m in rel and rel[m]["rel_mse"] is not None else "–"
         lines.append(f"| {scene} | {len(entry['params'])} | " + " | ".join(cells) +
                      f" | {ratio('fd')} | {ratio('vsphere')} | {ratio('uniform')} | {entry['rel_noise_floor']:.3g} |")
     lines.append("")
+    lines += targets_text(results)
     for (scene, kset), (entry, res) in results.items():
         name = f"{scene}-{kset}"
         params = ", ".join(f"`{p}`" for p in entry["params"])
