@@ -119,8 +119,8 @@ def targets_text(results):
         lines.append(f"| {scene} | {k} | {f('fd')} | {f('vsphere')} | {f('uniform')} | {goal}; vsphere ≥ 10 with secondary silhouettes; uniform ≥ 1 |")
     lines += ["", "Where FD / quadric is below its target, finite differences are the more efficient estimator "
               "today. Why, measured: the boundary term takes 80–90 % of `grad`'s time (node importance: the box's "
-              "silhouette polygon, its LTC integral and clipping, and the rejection tests; Embree is under 10 %), "
-              "`grad` costs about 9× `render` per sample, and its per-pixel samples are heavy-tailed (a pixel's "
+              "silhouette polygon, its LTC integral and clipping, and the rejection tests; Embree takes 7–11 %), "
+              "`grad` costs 11–26× `render` per sample (tools/bench/grad_cost.py), and its per-pixel samples are heavy-tailed (a pixel's "
               "edge sample is rare and large), while FD with common random numbers subtracts two almost equal "
               "renders: soft shadows, glossy reflections and diffuse shading are smooth in θ, so its noise is "
               "small. FD's weaknesses are elsewhere: it needs 2k renders for k parameters, and a step per scene "
