@@ -1,6 +1,7 @@
 // The `qsil` program as a user meets it: exit codes and one-line errors for bad input, no partial
 // output files, deterministic images across thread counts. Runs the built binary.
 #include "qsil/image.h"
+#include "shell_run.h"
 
 #include <gtest/gtest.h>
 
@@ -14,37 +15,11 @@
 
 namespace {
 
-struct CliRun {
-  int code = -1;
-  std::string err;  ///< stderr
-  std::string out;  ///< stdout
-};
+using CliRun = qsil::testing::ShellRun;
 
-/// Runs `qsil ARGS` from the repository root (QSIL_SOURCE_DIR, whatever ctest's working
-/// directory), capturing stdout and stderr.
+/// Runs `qsil ARGS` from the repository root, capturing stdout and stderr.
 CliRun run_qsil(const std::string& args) {
-  const auto dir = std::filesystem::temp_directory_path();
-  // Per-process names: ctest runs tests of this file in parallel processes.
-  const std::string id = std::to_string(::getpid());
-  const auto err = dir / ("qsil_cli_test" + id + ".err"), out = dir / ("qsil_cli_test" + id + ".out");
-  const std::string cmd = "cd '" + std::string(QSIL_SOURCE_DIR) + "' && " + std::string(QSIL_CLI_PATH) + " " + args +
-                          " >" + out.string() + " 2>" + err.string();
-  const int status = std::system(cmd.c_str());
-  CliRun r;
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  auto slurp = [](const std::filesystem::path& p) {
-    std::string s;
-    if (FILE* f = std::fopen(p.c_str(), "r")) {
-      std::array<char, 4096> buf;
-      size_t n;
-      while ((n = std::fread(buf.data(), 1, buf.size(), f)) > 0) s.append(buf.data(), n);
-      std::fclose(f);
-    }
-    return s;
-  };
-  r.err = slurp(err);
-  r.out = slurp(out);
-  return r;
+  return qsil::testing::run_shell(std::string(QSIL_CLI_PATH) + " " + args, "qsil_cli_test");
 }
 
 std::string tmp(const std::string& name) {

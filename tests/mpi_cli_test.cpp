@@ -4,6 +4,7 @@
 // threads; a rank with bad input, a killed rank and a failed write end the job with one line on
 // stderr, a non-zero exit code and no output file.
 #include "qsil/image.h"
+#include "shell_run.h"
 
 #include <gtest/gtest.h>
 
@@ -20,39 +21,10 @@
 
 namespace {
 
-struct ShellRun {
-  int code = -1;
-  std::string err;  ///< stderr
-  std::string out;  ///< stdout
-  double seconds = 0;
-};
+using qsil::testing::ShellRun;
 
 /// Runs the shell command `cmd` from the repository root, capturing stdout and stderr.
-ShellRun run_shell(const std::string& cmd) {
-  const auto dir = std::filesystem::temp_directory_path();
-  const std::string id = std::to_string(::getpid());
-  const auto err = dir / ("qsil_mpi_test" + id + ".err"), out = dir / ("qsil_mpi_test" + id + ".out");
-  const std::string full =
-      "cd '" + std::string(QSIL_SOURCE_DIR) + "' && " + cmd + " >" + out.string() + " 2>" + err.string();
-  const auto t0 = std::chrono::steady_clock::now();
-  const int status = std::system(full.c_str());
-  ShellRun r;
-  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  auto slurp = [](const std::filesystem::path& p) {
-    std::string s;
-    if (FILE* f = std::fopen(p.c_str(), "r")) {
-      std::array<char, 4096> buf;
-      size_t n;
-      while ((n = std::fread(buf.data(), 1, buf.size(), f)) > 0) s.append(buf.data(), n);
-      std::fclose(f);
-    }
-    return s;
-  };
-  r.err = slurp(err);
-  r.out = slurp(out);
-  return r;
-}
+ShellRun run_shell(const std::string& cmd) { return qsil::testing::run_shell(cmd, "qsil_mpi_test"); }
 
 /// `mpirun -np RANKS` of the shell words `command` (root allowed: CI runs as root; no single-copy
 /// shared memory, which containers may forbid; -q: mpirun's own reports off, so that stderr holds
