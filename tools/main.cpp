@@ -80,10 +80,14 @@ int main(int argc, char** argv) {
       return run();
     }
   } catch (const qsil::GroupError& e) {  // every rank has it: rank 0 reports
+    // The job's outcome is said: when another rank exits first and the launcher ends this one
+    // with SIGTERM, on_terminate must not add a second line.
+    std::signal(SIGTERM, SIG_DFL);
     if (group->root()) std::cerr << "qsil: " << e.what() << "\n";
     return e.exit_code();
   } catch (const qsil::Error& e) {
     // Outside a collective step: this rank alone failed, and the others may be waiting for it.
+    std::signal(SIGTERM, SIG_DFL);
     std::cerr << "qsil: " << (group->size() > 1 ? "rank " + std::to_string(group->rank()) + ": " : "") << e.what()
               << "\n";
     if (group->size() > 1) group->abort(2);
