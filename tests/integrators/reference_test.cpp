@@ -1,6 +1,7 @@
 // qsil::agreement (qsil/integrators/reference.h), the test behind `qsil agree` and the step study
 // of tools/references.py, on synthetic references with known truth and Gaussian noise of known
-// standard error: independent references agree, a 3 % scale error or a differing exact block is
+// standard error: independent references agree, a 3 % scale error, a local bias that cancels in the
+// image sum or a differing exact block is
 // refused. Fixed seeds; the agreeing case has chi^2/dof ~ 1 +- 0.1 against a limit of 1.76 (a
 // false refusal has probability < 1e-9), the biased one chi^2/dof ~ 3.9.
 #include "qsil/integrators/reference.h"
@@ -57,6 +58,21 @@ TEST(Agreement, ScaleErrorOfThreePercentIsRefused) {
   const Agreement g = agreement(synthetic(1, 1.0), synthetic(2, 1.03), 8);
   EXPECT_GT(g.chi2_per_dof, g.chi2_limit());
   EXPECT_GT(std::abs(g.sum_z[0]), 3);
+  EXPECT_FALSE(g.agrees());
+}
+
+// A bias that cancels in the image sum (+0.1 on the left half, -0.1 on the right): only the block
+// tests can see it (block z ~ 0.1 * 64 / 1.13 = 5.7 on every block, chi^2/dof ~ 33).
+TEST(Agreement, LocalBiasWithUnchangedImageSumIsRefused) {
+  Reference b = synthetic(2, 1.0);
+  for (int c = 0; c < 3; ++c)
+    for (int y = 0; y < kSize; ++y)
+      for (int x = 0; x < kSize; ++x)
+        if (!(x < 8 && y < 8)) b.image.at(2 * c, x, y) += x < kSize / 2 ? 0.1f : -0.1f;
+  summarize_reference(b);
+  const Agreement g = agreement(synthetic(1, 1.0), b, 8);
+  EXPECT_LT(std::abs(g.sum_z[0]), 3);
+  EXPECT_GT(g.chi2_per_dof, g.chi2_limit());
   EXPECT_FALSE(g.agrees());
 }
 
