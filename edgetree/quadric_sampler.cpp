@@ -15,4 +15,9 @@ SilhouetteSample QuadricEdgeSampler::sample(const SilhouetteQuery& query, const 
   return sample_silhouette(forest_, query, next, method_);
 }
 
+void QuadricEdgeSampler::sample_set(const SilhouetteQuery& query, const std::function<double()>& next,
+                                    SilhouetteSampleSet& out) const {
+  sample_silhouette_set(forest_, query, next, method_, out);
+}
+
 }  // namespace qsil::edgetree

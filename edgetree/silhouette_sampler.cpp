@@ -163,34 +163,121 @@ NodeWeight node_weight(const ForestNode& node, const SilhouetteQuery& q) {
   return w;
 }
 
-SilhouetteSample sample_silhouette(const EdgeForest& forest, const SilhouetteQuery& query,
-                                   const std::function<double()>& next, Method method) {
-  QSIL_DCHECK(uses_edge_forest(method));
-  SilhouetteSample s;
-  thread_local std::vector<Candidate> top;
-  const int n_top = top_candidates(forest, query, method, top, s.rejection_tests);
-  if (n_top == 0) return s;
-  thread_local std::vector<double> prob;
-  prob.resize(size_t(n_top));
-  choice_probabilities(top, n_top, prob.data());
-  int i = choose(prob.data(), n_top, next());
-  double pmf = prob[size_t(i)];
-  Candidate cur = top[size_t(i)];
+namespace {
+
+/// The top level of a traversal: candidates and their probabilities (thread-local storage).
+struct TopLevel {
+  std::vector<Candidate> cand;
+  std::vector<double> prob;
+  int n = 0;
+  int tests = 0;
+};
+
+void top_level(const EdgeForest& forest, const SilhouetteQuery& query, Method method, TopLevel& top) {
+  top.tests = 0;
+  top.n = top_candidates(forest, query, method, top.cand, top.tests);
+  top.prob.resize(size_t(std::max(top.n, 1)));
+  if (top.n > 0) choice_probabilities(top.cand, top.n, top.prob.data());
+}
+
+/// Indices (into top.cand) of the split edges: loose edges with probability >= kSplitShare, the
+/// kMaxSplitEdges most probable (ties: the first). Returns their count.
+int split_indices(const TopLevel& top, std::array<int, kMaxSplitEdges>& idx) {
+  int k = 0;
+  for (int i = 0; i < top.n; ++i) {
+    if (!top.cand[size_t(i)].edge || !(top.prob[size_t(i)] >= kSplitShare)) continue;
+    if (k < kMaxSplitEdges) {
+      idx[size_t(k++)] = i;
+    } else {  // replace the least probable when i is more probable
+      int worst = 0;
+      for (int j = 1; j < k; ++j)
+        if (top.prob[size_t(idx[size_t(j)])] < top.prob[size_t(idx[size_t(worst)])]) worst = j;
+      if (top.prob[size_t(i)] > top.prob[size_t(idx[size_t(worst)])]) idx[size_t(worst)] = i;
+    }
+  }
+  return k;
+}
+
+/// From the top-level candidate `cur` (chosen with probability pmf) down to an edge and a point.
+SilhouetteSample descend(const EdgeForest& forest, const SilhouetteQuery& query, const std::function<double()>& next,
+                         Method method, Candidate cur, double pmf, int tests) {
   std::array<Candidate, 4> cand;
   std::array<double, 4> p4;
   // ---- Descend: inner nodes choose among accepted children, leaves among silhouette edges.
   while (!cur.edge) {
     const ForestNode& node = forest.node(cur.node);
     const int k = node.is_leaf() ? leaf_candidates(forest, cur.node, query, cand)
-                                 : child_candidates(forest, cur.node, query, method, cand, s.rejection_tests);
-    if (k == 0) return s;  // a false accept: no silhouette below (a zero-contribution traversal)
+                                 : child_candidates(forest, cur.node, query, method, cand, tests);
+    if (k == 0) {  // a false accept: no silhouette below (a zero-contribution traversal)
+      SilhouetteSample none;
+      none.rejection_tests = tests;
+      return none;
+    }
     choice_probabilities(cand, k, p4.data());
-    i = choose(p4.data(), k, next());
+    const int i = choose(p4.data(), k, next());
     pmf *= p4[size_t(i)];
     cur = cand[size_t(i)];
   }
   // ---- The point on the edge.
-  return sample_on_edge(*cur.edge, pmf, query, next(), s.rejection_tests);
+  return sample_on_edge(*cur.edge, pmf, query, next(), tests);
+}
+
+}  // namespace
+
+SilhouetteSample sample_silhouette(const EdgeForest& forest, const SilhouetteQuery& query,
+                                   const std::function<double()>& next, Method method) {
+  QSIL_DCHECK(uses_edge_forest(method));
+  thread_local TopLevel top;
+  top_level(forest, query, method, top);
+  SilhouetteSample s;
+  s.rejection_tests = top.tests;
+  if (top.n == 0) return s;
+  const int i = choose(top.prob.data(), top.n, next());
+  if (i < 0) return s;
+  return descend(forest, query, next, method, top.cand[size_t(i)], top.prob[size_t(i)], top.tests);
+}
+
+void sample_silhouette_set(const EdgeForest& forest, const SilhouetteQuery& query, const std::function<double()>& next,
+                           Method method, SilhouetteSampleSet& out) {
+  QSIL_DCHECK(uses_edge_forest(method));
+  out.count = 0;
+  thread_local TopLevel top;
+  top_level(forest, query, method, top);
+  if (top.n == 0) return;
+  std::array<int, kMaxSplitEdges> idx;
+  const int n_split = split_indices(top, idx);
+  for (int j = 0; j < n_split; ++j) {
+    const int i = idx[size_t(j)];
+    const SilhouetteSample s = sample_on_edge(*top.cand[size_t(i)].edge, 1.0, query, next(), 0);
+    if (s.edge) out.push(s);
+    top.prob[size_t(i)] = 0;
+  }
+  // The traversal chooses among the rest, its probabilities renormalised to sum to what they did.
+  double rest = 0;
+  for (int i = 0; i < top.n; ++i) rest += top.prob[size_t(i)];
+  if (!(rest > 0)) return;
+  if (n_split > 0)
+    for (int i = 0; i < top.n; ++i) top.prob[size_t(i)] /= rest;
+  const int i = choose(top.prob.data(), top.n, next());
+  if (i < 0) return;
+  const SilhouetteSample s = descend(forest, query, next, method, top.cand[size_t(i)], top.prob[size_t(i)], top.tests);
+  if (s.edge) out.push(s);
+}
+
+std::vector<const ForestEdge*> split_edges(const EdgeForest& forest, const SilhouetteQuery& query, Method method,
+                                           double* split_probability) {
+  TopLevel top;
+  top_level(forest, query, method, top);
+  std::array<int, kMaxSplitEdges> idx;
+  const int n_split = top.n > 0 ? split_indices(top, idx) : 0;
+  std::vector<const ForestEdge*> out;
+  double sum = 0;
+  for (int j = 0; j < n_split; ++j) {
+    out.push_back(top.cand[size_t(idx[size_t(j)])].edge);
+    sum += top.prob[size_t(idx[size_t(j)])];
+  }
+  if (split_probability) *split_probability = sum;
+  return out;
 }
 
 SilhouetteSample sample_on_edge(const ForestEdge& e, double pmf, const SilhouetteQuery& query, double u,

@@ -138,7 +138,7 @@ struct Estimate {
 };
 
 /// The boundary estimator of `method` at p (normal +z, viewed from above) with dp/dtheta = dp,
-/// n samples, fixed seed.
+/// n traversals (EdgeSampler::sample_set, as the renderer: split edges included), fixed seed.
 inline Estimate boundary_estimate(const Scene& scene, Method method, const std::string& param, const Vec3& p,
                                   const Vec3& dp, int n) {
   const std::vector<ParameterSpec> params{parse_parameter(param, scene)};
@@ -167,14 +167,16 @@ inline Estimate boundary_estimate(const Scene& scene, Method method, const std::
   double sum = 0, sum2 = 0;
   for (int i = 0; i < n; ++i) {
     double v = 0;
-    const auto s = edge_sampler->sample(q, [&] { return sampler.next(); });
-    if (s.edge && s.pdf > 0) {
+    edgetree::SilhouetteSampleSet set;
+    edge_sampler->sample_set(q, [&] { return sampler.next(); }, set);
+    for (int k = 0; k < set.count; ++k) {
+      const edgetree::SilhouetteSample& s = set.samples[size_t(k)];
       const Vec3 w = (s.edge->p0 + s.t * (s.edge->p1 - s.edge->p0) - p).normalized();
       const Color f = bsdf_eval<double>(scene.bsdfs[0], q.frame.to_local(w), wo_local);
       Color jump;
       Eigen::Matrix<double, 1, 1> J;
       if (edge_jump<1>(ctx, vel, *s.edge, s.t, p, p + Vec3(0, 0, 1e-6), false, dpm, 1, sampler, stats, jump, J))
-        v = f[0] * jump[0] * J[0] / s.pdf;
+        v += f[0] * jump[0] * J[0] / s.pdf;
     }
     sum += v;
     sum2 += v * v;

@@ -10,6 +10,8 @@
 /// the query point and eligible (SilhouetteQuery::eligible), the probability of returning it must
 /// be > 0, and so must the density of every t on it; `pdf` is the product of the discrete
 /// probability and the density of t. Returning no edge is allowed (a zero-contribution sample).
+/// sample_set() may return several points (splitting); the same contract holds for each edge
+/// under the strategy that covers it.
 
 #include "qsil/edgetree/silhouette_sampler.h"
 #include "qsil/method.h"
@@ -31,6 +33,17 @@ class EdgeSampler {
   virtual ~EdgeSampler() = default;
   /// One edge point for the query; `next` returns fresh uniform numbers in [0, 1).
   virtual SilhouetteSample sample(const SilhouetteQuery& query, const std::function<double()>& next) const = 0;
+  /// The edge points the renderer evaluates for the query: the boundary term there is estimated by
+  /// the sum over `out` of integrand / pdf (each eligible discontinuity edge covered by exactly one
+  /// of the set's strategies, with positive probability). Default: sample() alone (an empty set
+  /// when it finds no edge); the edge forest splits bright loose edges off
+  /// (sample_silhouette_set).
+  virtual void sample_set(const SilhouetteQuery& query, const std::function<double()>& next,
+                          SilhouetteSampleSet& out) const {
+    out.count = 0;
+    const SilhouetteSample s = sample(query, next);
+    if (s.edge) out.push(s);
+  }
   /// The `--boundary` method it implements.
   virtual Method method() const = 0;
 };

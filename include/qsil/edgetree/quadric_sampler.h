@@ -17,6 +17,9 @@ class QuadricEdgeSampler final : public EdgeSampler {
   /// need not (the box test uses nothing of the quadric).
   QuadricEdgeSampler(const EdgeForest& forest, Method method);
   SilhouetteSample sample(const SilhouetteQuery& query, const std::function<double()>& next) const override;
+  /// sample_silhouette_set: splits bright loose always-candidate edges off the traversal.
+  void sample_set(const SilhouetteQuery& query, const std::function<double()>& next,
+                  SilhouetteSampleSet& out) const override;
   Method method() const override { return method_; }
 
  private:

@@ -3,7 +3,8 @@
 /// The boundary term at a path vertex [QSS Eq. 3, Appendix A; docs/architecture.md §4-§5 "Evaluation"]:
 ///   sum over discontinuity edges of  integral_0^1 dL_i(w(t)) f_s(w(t), wo) J(t) dt,
 ///   J(t) = det(w0, w1, v_t) / |w_t|^3,  v_t = d(edge point)/dtheta - dp/dtheta,
-/// estimated with one sampled edge point per vertex (sample_silhouette). The velocity is
+/// estimated with the edge points of one traversal per vertex (EdgeSampler::sample_set: the
+/// traversal's point, and for the edge forest the split bright loose edges'). The velocity is
 /// relative to the shading point p, which moves when it lies on a moving shape or an earlier
 /// vertex of its path moved (p carries that derivative as a dual): then the edges of static
 /// shapes (occluders, a mirror's outline, a light's outline) contribute too, so every shape's
@@ -182,26 +183,29 @@ struct BoundaryHook {
     q.velocity_scale = bctx->velocity_scale;
     const Color T = value(beta);
     const Vec3 wo_world = q.frame.to_world(wo_local);
+    edgetree::SilhouetteSampleSet set;
     for (int sample = 0; sample < bctx->samples_per_vertex; ++sample) {
       ++stats.boundary_traversals;
-      const edgetree::SilhouetteSample s = bctx->sampler->sample(q, [this] { return sampler->next(); });
-      if (!s.edge || !(s.pdf > 0)) {
-        ++stats.boundary_zero;
-        continue;
+      bctx->sampler->sample_set(q, [this] { return sampler->next(); }, set);
+      // Counted per traversal: zero when none of its edge points contributed.
+      bool contributed = false;
+      for (int k = 0; k < set.count; ++k) {
+        const edgetree::SilhouetteSample& s = set.samples[size_t(k)];
+        if (!(s.pdf > 0)) continue;
+        const Vec3 w = (s.edge->p0 + s.t * (s.edge->p1 - s.edge->p0) - q.p).normalized();
+        const Color f = bsdf_eval<double>(*sp.bsdf, q.frame.to_local(w), wo_local);
+        Color jump;
+        Eigen::Matrix<double, 1, N> J;
+        if ((f == 0).all() ||
+            !edge_jump<N>(*ctx, *bctx->velocities, *s.edge, s.t, q.p, spawn_origin(si, w),
+                          leaves_below(si, wo_world, w), dp, seg, *sampler, stats, jump, J) ||
+            (jump == 0).all())
+          continue;
+        contributed = true;
+        const Color weight = T * f * jump / (s.pdf * bctx->samples_per_vertex);
+        for (int c = 0; c < 3; ++c) L[c] += Dual<N>(0.0, (weight[c] * J).transpose());
       }
-      const Vec3 w = (s.edge->p0 + s.t * (s.edge->p1 - s.edge->p0) - q.p).normalized();
-      const Color f = bsdf_eval<double>(*sp.bsdf, q.frame.to_local(w), wo_local);
-      Color jump;
-      Eigen::Matrix<double, 1, N> J;
-      if ((f == 0).all() ||
-          !edge_jump<N>(*ctx, *bctx->velocities, *s.edge, s.t, q.p, spawn_origin(si, w), leaves_below(si, wo_world, w),
-                        dp, seg, *sampler, stats, jump, J) ||
-          (jump == 0).all()) {
-        ++stats.boundary_zero;
-        continue;
-      }
-      const Color weight = T * f * jump / (s.pdf * bctx->samples_per_vertex);
-      for (int c = 0; c < 3; ++c) L[c] += Dual<N>(0.0, (weight[c] * J).transpose());
+      stats.boundary_zero += !contributed;
     }
     stats.boundary_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }

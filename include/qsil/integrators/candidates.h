@@ -16,6 +16,9 @@
 /// - non-silhouette mass: the total probability of candidates that are not silhouettes;
 /// - dead-end mass: 1 - total candidate probability (traversals that end with every child
 ///   rejected); both are zero-contribution samples.
+/// Probabilities are those of one traversal without splitting (sample_silhouette): the renderer
+/// additionally splits bright loose edges off (silhouette_sampler.h), which the query here (no
+/// lights, no emission) rarely triggers; a split edge is covered with probability 1.
 /// Outputs (write_candidates): DIR/<method>-camera.png (scene camera) and <method>-overview.png
 /// (overview_camera): the meshes' wireframe in grey, non-silhouette candidates green, silhouette
 /// candidates red, the shading point black with its normal; DIR/<method>-edges.obj (the

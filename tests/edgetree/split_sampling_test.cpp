@@ -1,0 +1,176 @@
+/// @file split_sampling_test.cpp
+/// Splitting in the edge forest's traversal (sample_silhouette_set, silhouette_sampler.h) on a
+/// forest of spot and an emitting open square sheet (radiance 40: its outline is loose
+/// always-candidate and bright), for shading points around spot with diffuse or GGX LTCs:
+/// - the split set is exactly the loose edges whose top-level probability (sample_silhouette's,
+///   silhouette_edge_probability) is >= kSplitShare, at most kMaxSplitEdges of them;
+/// - every set holds one point of each split edge (pdf = the split edge's density of t alone)
+///   and at most one traversal sample, of a non-split edge;
+/// - the traversal's choices: chi-square against silhouette_edge_probability / (1 - the split
+///   probability) for every non-split silhouette edge plus a "no edge" bin, 1 % family
+///   significance (Šidák), 40000 traversals per query; its pdf = that probability × the edge's
+///   density of t (relative 1e-9).
+/// The test has power only if some queries split: it requires at least 3 of the queries to.
+/// Fixed seeds.
+
+#include "baselines/baseline_test_util.h"
+#include "chi2.h"
+#include "edgetree/edge_mixture.h"
+#include "qsil/edgetree/edge_forest.h"
+#include "qsil/edgetree/ltc.h"
+#include "qsil/edgetree/quadric_sampler.h"
+#include "qsil/edgetree/silhouette_sampler.h"
+#include "qsil/rng.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <map>
+#include <memory>
+#include <random>
+
+namespace qsil::edgetree {
+namespace {
+
+using namespace qsil::baselines_test;
+using namespace qsil::test;
+
+struct World {
+  std::vector<TriangleMesh> meshes;
+  EdgeForest forest;
+  std::vector<double> emission{0.0, 40.0};
+  std::vector<bool> eligible{true, true};
+};
+
+std::unique_ptr<World> make_world() {
+  auto w = std::make_unique<World>();
+  w->meshes.push_back(test_mesh("spot.obj"));
+  TriangleMesh sheet;  // above spot, facing down: a light's outline
+  sheet.positions = {{-0.4, 1.2, -0.4}, {0.4, 1.2, -0.4}, {0.4, 1.2, 0.4}, {-0.4, 1.2, 0.4}};
+  sheet.triangles = {{0, 1, 2}, {0, 2, 3}};
+  w->meshes.push_back(sheet);
+  std::vector<ForestShapeInput> in;
+  for (size_t i = 0; i < w->meshes.size(); ++i) in.push_back({&w->meshes[i], int(i)});
+  w->forest = EdgeForest::build(in);
+  return w;
+}
+
+std::vector<SilhouetteQuery> queries(const World& w, int n, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> g;
+  std::uniform_real_distribution<double> u(0, 1);
+  const std::vector<Vec3> pts = shading_points(w.meshes[0], n, seed);
+  std::vector<SilhouetteQuery> out(pts.size());
+  for (size_t i = 0; i < pts.size(); ++i) {
+    SilhouetteQuery& q = out[i];
+    q.p = pts[i];
+    q.frame = Frame(Vec3(g(rng), g(rng) + 1.5, g(rng)).normalized());  // mostly facing the sheet
+    if (i % 2) {
+      q.ltc = ltc_diffuse();
+      q.ltc.norm = 0.7;
+    } else {
+      q.ltc = ltc_ggx(std::pow(10.0, -1.5 + 1.5 * u(rng)), Vec3(g(rng), g(rng), std::abs(g(rng)) + 0.1).normalized());
+    }
+    q.eligible = &w.eligible;
+    q.emission = &w.emission;
+    q.env_weight = 0.05;
+  }
+  return out;
+}
+
+TEST(SplitSampling, SplitSetIsTheBrightLooseEdges) {
+  const auto w = make_world();
+  const auto qs = queries(*w, 60, 41);
+  int splitting = 0;
+  for (size_t qi = 0; qi < qs.size(); ++qi) {
+    const SilhouetteQuery& q = qs[qi];
+    double sum = 0;
+    const auto split = split_edges(w->forest, q, Method::Quadric, &sum);
+    std::vector<std::pair<double, const ForestEdge*>> want;
+    for (const ForestEdge& e : w->forest.always_edges()) {
+      const double pr = silhouette_edge_probability(w->forest, q, &e, Method::Quadric);
+      if (pr >= kSplitShare) want.push_back({pr, &e});
+    }
+    std::sort(want.rbegin(), want.rend());
+    if (want.size() > size_t(kMaxSplitEdges)) want.resize(size_t(kMaxSplitEdges));
+    double want_sum = 0;
+    for (const auto& x : want) want_sum += x.first;
+    ASSERT_EQ(split.size(), want.size()) << "query " << qi;
+    for (const auto& x : want)
+      EXPECT_NE(std::find(split.begin(), split.end(), x.second), split.end()) << "query " << qi;
+    EXPECT_NEAR(sum, want_sum, 1e-12) << "query " << qi;
+    splitting += !split.empty();
+  }
+  EXPECT_GE(splitting, 3) << "too few queries split: the test has no power";
+}
+
+TEST(SplitSampling, TraversalHistogramMatchesRenormalisedProbabilities) {
+  const auto w = make_world();
+  const auto qs = queries(*w, 24, 42);
+  const QuadricEdgeSampler sampler(w->forest, Method::Quadric);
+  const int n = 40000;
+  std::vector<size_t> tested;
+  for (size_t qi = 0; qi < qs.size(); ++qi)
+    if (!split_edges(w->forest, qs[qi], Method::Quadric).empty()) tested.push_back(qi);
+  ASSERT_GE(tested.size(), 3u) << "too few queries split: the test has no power";
+  if (tested.size() > 6) tested.resize(6);
+  const double alpha = sidak(0.01, int(tested.size()));
+  for (size_t qi : tested) {
+    const SilhouetteQuery& q = qs[qi];
+    double split_sum = 0;
+    const auto split = split_edges(w->forest, q, Method::Quadric, &split_sum);
+    auto is_split = [&](const ForestEdge* e) { return std::find(split.begin(), split.end(), e) != split.end(); };
+    std::map<const ForestEdge*, int> bin;
+    std::vector<double> expected(1, 0.0);  // bin 0: no traversal sample
+    double mass = 0;
+    auto add = [&](const ForestEdge& e) {
+      if (is_split(&e) || !edge_is_silhouette(e, q.p)) return;
+      const double pr = silhouette_edge_probability(w->forest, q, &e, Method::Quadric) / (1.0 - split_sum);
+      if (!(pr > 0)) return;
+      bin[&e] = int(expected.size());
+      expected.push_back(n * pr);
+      mass += pr;
+    };
+    for (const ForestEdge& e : w->forest.edges()) add(e);
+    for (const ForestEdge& e : w->forest.always_edges()) add(e);
+    expected[0] = n * std::max(0.0, 1.0 - mass);
+    std::vector<double> observed(expected.size(), 0.0);
+    Sampler rng(91, qi, 0);
+    int bad_split = 0, bad_pdf = 0, unknown = 0, extra = 0;
+    SilhouetteSampleSet set;
+    for (int i = 0; i < n; ++i) {
+      sampler.sample_set(q, [&] { return rng.next(); }, set);
+      int seen_split = 0, traversal = 0;
+      for (int k = 0; k < set.count; ++k) {
+        const SilhouetteSample& s = set.samples[size_t(k)];
+        const double pdf_t = EdgeMixture(*s.edge, q).pdf(s.t);
+        if (is_split(s.edge)) {
+          ++seen_split;
+          bad_pdf += !(std::abs(s.pdf - pdf_t) <= 1e-9 * pdf_t);
+          continue;
+        }
+        ++traversal;
+        auto it = bin.find(s.edge);
+        if (it == bin.end()) {
+          ++unknown;
+          continue;
+        }
+        observed[size_t(it->second)] += 1;
+        const double want = expected[size_t(it->second)] / n * pdf_t;
+        bad_pdf += !(std::abs(s.pdf - want) <= 1e-9 * want);
+      }
+      bad_split += seen_split != int(split.size());
+      extra += traversal > 1;
+      if (traversal == 0) observed[0] += 1;
+    }
+    EXPECT_EQ(bad_split, 0) << "query " << qi << ": a set without every split edge";
+    EXPECT_EQ(extra, 0) << "query " << qi << ": more than one traversal sample";
+    EXPECT_EQ(unknown, 0) << "query " << qi << ": the traversal sampled a split edge or one of probability 0";
+    EXPECT_EQ(bad_pdf, 0) << "query " << qi << ": pdf != probability x density of t";
+    const Chi2Result r = chi2_test(observed, expected, alpha);
+    EXPECT_TRUE(r.passed) << "query " << qi << ": " << r.message;
+  }
+}
+
+}  // namespace
+}  // namespace qsil::edgetree
