@@ -210,10 +210,13 @@ class FiniteDifferenceEstimator final : public Estimator::Impl {
     for (double h : steps)
       if (!(h > 0) || !std::isfinite(h))
         throw Error("fd: step h must be positive and finite (got " + std::to_string(h) + ")");
-    sides.push_back(std::make_unique<Side>(s));
+    // Every side's ray tracer uses the primal scene's local origin: static geometry is then
+    // rounded to float alike on every side (no spurious motion of ulp size between them).
+    const Vec3 local_origin = embree_local_origin(s);
+    sides.push_back(std::make_unique<Side>(s, local_origin));
     for (int k = 0; k < K; ++k) {
-      sides.push_back(std::make_unique<Side>(displaced_scene(s, config.params, k, +steps[size_t(k)])));
-      sides.push_back(std::make_unique<Side>(displaced_scene(s, config.params, k, -steps[size_t(k)])));
+      sides.push_back(std::make_unique<Side>(displaced_scene(s, config.params, k, +steps[size_t(k)]), local_origin));
+      sides.push_back(std::make_unique<Side>(displaced_scene(s, config.params, k, -steps[size_t(k)]), local_origin));
     }
     setup.structure = std::to_string(sides.size()) + " scenes (primal and displaced), each with a ray tracer";
   }
@@ -250,7 +253,8 @@ class FiniteDifferenceEstimator final : public Estimator::Impl {
  private:
   /// One side of a difference: a scene, its tracer and lights.
   struct Side {
-    explicit Side(Scene s) : scene(std::move(s)), tracer(scene), lights(scene), ctx(lights.context(scene, tracer)) {}
+    Side(Scene s, const Vec3& local_origin)
+        : scene(std::move(s)), tracer(scene, local_origin), lights(scene), ctx(lights.context(scene, tracer)) {}
     Scene scene;
     RayTracer tracer;
     LightSetup lights;

@@ -71,11 +71,29 @@ struct RayTracer::Impl {
     invalid_rays.fetch_add(1, std::memory_order_relaxed);
     g_invalid_rays.fetch_add(1, std::memory_order_relaxed);
   }
-  std::vector<char> one_sided;  ///< per geometry (= shape index)
+  std::vector<char> one_sided;       ///< per geometry (= shape index)
+  Vec3 local_origin = Vec3::Zero();  ///< Embree's coordinates are world coordinates minus this
 };
 
-RayTracer::RayTracer(const Scene& scene) : impl_(std::make_unique<Impl>()) {
+Vec3 embree_local_origin(const Scene& scene) {
+  const Box3 b = scene.bounds();
+  if (b.empty() || !b.lo.allFinite() || !b.hi.allFinite()) return Vec3::Zero();
+  const Vec3 centre = b.center();
+  const double diag = b.diagonal();
+  if (!(diag > 0)) return centre;
+  int e = 0;
+  std::frexp(diag, &e);  // diag = m 2^e, m in [0.5, 1): 2^e is a power of two >= diag
+  const double q = std::ldexp(1.0, e);
+  Vec3 c;
+  for (int k = 0; k < 3; ++k) c[k] = q * std::nearbyint(centre[k] / q);
+  return c;
+}
+
+RayTracer::RayTracer(const Scene& scene) : RayTracer(scene, embree_local_origin(scene)) {}
+
+RayTracer::RayTracer(const Scene& scene, const Vec3& local_origin) : impl_(std::make_unique<Impl>()) {
   Impl& impl = *impl_;
+  impl.local_origin = local_origin;
   impl.device = rtcNewDevice(nullptr);
   if (!impl.device) throw Error("Embree: cannot create device");
   rtcSetDeviceErrorFunction(impl.device, embree_error, nullptr);
@@ -92,7 +110,7 @@ RayTracer::RayTracer(const Scene& scene) : impl_(std::make_unique<Impl>()) {
     auto* vb = static_cast<float*>(
         rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), pos.size()));
     for (size_t i = 0; i < pos.size(); ++i)
-      for (int k = 0; k < 3; ++k) vb[3 * i + k] = float(pos[i][k]);
+      for (int k = 0; k < 3; ++k) vb[3 * i + k] = float(pos[i][k] - local_origin[k]);
     auto* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
                                                               3 * sizeof(unsigned), mesh.triangles.size()));
     for (size_t f = 0; f < mesh.triangles.size(); ++f)
@@ -113,6 +131,8 @@ RayTracer::~RayTracer() {
 uint64_t RayTracer::invalid_rays() const { return impl_->invalid_rays.load(std::memory_order_relaxed); }
 
 uint64_t RayTracer::total_invalid_rays() { return g_invalid_rays.load(std::memory_order_relaxed); }
+
+const Vec3& RayTracer::local_origin() const { return impl_->local_origin; }
 
 namespace {
 /// The Embree ray of a ray that passed ray_is_valid (checked again in debug builds: Embree aborts
@@ -141,7 +161,8 @@ void filter_context(const IgnoreSet& ignore, const std::vector<char>& one_sided,
 }
 }  // namespace
 
-Hit RayTracer::intersect(const Vec3& origin, const Vec3& dir, double tmax, const IgnoreSet& ignore) const {
+Hit RayTracer::intersect(const Vec3& world_origin, const Vec3& dir, double tmax, const IgnoreSet& ignore) const {
+  const Vec3 origin = world_origin - impl_->local_origin;  // Embree's coordinates
   if (!ray_is_valid(origin, dir, tmax)) {
     impl_->refuse();
     return Hit{};
@@ -163,7 +184,8 @@ Hit RayTracer::intersect(const Vec3& origin, const Vec3& dir, double tmax, const
   return hit;
 }
 
-bool RayTracer::occluded(const Vec3& origin, const Vec3& dir, double tmax, const IgnoreSet& ignore) const {
+bool RayTracer::occluded(const Vec3& world_origin, const Vec3& dir, double tmax, const IgnoreSet& ignore) const {
+  const Vec3 origin = world_origin - impl_->local_origin;  // Embree's coordinates
   if (!ray_is_valid(origin, dir, tmax)) {
     impl_->refuse();
     return false;

@@ -13,7 +13,8 @@
 /// Evaluation of a sampled point x_e = p + w_t with direction w = w_t/|w_t|:
 /// - sign s = sign((w0 x w1).(x_opp - p)), x_opp the third vertex of a face of the edge: the side
 ///   of the plane through p and the edge on which the occluding faces lie;
-/// - visibility: p -> x_e must be unoccluded (ignoring the edge's own faces), else 0;
+/// - visibility: p -> x_e must be unoccluded (ignoring the edge's own faces), else 0; the ray
+///   starts at p's offset ray origin and aims at x_e itself;
 /// - foreground L_fg: radiance leaving the edge's face that faces p, at x_e, toward p (a path
 ///   started exactly there, with the remaining depth);
 /// - background L_bg: radiance arriving at x_e along w from beyond the edge (a ray from x_e that
@@ -71,7 +72,8 @@ inline edgetree::LTC bsdf_ltc(const BSDFDesc& b, Vec3 wo_local) {
 ///   (p, edge), the plus side being where w0 x w1 points, both with the same random numbers;
 /// - J[k] = det(w0, w1, v_t) / |w_t|^3 for parameter k (per unit t), v_t relative to p.
 /// Returns false for a zero contribution: p on the edge's line, no relative velocity, or the edge
-/// point hidden from p. `vis_origin` starts the visibility ray (p, offset off its surface).
+/// point hidden from p. `vis_origin` starts the visibility ray (p, offset off its surface), which
+/// aims at the edge point from there (not along w) and stops 1/4096 of the distance short of it.
 /// `through_back_faces`: the direction from p to the edge point leaves p's surface on the side
 /// opposite to p's viewer (leaves_below), so that ray and its continuation beyond the edge pass
 /// through back faces, as every such ray of the path tracer does.
@@ -98,9 +100,15 @@ bool edge_jump(const PathContext& ctx, const SceneVelocities& vel, const edgetre
   ignore.prims[0] = {e.shape, e.f0};
   ignore.prims[1] = {e.f1 >= 0 ? e.shape : -1, e.f1};
   ignore.through_back_faces = through_back_faces;
-  const double vis_dist = (e.p0 + t * (e.p1 - e.p0) - vis_origin).norm();
+  // The ray aims from vis_origin at the edge point itself. Along w, from an origin offset off
+  // p's surface, it would pass the edge point at the offset's distance (2^-20 of the coordinate
+  // magnitude: 0.01 for a unit-size object 1e4 from the origin), inside the occluder's outline
+  // for about half of the grazing directions, and meet the faces next to the edge.
+  const Vec3 to_edge = e.p0 + t * (e.p1 - e.p0) - vis_origin;
+  const double vis_dist = to_edge.norm();
+  if (!(vis_dist > 0)) return false;
   ++stats.rays;
-  if (ctx.tracer->occluded(vis_origin, w, vis_dist * (1.0 - 1.0 / 4096.0), ignore)) return false;
+  if (ctx.tracer->occluded(vis_origin, to_edge / vis_dist, vis_dist * (1.0 - 1.0 / 4096.0), ignore)) return false;
   // The side of the plane (p, edge) on which a face lies: the sign of (w0 x w1).(x_opp - p) for
   // the face's third vertex.
   auto side_of = [&](int face) {
