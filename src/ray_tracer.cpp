@@ -198,10 +198,10 @@ bool RayTracer::occluded(const Vec3& world_origin, const Vec3& dir, double tmax,
   return ray.tfar < 0.0f;  // Embree sets tfar = -inf on a hit
 }
 
-Vec3 offset_ray_origin(const Vec3& p, const Vec3& ng, const Vec3& dir, double scale) {
+Vec3 offset_ray_origin(const Vec3& p, const Vec3& ng, const Vec3& dir, double scale, const Vec3& local_origin) {
   const double len = ng.norm();
   if (!(len > 0)) return p;
-  const double d = kRayOffsetRelative * std::max(scale, p.cwiseAbs().maxCoeff());
+  const double d = kRayOffsetRelative * std::max(scale, (p - local_origin).cwiseAbs().maxCoeff());
   const Vec3 n = ng / len;
   return n.dot(dir) >= 0 ? Vec3(p + d * n) : Vec3(p - d * n);
 }

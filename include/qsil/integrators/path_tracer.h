@@ -159,7 +159,7 @@ ColorT<typename View::Real> trace_path(const PathContext& ctx, const View& view,
       }
       break;
     }
-    const SurfaceInteraction<T> si = make_interaction(view, hit, o, d);
+    const SurfaceInteraction<T> si = make_interaction(view, hit, o, d, ctx.tracer->local_origin());
     // A ray grazing a triangle's plane has no well-defined intersection: end the path rather than
     // propagate a NaN (never reached with Embree's own hits in practice).
     if (!value(si.p).allFinite() || !value(si.ns).allFinite()) break;

@@ -20,7 +20,11 @@ struct SurfaceInteraction {
   Vec3T<T> p;        ///< world position
   Vec3T<T> ng;       ///< unit geometric normal (counter-clockwise winding = outward)
   Vec3T<T> ns;       ///< unit shading normal (interpolated vertex normals, or ng for face_normals)
-  double scale = 0;  ///< largest absolute vertex coordinate of the triangle (ray offsets)
+  /// Largest absolute coordinate of the triangle's vertices relative to local_origin (ray offsets).
+  double scale = 0;
+  /// The ray tracer's local origin (RayTracer::local_origin): Embree's float error, and so every
+  /// ray offset, is relative to coordinates measured from it, not from the world origin.
+  Vec3 local_origin = Vec3::Zero();
   /// For a point given exactly (Hit::exact: a sampled edge point, on the triangle's boundary):
   /// the unit in-plane direction from p toward the triangle's centroid, else zero. Rays leaving
   /// such a point start a relative offset inside the triangle (spawn_origin), so that what they
@@ -32,9 +36,11 @@ struct SurfaceInteraction {
 /// direction d, for the triangle Embree reported in `hit`. Works outside the triangle too (the
 /// barycentrics are then extrapolated): Embree decided which triangle is hit. With hit.exact the
 /// point is interpolated from hit.u, hit.v instead (a known point; no ray-plane intersection).
+/// `local_origin`: the ray tracer's (RayTracer::local_origin), which the ray offsets are relative to.
 template <class View>
 SurfaceInteraction<typename View::Real> make_interaction(const View& view, const Hit& hit,
-                                                         const Vec3T<typename View::Real>& o, const Vec3& d) {
+                                                         const Vec3T<typename View::Real>& o, const Vec3& d,
+                                                         const Vec3& local_origin = Vec3::Zero()) {
   using T = typename View::Real;
   SurfaceInteraction<T> si;
   si.shape = hit.shape;
@@ -78,8 +84,9 @@ SurfaceInteraction<typename View::Real> make_interaction(const View& view, const
     si.ns = value(len) > 0 ? Vec3T<T>(n / len) : si.ng;
   }
   const auto& P = shape.mesh.positions;
-  si.scale =
-      std::max({P[tri[0]].cwiseAbs().maxCoeff(), P[tri[1]].cwiseAbs().maxCoeff(), P[tri[2]].cwiseAbs().maxCoeff()});
+  si.local_origin = local_origin;
+  si.scale = std::max({(P[tri[0]] - local_origin).cwiseAbs().maxCoeff(), (P[tri[1]] - local_origin).cwiseAbs().maxCoeff(),
+                       (P[tri[2]] - local_origin).cwiseAbs().maxCoeff()});
   return si;
 }
 
@@ -95,8 +102,9 @@ SurfaceInteraction<typename View::Real> make_interaction(const View& view, const
 template <class T>
 Vec3 spawn_origin(const SurfaceInteraction<T>& si, const Vec3& dir) {
   const Vec3 p = value(si.p);
-  Vec3 o = offset_ray_origin(p, value(si.ng), dir, si.scale);
-  if (si.inward != Vec3::Zero()) o += kRayOffsetRelative * std::max(si.scale, p.cwiseAbs().maxCoeff()) * si.inward;
+  Vec3 o = offset_ray_origin(p, value(si.ng), dir, si.scale, si.local_origin);
+  if (si.inward != Vec3::Zero())
+    o += kRayOffsetRelative * std::max(si.scale, (p - si.local_origin).cwiseAbs().maxCoeff()) * si.inward;
   return o;
 }
 
