@@ -301,17 +301,15 @@ double silhouette_edge_probability(const EdgeForest& forest, const SilhouetteQue
     const std::span<const ForestEdge> below = forest.node_edges(c.node);
     return edge >= below.data() && edge < below.data() + below.size();
   };
-  int tests = 0;
-  std::vector<Candidate> top;
-  const int n_top = top_candidates(forest, query, method, top, tests);
-  std::vector<double> prob(size_t(std::max(n_top, 1)));
-  choice_probabilities(top, n_top, prob.data());
+  TopLevel top;
+  top_level(forest, query, method, top);
+  int tests = top.tests;
   double pmf = 0;
   Candidate cur;
-  for (int i = 0; i < n_top; ++i)
-    if (leads_to(top[size_t(i)])) {
-      pmf = prob[size_t(i)];
-      cur = top[size_t(i)];
+  for (int i = 0; i < top.n; ++i)
+    if (leads_to(top.cand[size_t(i)])) {
+      pmf = top.prob[size_t(i)];
+      cur = top.cand[size_t(i)];
     }
   if (pmf == 0) return 0;
   std::array<Candidate, 4> cand;
