@@ -5,6 +5,7 @@
 #include "qsil/integrators/estimator.h"
 
 #include "integrators/boundary_setup.h"
+#include "integrators/light_setup.h"
 #include "integrators/pixel_loop.h"
 #include "integrators/primary_boundary.h"
 #include "qsil/check.h"
@@ -31,24 +32,6 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 double thread_count(const RenderOptions& o) {
   return double(o.threads > 0 ? o.threads : tbb::this_task_arena::max_concurrency());
 }
-
-/// The light samplers of a scene and the path context over them and a ray tracer.
-struct LightSetup {
-  EnvironmentLight environment;
-  AreaLights area_lights;
-  explicit LightSetup(const Scene& scene) : environment(scene.environment), area_lights(scene) {}
-  PathContext context(const Scene& scene, const RayTracer& tracer) const {
-    PathContext ctx;
-    ctx.scene = &scene;
-    ctx.tracer = &tracer;
-    ctx.environment = &environment;
-    ctx.area_lights = &area_lights;
-    ctx.max_depth = PathContext::resolve_depth(scene.max_depth);
-    const bool env = environment.present(), area = !area_lights.empty();
-    ctx.p_environment = env && area ? 0.5 : (env ? 1.0 : 0.0);
-    return ctx;
-  }
-};
 
 }  // namespace
 

@@ -28,18 +28,20 @@ bool clip(const Vec3& c0, const Vec3& c1, const Vec3& n, double d, double& ta, d
   return ta < tb;
 }
 
-template <int N>
-void run_chunk(const PathContext& ctx, const SceneVelocities& vel, const std::vector<PrimaryEdge>& edges,
-               const std::vector<double>& cdf, long long count, double per_sample, uint64_t seed, long long chunk,
-               int range_key, std::vector<FilmSplat>& out, PathStats& stats) {
+/// Draws `count` primary edge samples of chunk `chunk` from Sampler(seed, chunk, range_key, 2) and
+/// evaluates them: `accept(edge, t, g)` sees the Jacobian's linear form g (edge_jump_with) before
+/// any ray; `emit(px, py, edge, t, weight, g)` receives each contributing sample, weight = jump W
+/// per_sample / pdf (so the pixel's derivative gains weight (g . v_t)). Shared by forward mode
+/// (add_primary_boundary) and reverse mode (for_each_primary_sample).
+template <class Accept, class Emit>
+void sample_chunk(const PathContext& ctx, const std::vector<PrimaryEdge>& edges, const std::vector<double>& cdf,
+                  long long count, double per_sample, uint64_t seed, long long chunk, int range_key, PathStats& stats,
+                  Accept&& accept, Emit&& emit) {
   const Camera& cam = ctx.scene->camera;
   const Vec2 tanf = cam.tan_half_fov();
   const double fx = cam.width / (2.0 * tanf.x()), fy = cam.height / (2.0 * tanf.y());
   const Vec3 o = cam.origin();
   const Vec3 forward = cam.to_world.block<3, 1>(0, 2).normalized();
-  const int K = vel.num_params;
-  const FilmLayout layout(K);
-  const Eigen::Matrix<double, 3, N> dp = Eigen::Matrix<double, 3, N>::Zero();  // the camera does not move
   Sampler sampler(seed, uint64_t(chunk), uint64_t(range_key), 2);
   for (long long i = 0; i < count; ++i) {
     ++stats.boundary_traversals;
@@ -64,18 +66,83 @@ void run_chunk(const PathContext& ctx, const SceneVelocities& vel, const std::ve
     }
     const double W = fx * fy / (cos_theta * cos_theta * cos_theta);
     Color jump;
-    Eigen::Matrix<double, 1, N> J;
-    if (!edge_jump<N>(ctx, vel, *pe.edge, t, o, o, false, dp, 0, sampler, stats, jump, J) || (jump == 0).all()) {
+    Vec3 g;
+    const bool ok = edge_jump_with(ctx, *pe.edge, t, o, o, false, 0, sampler, stats, jump, [&](const Vec3& gv) {
+      g = gv;
+      return accept(*pe.edge, t, gv);
+    });
+    if (!ok || (jump == 0).all()) {
       ++stats.boundary_zero;
       continue;
     }
-    const Color weight = jump * (W * per_sample / pdf);
+    emit(px, py, *pe.edge, t, Color(jump * (W * per_sample / pdf)), g);
+  }
+}
+
+/// Forward mode: the splats of one chunk, J[k] = g . (velocity of the edge point) (the camera
+/// does not move).
+template <int N>
+void run_chunk(const PathContext& ctx, const SceneVelocities& vel, const std::vector<PrimaryEdge>& edges,
+               const std::vector<double>& cdf, long long count, double per_sample, uint64_t seed, long long chunk,
+               int range_key, std::vector<FilmSplat>& out, PathStats& stats) {
+  const int K = vel.num_params;
+  const FilmLayout layout(K);
+  Eigen::Matrix<double, 1, N> J;
+  auto accept = [&](const edgetree::ForestEdge& e, double t, const Vec3& g) {
+    const auto& V = vel.position[e.shape];
+    J = g.transpose() * ((1 - t) * V[e.v0].template leftCols<N>() + t * V[e.v1].template leftCols<N>());
+    return !J.isZero(0.0);
+  };
+  auto emit = [&](int px, int py, const edgetree::ForestEdge&, double, const Color& weight, const Vec3&) {
     for (int k = 0; k < K; ++k) {
       for (int c = 0; c < 3; ++c) out.push_back({px, py, layout.derivative(k, c), weight[c] * J[k]});
       out.push_back({px, py, layout.derivative_mean(k), weight.mean() * J[k]});
     }
-  }
+  };
+  sample_chunk(ctx, edges, cdf, count, per_sample, seed, chunk, range_key, stats, accept, emit);
 }
+
+/// The chunks of samples [first_sample, first_sample + spp) of the primary term and this part's
+/// share of them (see add_primary_boundary for the numbering).
+struct ChunkPlan {
+  std::vector<double> cdf;  ///< cumulative edge weights
+  double per_sample = 0;    ///< each sample estimates the whole image's term; a pixel's mean divides by spp
+  long long g0 = 0, g1 = 0;  ///< global sample numbers of the range
+  long long c0 = 0, chunks = 0;  ///< this part's first chunk and chunk count
+  static constexpr long long kChunkSize = 1024;
+  ChunkPlan(const Camera& cam, const std::vector<PrimaryEdge>& edges, int first_sample, int spp, int part, int parts) {
+    const long long per_index = (long long)cam.width * cam.height;  // primary samples per sample index
+    const long long num_samples = per_index * spp;
+    cdf.assign(1, 0.0);
+    for (const auto& e : edges) cdf.push_back(cdf.back() + e.weight);
+    per_sample = double(spp) / double(std::max(1LL, num_samples));
+    // Sample index s owns primary samples [s W H, (s + 1) W H); chunk c holds numbers
+    // [c 1024, (c + 1) 1024) and draws from stream (seed, c, 0, 2), whichever run draws it. A
+    // chunk cut by the start of this range draws its part from (seed, c, first_sample, 2).
+    g0 = per_index * first_sample;
+    g1 = g0 + num_samples;
+    const long long first_chunk = g0 / kChunkSize, all_chunks = (g1 + kChunkSize - 1) / kChunkSize - first_chunk;
+    // This part's share of the chunks: a contiguous run of them, in order.
+    c0 = first_chunk + all_chunks * part / parts;
+    chunks = first_chunk + all_chunks * (part + 1) / parts - c0;
+    if (edges.empty() || num_samples <= 0) chunks = 0;
+  }
+  /// Runs body(j, count, chunk, cut) in parallel for chunks j in [j0, j1) of this part (default:
+  /// all): `count` samples of global chunk `chunk`, `cut` = 1 when the range's start cuts it.
+  template <class Body>
+  void run(int threads, Body&& body, long long j0 = 0, long long j1 = -1) const {
+    auto one = [&](long long j) {
+      const long long c = c0 + j;
+      const long long begin = std::max(g0, c * kChunkSize), end = std::min(g1, (c + 1) * kChunkSize);
+      body(j, end - begin, c, begin > c * kChunkSize ? 1 : 0);
+    };
+    auto all = [&] { tbb::parallel_for(j0, j1 < 0 ? chunks : j1, one); };
+    if (threads > 0)
+      tbb::task_arena(threads).execute(all);
+    else
+      all();
+  }
+};
 
 }  // namespace
 
@@ -113,43 +180,18 @@ std::vector<PrimaryEdge> find_primary_edges(const Scene& scene, const edgetree::
 void add_primary_boundary(Film& film, const PathContext& ctx, const SceneVelocities& velocities,
                           const std::vector<PrimaryEdge>& edges, int first_sample, int spp, uint64_t seed, int threads,
                           PathStats& stats, int part, int parts, std::vector<FilmSplat>* deferred) {
-  const Camera& cam = ctx.scene->camera;
-  const long long per_index = (long long)cam.width * cam.height;  // primary samples per sample index
-  const long long num_samples = per_index * spp;
-  if (edges.empty() || num_samples <= 0) return;
-  std::vector<double> cdf(1, 0.0);
-  for (const auto& e : edges) cdf.push_back(cdf.back() + e.weight);
-  // Each sample estimates the whole image's primary term; a pixel's film mean divides by spp.
-  const double per_sample = double(spp) / double(num_samples);
-  // ---- Global numbering: sample index s owns primary samples [s W H, (s + 1) W H); chunk c holds
-  // numbers [c 1024, (c + 1) 1024) and draws from stream (seed, c, 0, 2), whichever run draws it.
-  // A chunk cut by the start of this range draws its part from (seed, c, first_sample, 2).
-  const long long chunk_size = 1024;
-  const long long g0 = per_index * first_sample, g1 = g0 + num_samples;
-  const long long first_chunk = g0 / chunk_size, all_chunks = (g1 + chunk_size - 1) / chunk_size - first_chunk;
-  // ---- This part's share of the chunks: a contiguous run of them, in order.
-  const long long c0 = first_chunk + all_chunks * part / parts;
-  const long long chunks = first_chunk + all_chunks * (part + 1) / parts - c0;
-  std::vector<std::vector<FilmSplat>> splats{static_cast<size_t>(chunks)};
-  std::vector<PathStats> chunk_stats{static_cast<size_t>(chunks)};
+  const ChunkPlan plan(ctx.scene->camera, edges, first_sample, spp, part, parts);
+  std::vector<std::vector<FilmSplat>> splats{static_cast<size_t>(plan.chunks)};
+  std::vector<PathStats> chunk_stats{static_cast<size_t>(plan.chunks)};
   const int K = velocities.num_params;
-  auto body = [&](long long j) {
-    const long long c = c0 + j;
-    const long long begin = std::max(g0, c * chunk_size), end = std::min(g1, (c + 1) * chunk_size);
-    const int key = begin > c * chunk_size ? first_sample : 0;
-    auto& out = splats[size_t(j)];
-    auto& st = chunk_stats[size_t(j)];
+  plan.run(threads, [&](long long j, long long count, long long c, int cut) {
     with_dual_size(K, [&](auto n) {
-      run_chunk<decltype(n)::value>(ctx, velocities, edges, cdf, end - begin, per_sample, seed, c, key, out, st);
+      run_chunk<decltype(n)::value>(ctx, velocities, edges, plan.cdf, count, plan.per_sample, seed, c,
+                                    cut ? first_sample : 0, splats[size_t(j)], chunk_stats[size_t(j)]);
     });
-  };
-  auto run = [&] { tbb::parallel_for(0LL, chunks, body); };
-  if (threads > 0)
-    tbb::task_arena(threads).execute(run);
-  else
-    run();
+  });
   // Merge in chunk order: the same sums whatever the thread count (or hand them on in that order).
-  for (long long c = 0; c < chunks; ++c) {
+  for (long long c = 0; c < plan.chunks; ++c) {
     if (deferred) {
       deferred->insert(deferred->end(), splats[size_t(c)].begin(), splats[size_t(c)].end());
       std::vector<FilmSplat>().swap(splats[size_t(c)]);
@@ -159,6 +201,39 @@ void add_primary_boundary(Film& film, const PathContext& ctx, const SceneVelocit
     stats.rays += chunk_stats[size_t(c)].rays;
     stats.boundary_traversals += chunk_stats[size_t(c)].boundary_traversals;
     stats.boundary_zero += chunk_stats[size_t(c)].boundary_zero;
+  }
+}
+
+void for_each_primary_sample(const PathContext& ctx, const std::vector<PrimaryEdge>& edges, int first_sample, int spp,
+                             uint64_t seed, int threads, PathStats& stats, const PrimarySampleFn& fn) {
+  const ChunkPlan plan(ctx.scene->camera, edges, first_sample, spp, 0, 1);
+  // In batches of chunks (a bounded buffer), each drawn in parallel and handed on in order.
+  const long long batch = 64;
+  std::vector<std::vector<PrimarySample>> samples{static_cast<size_t>(batch)};
+  std::vector<PathStats> chunk_stats{static_cast<size_t>(batch)};
+  for (long long j0 = 0; j0 < plan.chunks; j0 += batch) {
+    const long long j1 = std::min(plan.chunks, j0 + batch);
+    plan.run(
+        threads,
+        [&](long long j, long long count, long long c, int cut) {
+          auto& out = samples[size_t(j - j0)];
+          out.clear();
+          chunk_stats[size_t(j - j0)] = PathStats{};
+          sample_chunk(
+              ctx, edges, plan.cdf, count, plan.per_sample, seed, c, cut ? first_sample : 0,
+              chunk_stats[size_t(j - j0)], [](const edgetree::ForestEdge&, double, const Vec3&) { return true; },
+              [&](int px, int py, const edgetree::ForestEdge& e, double t, const Color& weight, const Vec3& g) {
+                out.push_back({px, py, &e, t, weight, g});
+              });
+        },
+        j0, j1);
+    for (long long j = j0; j < j1; ++j) {
+      for (const PrimarySample& s : samples[size_t(j - j0)]) fn(s);
+      const PathStats& st = chunk_stats[size_t(j - j0)];
+      stats.rays += st.rays;
+      stats.boundary_traversals += st.boundary_traversals;
+      stats.boundary_zero += st.boundary_zero;
+    }
   }
 }
 

@@ -22,6 +22,8 @@
 #include "qsil/integrators/path_tracer.h"
 #include "qsil/parameters.h"
 
+#include <functional>
+
 namespace qsil {
 
 /// One primary discontinuity edge: its visible parameter range and its projected segment.
@@ -59,5 +61,25 @@ std::vector<PrimaryEdge> find_primary_edges(const Scene& scene, const edgetree::
 void add_primary_boundary(Film& film, const PathContext& ctx, const SceneVelocities& velocities,
                           const std::vector<PrimaryEdge>& edges, int first_sample, int spp, uint64_t seed, int threads,
                           PathStats& stats, int part = 0, int parts = 1, std::vector<FilmSplat>* deferred = nullptr);
+
+/// One contributing primary edge sample (reverse mode): the pixel it lands in, the edge point
+/// (edge, t), its weight s (L_bg - L_fg) W / pdf per sample index, and g = (w0 x w1) / |w_t|^3:
+/// the pixel's derivative gains weight (g . v) for an edge-point velocity v.
+struct PrimarySample {
+  int px = 0, py = 0;
+  const edgetree::ForestEdge* edge = nullptr;
+  double t = 0;
+  Color weight = Color::Zero();
+  Vec3 g = Vec3::Zero();
+};
+using PrimarySampleFn = std::function<void(const PrimarySample&)>;
+
+/// The primary boundary term's samples of the range [first_sample, first_sample + spp), drawn
+/// exactly as add_primary_boundary draws them (same streams, same chunks), but without velocities:
+/// every sample whose edge point is visible and whose jump is non-zero is passed to `fn`, on the
+/// calling thread, in chunk order (deterministic for a seed whatever the thread count). The edges
+/// are those of the shapes whose vertices are differentiated. Counts rays and zero contributions.
+void for_each_primary_sample(const PathContext& ctx, const std::vector<PrimaryEdge>& edges, int first_sample, int spp,
+                             uint64_t seed, int threads, PathStats& stats, const PrimarySampleFn& fn);
 
 }  // namespace qsil

@@ -100,11 +100,13 @@ void write_png(const std::filesystem::path& path, int width, int height, const s
   });
 }
 
-void write_npy(const std::filesystem::path& path, int height, int width, const std::vector<float>& data) {
-  if (height <= 0 || width <= 0 || data.size() != size_t(height) * size_t(width))
-    throw Error(path.string() + ": internal: malformed array");
-  std::string header = "{'descr': '<f4', 'fortran_order': False, 'shape': (" + std::to_string(height) + ", " +
-                       std::to_string(width) + "), }";
+namespace {
+/// A 2D NumPy array of `rows` x `cols` elements of type `descr` ('<f4', '<f8'), `bytes` of data,
+/// in format version 1.0, C order, written atomically.
+void write_npy_array(const std::filesystem::path& path, const std::string& descr, size_t rows, size_t cols,
+                     const char* data, size_t bytes_per_element) {
+  std::string header = "{'descr': '" + descr + "', 'fortran_order': False, 'shape': (" + std::to_string(rows) + ", " +
+                       std::to_string(cols) + "), }";
   // Magic (6) + version (2) + header length (2) + header, padded with spaces to a multiple of 64
   // and ended by a newline.
   const size_t total = 10 + header.size() + 1;
@@ -115,8 +117,21 @@ void write_npy(const std::filesystem::path& path, int height, int width, const s
   bytes.push_back(char(len & 0xff));
   bytes.push_back(char(len >> 8));
   bytes += header;
-  bytes.append(reinterpret_cast<const char*>(data.data()), data.size() * sizeof(float));
+  bytes.append(data, rows * cols * bytes_per_element);
   write_file(path, bytes);
+}
+}  // namespace
+
+void write_npy(const std::filesystem::path& path, int height, int width, const std::vector<float>& data) {
+  if (height <= 0 || width <= 0 || data.size() != size_t(height) * size_t(width))
+    throw Error(path.string() + ": internal: malformed array");
+  write_npy_array(path, "<f4", size_t(height), size_t(width), reinterpret_cast<const char*>(data.data()),
+                  sizeof(float));
+}
+
+void write_npy(const std::filesystem::path& path, size_t rows, size_t cols, const std::vector<double>& data) {
+  if (cols == 0 || data.size() != rows * cols) throw Error(path.string() + ": internal: malformed array");
+  write_npy_array(path, "<f8", rows, cols, reinterpret_cast<const char*>(data.data()), sizeof(double));
 }
 
 std::vector<float> luminance_plane(const Image& image, const std::string& prefix) {

@@ -128,3 +128,35 @@ TEST(CLI, GradWritesTheDocumentedChannelsAttributesAndPreviews) {
   EXPECT_TRUE(std::filesystem::exists(dir + "/dtheta1.png"));
   EXPECT_NE(r.out.find("image sum"), std::string::npos);
 }
+
+TEST(CLI, ReverseErrorsExitWithCode2) {
+  const std::string target = tmp("qsil_reverse_target.exr");
+  ASSERT_EQ(run_qsil("render scenes/shadow-quad.xml -q -D res=16 --spp 1 -o " + target).code, 0);
+  expect_error("reverse scenes/shadow-quad.xml --spp 1 --shape nosuch --target " + target,
+               "--shape 'nosuch': no shape with this id");
+  expect_error("reverse scenes/shadow-quad.xml --spp 1 -D res=8 --shape object --target " + target,
+               "16x16, the scene renders 8x8");
+  expect_error("reverse scenes/shadow-quad.xml --spp 1 -D res=16 --shape object", "give --adjoint or --target");
+  expect_error("reverse scenes/shadow-quad.xml --spp 1 -D res=16 --shape object --boundary fd --target " + target,
+               "--boundary");
+}
+
+TEST(CLI, ReverseWritesOneGradientRowPerVertex) {
+  const std::string target = tmp("qsil_reverse_target2.exr"), out = tmp("qsil_reverse.npy");
+  ASSERT_EQ(run_qsil("render scenes/shadow-quad.xml -q -D res=16 --spp 1 -o " + target).code, 0);
+  const CliRun r =
+      run_qsil("reverse scenes/shadow-quad.xml -q -D res=16 --spp 2 --shape object --shape light --target " + target +
+               " -o " + out);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("loss mean (I - T)^2"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("light: rows "), std::string::npos) << r.out;
+  // The NumPy header: float64, (object's vertices + the light's 4, 3).
+  std::FILE* f = std::fopen(out.c_str(), "rb");
+  ASSERT_NE(f, nullptr);
+  std::array<char, 128> head{};
+  const size_t n = std::fread(head.data(), 1, head.size(), f);
+  std::fclose(f);
+  const std::string header(head.data(), n);
+  EXPECT_NE(header.find("'descr': '<f8'"), std::string::npos) << header;
+  EXPECT_NE(header.find(", 3), }"), std::string::npos) << header;
+}

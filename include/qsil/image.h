@@ -41,6 +41,10 @@ void write_png(const std::filesystem::path& path, int width, int height, const s
 /// (format version 1.0, C order), atomically. Throws qsil::Error on failure.
 void write_npy(const std::filesystem::path& path, int height, int width, const std::vector<float>& data);
 
+/// Writes a float64 2D array (rows x cols, row-major; rows may be 0) as a NumPy .npy file (format
+/// version 1.0, C order), atomically. Throws qsil::Error on failure or a size mismatch.
+void write_npy(const std::filesystem::path& path, size_t rows, size_t cols, const std::vector<double>& data);
+
 /// The luminance (math.h) of channels prefix.R, prefix.G, prefix.B (prefix "" for R, G, B) of
 /// every pixel, row-major, top row first. Throws qsil::Error "image has no PREFIX channels".
 std::vector<float> luminance_plane(const Image& image, const std::string& prefix);

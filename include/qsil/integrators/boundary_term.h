@@ -70,30 +70,31 @@ inline edgetree::LTC bsdf_ltc(const BSDFDesc& b, Vec3 wo_local) {
 ///   for a silhouette or boundary edge; for a crease (edgetree::CreaseSet; an edge whose two
 ///   faces both face p), the radiance on the minus side minus that on the plus side of the plane
 ///   (p, edge), the plus side being where w0 x w1 points, both with the same random numbers;
-/// - J[k] = det(w0, w1, v_t) / |w_t|^3 for parameter k (per unit t), v_t relative to p.
+/// - the Jacobian J = det(w0, w1, v_t) / |w_t|^3 = g . v_t (per unit t), v_t the edge point's
+///   velocity relative to p, through `accept` (below; edge_jump computes J per parameter).
 /// Returns false for a zero contribution: p on the edge's line, no relative velocity, or the edge
 /// point hidden from p. `vis_origin` starts the visibility ray (p, offset off its surface), which
 /// aims at the edge point from there (not along w) and stops 1/4096 of the distance short of it.
 /// `through_back_faces`: the direction from p to the edge point leaves p's surface on the side
 /// opposite to p's viewer (leaves_below), so that ray and its continuation beyond the edge pass
 /// through back faces, as every such ray of the path tracer does.
-template <int N>
-bool edge_jump(const PathContext& ctx, const SceneVelocities& vel, const edgetree::ForestEdge& e, double t,
-               const Vec3& p, const Vec3& vis_origin, bool through_back_faces, const Eigen::Matrix<double, 3, N>& dp,
-               int seg, Sampler& sampler, PathStats& stats, Color& jump, Eigen::Matrix<double, 1, N>& J) {
+///
+/// `accept(g)` receives g = (w0 x w1) / |w_t|^3, the Jacobian's linear form in the relative
+/// velocity (J = g . v_t), before any ray is traced or random number drawn; returning false ends
+/// the evaluation with a zero contribution (edge_jump: no relative velocity). Reverse mode
+/// (integrators/reverse.cpp) keeps g itself: the adjoint of v_t.
+template <class Accept>
+bool edge_jump_with(const PathContext& ctx, const edgetree::ForestEdge& e, double t, const Vec3& p,
+                    const Vec3& vis_origin, bool through_back_faces, int seg, Sampler& sampler, PathStats& stats,
+                    Color& jump, Accept&& accept) {
   const Scene& scene = *ctx.scene;
   const Vec3 w0 = e.p0 - p, w1 = e.p1 - p;
   const Vec3 wt = w0 + t * (w1 - w0);
   const double dist = wt.norm();
   if (!(dist > 0)) return false;
   const Vec3 w = wt / dist;
-  // ---- J for every parameter: velocity of the edge point relative to p.
-  const auto& V = vel.position[e.shape];
-  const Eigen::Matrix<double, 3, N> ve =
-      (1 - t) * V[e.v0].template leftCols<N>() + t * V[e.v1].template leftCols<N>() - dp;
   const Vec3 n01 = w0.cross(w1);
-  J = n01.transpose() * ve / (dist * dist * dist);
-  if (J.isZero(0.0)) return false;
+  if (!accept(Vec3(n01 / (dist * dist * dist)))) return false;
   // ---- Visibility of the edge point from p (ignoring the edge's own faces).
   const TriangleMesh& mesh = scene.shapes[e.shape].mesh;
   IgnoreSet ignore;
@@ -161,6 +162,22 @@ bool edge_jump(const PathContext& ctx, const SceneVelocities& vel, const edgetre
   const Color L_bg = trace_path(ctx, pv, xe, w, bg, seg, 0.0, sampler, stats);
   jump = s * (L_bg - L_fg);
   return true;
+}
+
+/// edge_jump_with for forward mode: J[k] = g . v_t for every parameter k, v_t the velocity of the
+/// edge point (from `vel`) minus dp; a zero J is a zero contribution (no rays traced).
+template <int N>
+bool edge_jump(const PathContext& ctx, const SceneVelocities& vel, const edgetree::ForestEdge& e, double t,
+               const Vec3& p, const Vec3& vis_origin, bool through_back_faces, const Eigen::Matrix<double, 3, N>& dp,
+               int seg, Sampler& sampler, PathStats& stats, Color& jump, Eigen::Matrix<double, 1, N>& J) {
+  return edge_jump_with(ctx, e, t, p, vis_origin, through_back_faces, seg, sampler, stats, jump, [&](const Vec3& g) {
+    // ---- J for every parameter: velocity of the edge point relative to p.
+    const auto& V = vel.position[e.shape];
+    const Eigen::Matrix<double, 3, N> ve =
+        (1 - t) * V[e.v0].template leftCols<N>() + t * V[e.v1].template leftCols<N>() - dp;
+    J = g.transpose() * ve;
+    return !J.isZero(0.0);
+  });
 }
 
 /// The vertex hook of trace_path that adds the secondary boundary term (DualView<N> paths only).

@@ -159,7 +159,11 @@ ColorT<typename View::Real> trace_path(const PathContext& ctx, const View& view,
       }
       break;
     }
-    const SurfaceInteraction<T> si = make_interaction(view, hit, o, d, ctx.tracer->local_origin());
+    SurfaceInteraction<T> si = make_interaction(view, hit, o, d, ctx.tracer->local_origin());
+    // A view with a tape (reverse mode, qsil/integrators/reverse.h) records the hit and gives its
+    // point and shading normal derivative slots of their own; the other views have no attach().
+    if constexpr (requires { view.attach(si, hit, value(o), d, true); })
+      view.attach(si, hit, value(o), d, seg < ctx.max_depth);
     // A ray grazing a triangle's plane has no well-defined intersection: end the path rather than
     // propagate a NaN (never reached with Embree's own hits in practice).
     if (!value(si.p).allFinite() || !value(si.ns).allFinite()) break;

@@ -1,0 +1,97 @@
+#pragma once
+/// @file reverse.h
+/// Reverse mode: the gradient of a scalar loss with respect to every vertex position of chosen
+/// shapes (docs/architecture.md §9), for the inverse-rendering loop of [QSS §5.5]. The loss is
+///   L = sum over pixels x and channels c of w_c(x) I_c(x),
+/// w an adjoint image (for an L2 loss sum (I - I_target)^2: w = 2 (I - I_target)). The estimate
+/// is that of `qsil grad` in the same fixed-direction parametrization, read backwards:
+/// - interior term: each camera path records the hits on chosen shapes that scatter on a tape;
+///   the point p and the shading normal ns of each get derivative slots of their own (duals of
+///   12 entries: two hits per pass; a longer path is replayed with the same random numbers for
+///   the next two, Vicini et al. 2021 "Path Replay Backpropagation"). Their adjoints
+///   (sum_c w_c dL_c/dslot) are carried back to the triangle's three vertex positions and three
+///   vertex normals through the local Jacobian of the hit (make_interaction over 18-entry duals,
+///   the ray origin held fixed: its own dependence is in the earlier slots); vertex-normal
+///   adjoints reach the positions through the area-weighted normals (vertex_normals_adjoint);
+/// - secondary boundary term: a sample on edge (v0, v1) at t with weight W (throughput x BSDF x
+///   jump / pdf) adds W g (1 - t) to v0 and W g t to v1 (g = (w0 x w1)/|w_t|^3,
+///   boundary_term.h), and -W g . dp/dslot to the slots of the moving shading point p;
+/// - primary boundary term: the same for the camera's edge samples, weighted by the adjoint of
+///   the pixel each lands in (for_each_primary_sample).
+/// The edge sampler's importance has no velocities (velocity_factor 1): the per-vertex gradient
+/// has a parameter per vertex. Eligible edges: those of chosen shapes at a static p, every
+/// shape's at a p that moves (a chosen-shape hit at or before it).
+/// Deterministic for a seed whatever the thread count: per 16 x 16 tile, sums in pixel order;
+/// tiles, then primary chunks, are added in order.
+
+#include "qsil/integrators/estimator.h"
+#include "qsil/method.h"
+#include "qsil/scene.h"
+
+#include <memory>
+#include <vector>
+
+namespace qsil {
+
+/// What reverse mode differentiates and how.
+struct ReverseConfig {
+  std::vector<int> shapes;          ///< indices into Scene::shapes whose vertex positions are differentiated
+  Method method = Method::Quadric;  ///< boundary term: an edge-sampling method, or Method::None (interior only)
+  int boundary_spp = 1;             ///< discontinuity samples per shading point
+};
+
+/// One reverse-mode run.
+struct ReverseResult {
+  int width = 0, height = 0, spp = 0;
+  /// The primal image of the same paths, row-major RGB: image[3 (y width + x) + c].
+  std::vector<double> image;
+  /// sum_x,c w_c(x) I_c(x) over `image` (the loss of a linear adjoint; for an L2 loss the caller
+  /// computes it from an image of its own).
+  double loss = 0;
+  /// dL/dx per vertex: gradient[i][v] for shape config.shapes[i], vertex v (scene units of L per
+  /// scene unit of length).
+  std::vector<std::vector<Vec3>> gradient;
+  double seconds = 0;            ///< wall time of the run
+  uint64_t rays = 0;             ///< ray queries issued
+  uint64_t nonfinite = 0;        ///< samples with a NaN/inf value or gradient (dropped from every output, reported)
+  uint64_t traversals = 0;       ///< boundary-term samples drawn (secondary and primary)
+  uint64_t zero_traversals = 0;  ///< ...that contributed nothing
+  uint64_t replays = 0;          ///< extra passes of paths with more than two chosen-shape hits
+};
+
+/// Reverse mode set up for one scene (the scene must outlive it). Movable, not copyable.
+class ReverseEstimator {
+ public:
+  /// Builds the ray tracer, lights, and for an edge-sampling method the boundary method's
+  /// structures over every shape and the primary edges of the chosen shapes. Throws qsil::Error
+  /// for an empty or repeated shape list, a shape index out of range, or a method that is neither
+  /// an edge-sampling method nor none.
+  ReverseEstimator(const Scene& scene, ReverseConfig config);
+  ~ReverseEstimator();
+  ReverseEstimator(ReverseEstimator&&) noexcept;
+  ReverseEstimator& operator=(ReverseEstimator&&) noexcept;
+
+  /// Runs samples [options.first_sample, options.first_sample + spp) (spp = options.spp, or the
+  /// scene's sample count when <= 0) with adjoint image `adjoint` (row-major RGB, width x height x
+  /// 3 values: adjoint[3 (y width + x) + c] = w_c(x)). Throws qsil::Error when the adjoint has the
+  /// wrong size ("adjoint image: expected W x H x 3 = N values (got M)") or a non-finite value
+  /// ("adjoint image: non-finite weight at pixel (x, y)"), for an empty range, or for
+  /// options.parts > 1 (not supported).
+  ReverseResult run(const std::vector<double>& adjoint, const RenderOptions& options) const;
+
+  /// The configuration given.
+  const ReverseConfig& config() const;
+  /// Set-up time and what was built (SetupReport::describe()).
+  const SetupReport& setup() const;
+
+  class Impl;
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
+
+/// The shape indices of `ids` (Shape::id). Throws qsil::Error "--shape 'ID': no shape with this id
+/// in FILE" for an unknown id and "--shape 'ID': given twice" for a repeated one.
+std::vector<int> resolve_shapes(const Scene& scene, const std::vector<std::string>& ids);
+
+}  // namespace qsil

@@ -1,0 +1,451 @@
+/// @file reverse.cpp
+/// Reverse mode (per-vertex gradients of a scalar loss); see qsil/integrators/reverse.h.
+
+#include "qsil/integrators/reverse.h"
+
+#include "integrators/boundary_setup.h"
+#include "integrators/light_setup.h"
+#include "integrators/primary_boundary.h"
+#include "qsil/error.h"
+#include "qsil/integrators/boundary_term.h"
+#include "qsil/integrators/path_tracer.h"
+#include "qsil/vertex_normals.h"
+
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <chrono>
+#include <cmath>
+#include <set>
+#include <unordered_map>
+
+namespace qsil {
+
+namespace {
+
+/// Chosen-shape hits that get derivative slots in one pass of a path.
+constexpr int kHitsPerPass = 2;
+/// Slots of one hit: its point p (3) and its shading normal ns (3). The geometric normal needs
+/// none: the path tracer reads only its value (make_shading_point, offsets, leaves_below).
+constexpr int kSlotsPerHit = 6;
+constexpr int kSlots = kHitsPerPass * kSlotsPerHit;
+using RDual = Dual<kSlots>;
+/// The local Jacobian of a hit: its triangle's three vertex positions (9) and normals (9).
+constexpr int kLocal = 18;
+using LDual = Dual<kLocal>;
+
+/// One chosen-shape hit of a path that scatters (seg < max depth), as traced.
+struct TapeHit {
+  Hit hit;
+  Vec3 origin;     ///< the ray's origin (value)
+  Vec3 direction;  ///< the ray's fixed direction
+};
+
+/// The hits of the current pass of a path. Hits window .. window + kHitsPerPass - 1 hold slots.
+struct Tape {
+  std::vector<TapeHit> hits;
+  int window = 0;
+  bool moving = false;  ///< a chosen-shape hit at or before the current vertex: p moves
+  void reset(int first) {
+    hits.clear();
+    window = first;
+    moving = false;
+  }
+};
+
+/// The geometry view of a reverse-mode pass: vertices and normals are constants (zero
+/// derivatives); attach() (called by trace_path after each hit) records chosen-shape hits that
+/// scatter and gives those in the pass's window unit derivatives in their slots, on top of the
+/// derivatives p and ns carry from the earlier hits through the ray origin.
+struct ReverseView {
+  using Real = RDual;
+  const Scene* scene;
+  const std::vector<bool>* chosen;
+  Tape* tape;
+  Vec3T<Real> position(int shape, int v) const { return lift<Real>(scene->shapes[shape].mesh.positions[v]); }
+  Vec3T<Real> normal(int shape, int v) const { return lift<Real>(scene->shapes[shape].mesh.normals[v]); }
+  void attach(SurfaceInteraction<Real>& si, const Hit& hit, const Vec3& o, const Vec3& d, bool scatters) const {
+    if (!scatters || !(*chosen)[size_t(si.shape)]) return;
+    tape->moving = true;
+    const int slot = (int(tape->hits.size()) - tape->window) * kSlotsPerHit;
+    tape->hits.push_back({hit, o, d});
+    if (slot < 0 || slot >= kSlots) return;
+    for (int i = 0; i < 3; ++i) {
+      si.p[i].derivatives()[slot + i] += 1.0;
+      si.ns[i].derivatives()[slot + 3 + i] += 1.0;
+    }
+  }
+};
+
+/// The view of a hit's local Jacobian: the three vertices of triangle `tri` carry unit
+/// derivatives, positions in slots 3k..3k+2 and normals in 9+3k..9+3k+2 (k = the vertex's place).
+struct HitJacobianView {
+  using Real = LDual;
+  const Scene* scene;
+  Eigen::Vector3i tri;
+  int place(int v) const { return v == tri[0] ? 0 : (v == tri[1] ? 1 : 2); }
+  Vec3T<Real> unit(const Vec3& x, int first) const {
+    Eigen::Matrix<double, 3, kLocal> m = Eigen::Matrix<double, 3, kLocal>::Zero();
+    m.block<3, 3>(0, first) = Mat3::Identity();
+    return lift<kLocal>(x, m);
+  }
+  Vec3T<Real> position(int shape, int v) const {
+    return unit(scene->shapes[size_t(shape)].mesh.positions[size_t(v)], 3 * place(v));
+  }
+  Vec3T<Real> normal(int shape, int v) const {
+    return unit(scene->shapes[size_t(shape)].mesh.normals[size_t(v)], 9 + 3 * place(v));
+  }
+};
+
+/// Gradient contributions of one sample, committed to its tile only when all are finite.
+struct Contribution {
+  int chosen;  ///< index into ReverseConfig::shapes
+  int vertex;
+  bool normal;  ///< adjoint of the vertex normal (else of the position)
+  Vec3 value;
+};
+
+/// Sums of one tile (or of the whole run): dL/dx and dL/dN per (chosen shape, vertex).
+struct Accumulator {
+  std::unordered_map<uint64_t, Vec3> position, normal;
+  static uint64_t key(int chosen, int vertex) { return (uint64_t(uint32_t(chosen)) << 32) | uint32_t(vertex); }
+  void add(const Contribution& c) {
+    auto& map = c.normal ? normal : position;
+    auto [it, inserted] = map.try_emplace(key(c.chosen, c.vertex), c.value);
+    if (!inserted) it->second += c.value;
+  }
+};
+
+/// The secondary boundary term of a reverse-mode pass (the reverse of BoundaryHook): the edge's
+/// share goes to the sample's contribution list (first pass only), p's share to L's slots.
+struct ReverseBoundaryHook {
+  const PathContext* ctx;
+  const BoundaryContext* bctx;
+  Sampler* sampler;  ///< a stream of its own, so the path's own decisions equal the primal's
+  const Tape* tape;
+  const std::vector<int>* chosen_index;  ///< per shape: its index in the chosen list, or -1
+  Color adjoint;                         ///< the pixel's adjoint / spp
+  bool edges;                            ///< add the edge vertices' share (first pass of the path)
+  std::vector<Contribution>* out;
+
+  void operator()(const SurfaceInteraction<RDual>& si, const ShadingPoint<RDual>& sp, const Vec3& wo_local,
+                  const ColorT<RDual>& beta, int seg, Sampler&, PathStats& stats, ColorT<RDual>& L) const {
+    const auto t0 = std::chrono::steady_clock::now();
+    Eigen::Matrix<double, 3, kSlots> dp;
+    for (int i = 0; i < 3; ++i) dp.row(i) = si.p[i].derivatives().transpose();
+    edgetree::SilhouetteQuery q;
+    q.p = value(si.p);
+    q.frame = sp.frame_value;
+    q.ltc = bsdf_ltc(*sp.bsdf, wo_local);
+    q.eligible = tape->moving ? &bctx->all : &bctx->moving;
+    q.lights = &bctx->lights;
+    q.env_weight = bctx->env_weight;
+    q.emission = &bctx->emission;
+    q.velocities = nullptr;  // a parameter per vertex: no normal-velocity factor
+    const Color T = value(beta);
+    const Vec3 wo_world = q.frame.to_world(wo_local);
+    edgetree::SilhouetteSampleSet set;
+    for (int sample = 0; sample < bctx->samples_per_vertex; ++sample) {
+      ++stats.boundary_traversals;
+      bctx->sampler->sample_set(q, [this] { return sampler->next(); }, set);
+      bool contributed = false;
+      for (int k = 0; k < set.count; ++k) {
+        const edgetree::SilhouetteSample& s = set.samples[size_t(k)];
+        if (!(s.pdf > 0)) continue;
+        const edgetree::ForestEdge& e = *s.edge;
+        const Vec3 w = (e.p0 + s.t * (e.p1 - e.p0) - q.p).normalized();
+        const Color f = bsdf_eval<double>(*sp.bsdf, q.frame.to_local(w), wo_local);
+        Color jump;
+        Vec3 g;
+        if ((f == 0).all() ||
+            !edge_jump_with(*ctx, e, s.t, q.p, spawn_origin(si, w), leaves_below(si, wo_world, w), seg, *sampler,
+                            stats, jump,
+                            [&](const Vec3& gv) {
+                              g = gv;
+                              return true;
+                            }) ||
+            (jump == 0).all())
+          continue;
+        contributed = true;
+        const Color weight = T * f * jump / (s.pdf * bctx->samples_per_vertex);
+        // p's share: J = g . (v_edge - dp), the -g . dp part through L's slots.
+        const Eigen::Matrix<double, 1, kSlots> Jp = -(g.transpose() * dp);
+        if (!Jp.isZero(0.0))
+          for (int c = 0; c < 3; ++c) L[c] += RDual(0.0, (weight[c] * Jp).transpose());
+        // The edge's share: its vertices' velocities, (1 - t) v0 + t v1.
+        const int ci = (*chosen_index)[size_t(e.shape)];
+        if (edges && ci >= 0) {
+          const double a = (adjoint * weight).sum();
+          out->push_back({ci, e.v0, false, Vec3(a * (1 - s.t) * g)});
+          out->push_back({ci, e.v1, false, Vec3(a * s.t * g)});
+        }
+      }
+      stats.boundary_zero += !contributed;
+    }
+    stats.boundary_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  }
+};
+
+bool finite(const std::vector<Contribution>& cs) {
+  for (const Contribution& c : cs)
+    if (!c.value.allFinite()) return false;
+  return true;
+}
+
+}  // namespace
+
+class ReverseEstimator::Impl {
+ public:
+  Impl(const Scene& s, ReverseConfig c) : scene(s), config(std::move(c)), tracer(s), lights(s) {
+    if (config.shapes.empty()) throw Error("reverse mode: no shape to differentiate");
+    chosen.assign(s.shapes.size(), false);
+    chosen_index.assign(s.shapes.size(), -1);
+    for (size_t i = 0; i < config.shapes.size(); ++i) {
+      const int sh = config.shapes[i];
+      if (sh < 0 || sh >= int(s.shapes.size()))
+        throw Error("reverse mode: shape index " + std::to_string(sh) + " out of range (the scene has " +
+                    std::to_string(s.shapes.size()) + " shapes)");
+      if (chosen[size_t(sh)]) throw Error("reverse mode: shape index " + std::to_string(sh) + " given twice");
+      chosen[size_t(sh)] = true;
+      chosen_index[size_t(sh)] = int(i);
+    }
+    if (config.method != Method::None && !samples_edges(config.method))
+      throw Error("method " + std::string(method_name(config.method)) + " cannot estimate derivatives");
+    ctx = lights.context(s, tracer);
+    setup.structure = "none";
+    if (samples_edges(config.method)) {
+      boundary = build_boundary_setup(s, config.method);
+      bctx.sampler = boundary.sampler.get();
+      bctx.velocities = nullptr;
+      bctx.moving = chosen;
+      bctx.all.assign(s.shapes.size(), true);
+      bctx.samples_per_vertex = std::max(1, config.boundary_spp);
+      set_light_importance(s, lights.environment, bctx);
+      primary = find_primary_edges(s, *boundary.edges, chosen);
+      setup.edge_seconds = boundary.seconds;
+      setup.edges = int(boundary.edges->edges().size() + boundary.edges->always_edges().size());
+      setup.primary_edges = int(primary.size());
+      if (boundary.forest)
+        for (const auto& st : boundary.forest->stats()) {
+          setup.fitted_nodes += st.fitted;
+          setup.quadric_nodes += st.quadrics;
+        }
+      setup.structure = boundary.forest ? (uses_quadrics(config.method) ? "edge forest (dual box + quadrics)"
+                                                                         : "edge forest (dual box)")
+                                        : (config.method == Method::Uniform ? "edge set + uniform tables"
+                                                                            : "edge set + v-sphere tree");
+    }
+  }
+
+  /// Adds the adjoints of the slots of tape hits [first, first + kHitsPerPass) to `out` through
+  /// each hit's local Jacobian.
+  void backpropagate_hits(const Tape& tape, const ColorT<RDual>& L, const Color& a,
+                          std::vector<Contribution>& out) const {
+    const int last = std::min(int(tape.hits.size()), tape.window + kHitsPerPass);
+    for (int h = tape.window; h < last; ++h) {
+      const int slot = (h - tape.window) * kSlotsPerHit;
+      Eigen::Matrix<double, kSlotsPerHit, 1> adj = Eigen::Matrix<double, kSlotsPerHit, 1>::Zero();
+      for (int c = 0; c < 3; ++c) adj += a[c] * L[c].derivatives().segment<kSlotsPerHit>(slot);
+      if (adj.isZero(0.0)) continue;
+      const TapeHit& th = tape.hits[size_t(h)];
+      const Shape& shape = scene.shapes[size_t(th.hit.shape)];
+      const Eigen::Vector3i tri = shape.mesh.triangles[size_t(th.hit.triangle)];
+      const HitJacobianView view{&scene, tri};
+      const SurfaceInteraction<LDual> si =
+          make_interaction(view, th.hit, lift<LDual>(th.origin), th.direction, tracer.local_origin());
+      Eigen::Matrix<double, kLocal, 1> local = Eigen::Matrix<double, kLocal, 1>::Zero();
+      for (int i = 0; i < 3; ++i) local += adj[i] * si.p[i].derivatives() + adj[3 + i] * si.ns[i].derivatives();
+      const int ci = chosen_index[size_t(th.hit.shape)];
+      // (A degenerate triangle repeating a vertex holds its derivatives at the first place.)
+      for (int k = 0; k < 3; ++k) {
+        out.push_back({ci, tri[k], false, Vec3(local.segment<3>(3 * k))});
+        out.push_back({ci, tri[k], true, Vec3(local.segment<3>(9 + 3 * k))});
+      }
+    }
+  }
+
+  const Scene& scene;
+  ReverseConfig config;
+  RayTracer tracer;
+  LightSetup lights;
+  PathContext ctx;
+  BoundarySetup boundary;
+  BoundaryContext bctx;
+  std::vector<PrimaryEdge> primary;
+  std::vector<bool> chosen;
+  std::vector<int> chosen_index;
+  SetupReport setup;
+};
+
+ReverseEstimator::ReverseEstimator(const Scene& scene, ReverseConfig config) {
+  const auto t0 = std::chrono::steady_clock::now();
+  impl_ = std::make_unique<Impl>(scene, std::move(config));
+  impl_->setup.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+ReverseEstimator::~ReverseEstimator() = default;
+ReverseEstimator::ReverseEstimator(ReverseEstimator&&) noexcept = default;
+ReverseEstimator& ReverseEstimator::operator=(ReverseEstimator&&) noexcept = default;
+const ReverseConfig& ReverseEstimator::config() const { return impl_->config; }
+const SetupReport& ReverseEstimator::setup() const { return impl_->setup; }
+
+ReverseResult ReverseEstimator::run(const std::vector<double>& adjoint, const RenderOptions& options) const {
+  const Impl& m = *impl_;
+  const Scene& scene = m.scene;
+  const Camera& cam = scene.camera;
+  const int W = cam.width, H = cam.height;
+  const size_t expected = size_t(W) * size_t(H) * 3;
+  if (adjoint.size() != expected)
+    throw Error("adjoint image: expected " + std::to_string(W) + " x " + std::to_string(H) + " x 3 = " +
+                std::to_string(expected) + " values (got " + std::to_string(adjoint.size()) + ")");
+  for (size_t i = 0; i < adjoint.size(); ++i)
+    if (!std::isfinite(adjoint[i]))
+      throw Error("adjoint image: non-finite weight at pixel (" + std::to_string((i / 3) % size_t(W)) + ", " +
+                  std::to_string((i / 3) / size_t(W)) + ")");
+  const int count = options.spp > 0 ? options.spp : cam.spp;
+  if (count <= 0) throw Error("spp must be positive (got " + std::to_string(count) + ")");
+  if (options.first_sample < 0)
+    throw Error("the first sample index must be >= 0 (got " + std::to_string(options.first_sample) + ")");
+  if (options.parts != 1) throw Error("reverse mode runs in one process (parts = 1)");
+  const int first = options.first_sample;
+  const auto t0 = std::chrono::steady_clock::now();
+
+  ReverseResult r;
+  r.width = W;
+  r.height = H;
+  r.spp = count;
+  r.image.assign(expected, 0.0);
+  const Vec3 origin = cam.origin();
+  const bool with_boundary = bool(m.boundary.sampler);
+
+  // ---- Interior and secondary boundary terms, per 16 x 16 tile.
+  const int tiles_x = (W + 15) / 16, tiles_y = (H + 15) / 16;
+  const int tiles = tiles_x * tiles_y;
+  std::vector<Accumulator> acc(static_cast<size_t>(tiles));
+  std::vector<PathStats> tile_stats(static_cast<size_t>(tiles));
+  std::vector<double> tile_loss(static_cast<size_t>(tiles), 0.0);
+  std::vector<uint64_t> tile_nonfinite(static_cast<size_t>(tiles), 0), tile_replays(static_cast<size_t>(tiles), 0);
+  auto tile_body = [&](int tile) {
+    const int x0 = (tile % tiles_x) * 16, y0 = (tile / tiles_x) * 16;
+    Tape tape;
+    std::vector<Contribution> contributions;
+    const ReverseView view{&scene, &m.chosen, &tape};
+    PathStats& st = tile_stats[size_t(tile)];
+    for (int y = y0; y < std::min(H, y0 + 16); ++y)
+      for (int x = x0; x < std::min(W, x0 + 16); ++x) {
+        const uint64_t pixel = uint64_t(y) * uint64_t(W) + uint64_t(x);
+        const Color a = Eigen::Map<const Color>(&adjoint[3 * pixel]) / double(count);
+        Color sum = Color::Zero();
+        for (int s = first; s < first + count; ++s) {
+          contributions.clear();
+          // One pass: the path from the sample's first random number, slots for tape hits
+          // [window, window + kHitsPerPass). Every pass draws the same numbers: the same path.
+          auto pass = [&](int window, ColorT<RDual>& L) {
+            tape.reset(window);
+            Sampler sampler(options.seed, pixel, uint64_t(s));
+            const Vec2 u = sampler.next2();
+            const Vec3 d = cam.direction(x + u.x(), y + u.y());
+            ++st.rays;
+            const Hit hit = m.tracer.intersect(origin, d);
+            if (with_boundary) {
+              Sampler bsampler(options.seed, pixel, uint64_t(s), 1);
+              const ReverseBoundaryHook hook{&m.ctx, &m.bctx, &bsampler, &tape, &m.chosen_index,
+                                             a,      window == 0, &contributions};
+              L = trace_path(m.ctx, view, lift<RDual>(origin), d, hit, 0, 0.0, sampler, st, hook);
+            } else {
+              L = trace_path(m.ctx, view, lift<RDual>(origin), d, hit, 0, 0.0, sampler, st);
+            }
+            m.backpropagate_hits(tape, L, a, contributions);
+          };
+          ColorT<RDual> L;
+          pass(0, L);
+          const Color value_L = value(L);
+          for (int w = kHitsPerPass; w < int(tape.hits.size()); w += kHitsPerPass) {
+            ColorT<RDual> Lw;
+            pass(w, Lw);
+            ++tile_replays[size_t(tile)];
+          }
+          if (!value_L.allFinite() || !finite(contributions)) {
+            ++tile_nonfinite[size_t(tile)];
+            continue;
+          }
+          sum += value_L;
+          for (const Contribution& c : contributions) acc[size_t(tile)].add(c);
+        }
+        for (int c = 0; c < 3; ++c) r.image[3 * pixel + size_t(c)] = sum[c] / count;
+        tile_loss[size_t(tile)] += (Eigen::Map<const Color>(&adjoint[3 * pixel]) * sum).sum() / count;
+      }
+  };
+  auto run_tiles = [&] {
+    tbb::parallel_for(0, tiles, [&](int tile) { tile_body(tile); });
+  };
+  if (options.threads > 0)
+    tbb::task_arena(options.threads).execute(run_tiles);
+  else
+    run_tiles();
+
+  // ---- Sums in tile order (deterministic whatever the thread count).
+  std::vector<std::vector<Vec3>> d_position(m.config.shapes.size()), d_normal(m.config.shapes.size());
+  for (size_t i = 0; i < m.config.shapes.size(); ++i) {
+    const size_t n = scene.shapes[size_t(m.config.shapes[i])].mesh.positions.size();
+    d_position[i].assign(n, Vec3::Zero());
+    d_normal[i].assign(n, Vec3::Zero());
+  }
+  // Within a tile, each vertex's sum is in sample order; across tiles, in tile order (the maps'
+  // iteration order changes neither).
+  for (int tile = 0; tile < tiles; ++tile) {
+    for (const auto& [key, v] : acc[size_t(tile)].position) d_position[key >> 32][key & 0xffffffffu] += v;
+    for (const auto& [key, v] : acc[size_t(tile)].normal) d_normal[key >> 32][key & 0xffffffffu] += v;
+    r.loss += tile_loss[size_t(tile)];
+    const PathStats& st = tile_stats[size_t(tile)];
+    r.rays += st.rays;
+    r.traversals += st.boundary_traversals;
+    r.zero_traversals += st.boundary_zero;
+    r.nonfinite += tile_nonfinite[size_t(tile)];
+    r.replays += tile_replays[size_t(tile)];
+  }
+
+  // ---- Primary boundary term: the camera's edge samples, weighted by their pixel's adjoint.
+  if (with_boundary) {
+    PathStats st;
+    for_each_primary_sample(m.ctx, m.primary, first, count, options.seed, options.threads, st,
+                            [&](const PrimarySample& ps) {
+                              const size_t pixel = size_t(ps.py) * size_t(W) + size_t(ps.px);
+                              const double a = (Eigen::Map<const Color>(&adjoint[3 * pixel]) * ps.weight).sum() / count;
+                              const Vec3 g0 = a * (1 - ps.t) * ps.g, g1 = a * ps.t * ps.g;
+                              if (!g0.allFinite() || !g1.allFinite()) {
+                                ++r.nonfinite;
+                                return;
+                              }
+                              const int ci = m.chosen_index[size_t(ps.edge->shape)];
+                              d_position[size_t(ci)][size_t(ps.edge->v0)] += g0;
+                              d_position[size_t(ci)][size_t(ps.edge->v1)] += g1;
+                            });
+    r.rays += st.rays;
+    r.traversals += st.boundary_traversals;
+    r.zero_traversals += st.boundary_zero;
+  }
+
+  // ---- Vertex normals -> positions (area-weighted normals of the moving mesh).
+  for (size_t i = 0; i < m.config.shapes.size(); ++i) {
+    const Shape& shape = scene.shapes[size_t(m.config.shapes[i])];
+    if (!shape.face_normals && !shape.mesh.normals.empty())
+      vertex_normals_adjoint(shape.mesh, d_normal[i], d_position[i]);
+  }
+  r.gradient = std::move(d_position);
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return r;
+}
+
+std::vector<int> resolve_shapes(const Scene& scene, const std::vector<std::string>& ids) {
+  std::vector<int> out;
+  std::set<int> seen;
+  for (const std::string& id : ids) {
+    const int s = scene.find_shape(id);
+    if (s < 0) throw Error("--shape '" + id + "': no shape with this id in " + scene.file.string());
+    if (!seen.insert(s).second) throw Error("--shape '" + id + "': given twice");
+    out.push_back(s);
+  }
+  return out;
+}
+
+}  // namespace qsil

@@ -1,0 +1,257 @@
+// Reverse mode (qsil/integrators/reverse.h) against forward mode, the oracle it must reproduce:
+// for a parameter theta with vertex velocities v_j = dx_j/dtheta, sum_j (dL/dx_j) . v_j must equal
+// sum_x,c w_c(x) dI_c(x)/dtheta of `qsil grad` (forward mode, itself checked against finite
+// differences in gradient_vs_fd_test.cpp).
+// - Interior term: with the same seed both modes trace the same paths, so the two sums agree to
+//   rounding (relative 1e-9) for translations, rotations and a single vertex of two shapes at
+//   once, through paths with up to five chosen-shape hits (replayed passes).
+// - Boundary terms: the edge sampler's importance differs (reverse mode has no velocities), so
+//   the check is statistical: independent seeds, the difference from forward mode and from
+//   central finite differences each within 3.5 combined standard errors (two-sided, 99.95 % for
+//   a correct estimator), with power: each combined standard error below 4 % of the value.
+#include "qsil/integrators/estimator.h"
+#include "qsil/integrators/reverse.h"
+#include "qsil/error.h"
+#include "qsil/rng.h"
+#include "qsil/scene.h"
+#include "qsil/vertex_normals.h"
+#include "test_data.h"
+#include "test_scenes.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numeric>
+
+namespace qsil {
+namespace {
+
+/// A fixed pseudo-random adjoint image with both signs in every channel.
+std::vector<double> random_adjoint(const Scene& scene, uint64_t seed) {
+  Sampler rng(seed, 0, 0);
+  std::vector<double> w(size_t(scene.camera.width) * scene.camera.height * 3);
+  for (double& v : w) v = 2 * rng.next() - 1;
+  return w;
+}
+
+/// sum_x,c w_c(x) dI_c/dtheta_k of a forward-mode film.
+double forward_dot(const Film& film, const FilmLayout& layout, int k, const std::vector<double>& w) {
+  double s = 0;
+  for (int y = 0; y < film.height(); ++y)
+    for (int x = 0; x < film.width(); ++x)
+      for (int c = 0; c < 3; ++c) s += w[3 * (size_t(y) * film.width() + x) + c] * film.mean(layout.derivative(k, c), x, y);
+  return s;
+}
+
+/// sum_j g_j . v_j for parameter k (velocities of the chosen shapes, in ReverseConfig order).
+double reverse_dot(const ReverseResult& r, const std::vector<int>& shapes, const SceneVelocities& vel, int k) {
+  double s = 0;
+  for (size_t i = 0; i < shapes.size(); ++i)
+    for (size_t v = 0; v < r.gradient[i].size(); ++v)
+      s += r.gradient[i][v].dot(vel.position[size_t(shapes[i])][v].col(k));
+  return s;
+}
+
+TEST(ReverseMode, VertexNormalsAdjointIsTheTransposeOfTheirForwardDerivative) {
+  // A bumpy icosphere (irregular areas), a random adjoint per normal and a random motion per
+  // vertex: a . (dN/dx) delta in forward mode equals (dL/dx) . delta from the adjoint.
+  TriangleMesh mesh = test::icosphere(2);
+  Sampler rng(7, 0, 0);
+  for (Vec3& p : mesh.positions) p *= 0.8 + 0.4 * rng.next();
+  std::vector<Vec3> d_normal(mesh.positions.size()), delta(mesh.positions.size());
+  for (size_t i = 0; i < d_normal.size(); ++i) {
+    d_normal[i] = Vec3(rng.next(), rng.next(), rng.next()) - Vec3::Constant(0.5);
+    delta[i] = Vec3(rng.next(), rng.next(), rng.next()) - Vec3::Constant(0.5);
+  }
+  std::vector<Vec3T<Dual<1>>> pos(mesh.positions.size());
+  for (size_t i = 0; i < pos.size(); ++i) pos[i] = lift<1>(mesh.positions[i], Eigen::Matrix<double, 3, 1>(delta[i]));
+  const auto n = vertex_normals_t(mesh, pos);
+  double forward = 0, scale = 0;
+  for (size_t i = 0; i < n.size(); ++i)
+    for (int r = 0; r < 3; ++r) {
+      forward += d_normal[i][r] * n[i][r].derivatives()[0];
+      scale += std::abs(d_normal[i][r] * n[i][r].derivatives()[0]);
+    }
+  std::vector<Vec3> d_position(mesh.positions.size(), Vec3::Zero());
+  vertex_normals_adjoint(mesh, d_normal, d_position);
+  double reverse = 0;
+  for (size_t i = 0; i < delta.size(); ++i) reverse += d_position[i].dot(delta[i]);
+  ASSERT_GT(scale, 1.0);  // not vacuous
+  EXPECT_NEAR(reverse, forward, 1e-10 * scale);
+}
+
+TEST(ReverseMode, InteriorTermEqualsForwardModeOnTheSamePaths) {
+  // Spot above a GGX mirror under an environment map, 6 segments: paths hit Spot and the mirror
+  // several times. Four parameters of both shapes, all from one reverse run.
+  const Scene scene = load_scene(test::repo_path("scenes/spot-mirror.xml"),
+                                 {{"res", "24"}, {"spp", "4"}, {"max_depth", "6"}});
+  const std::vector<ParameterSpec> params =
+      parse_parameters({"spot:translate:0.3,1,-0.2", "spot:rotate:0,1,0", "spot:vertex:100:1,0.5,0",
+                        "mirror:rotate:1,0,0"},
+                       scene);
+  const std::vector<int> shapes = resolve_shapes(scene, {"spot", "mirror"});
+  const std::vector<double> w = random_adjoint(scene, 3);
+  RenderOptions opt;
+  opt.seed = 11;
+  opt.progress = false;
+  const Estimator forward(scene, EstimatorConfig::gradient(params, Method::None));
+  const RenderResult f = forward.run(opt);
+  const ReverseEstimator reverse(scene, ReverseConfig{shapes, Method::None, 1});
+  const ReverseResult r = reverse.run(w, opt);
+  EXPECT_GT(r.replays, 0u) << "no path had more than two chosen-shape hits: the replay is untested";
+  EXPECT_EQ(r.nonfinite, 0u);
+  const SceneVelocities vel = compute_velocities(scene, params);
+  for (int k = 0; k < int(params.size()); ++k) {
+    const double a = forward_dot(f.film, forward.layout(), k, w), b = reverse_dot(r, shapes, vel, k);
+    std::printf("%-28s forward %.12g reverse %.12g\n", params[size_t(k)].text.c_str(), a, b);
+    EXPECT_GT(std::abs(a), 1e-3) << "vacuous";
+    EXPECT_NEAR(b, a, 1e-9 * std::abs(a)) << params[size_t(k)].text;
+  }
+  // The primal image of the same paths, and the loss of the linear adjoint.
+  double loss = 0;
+  for (int y = 0; y < scene.camera.height; ++y)
+    for (int x = 0; x < scene.camera.width; ++x)
+      for (int c = 0; c < 3; ++c) {
+        const size_t i = 3 * (size_t(y) * scene.camera.width + x) + c;
+        EXPECT_NEAR(r.image[i], f.film.mean(forward.layout().primal(c), x, y), 1e-12 * (1 + std::abs(r.image[i])));
+        loss += w[i] * r.image[i];
+      }
+  EXPECT_NEAR(r.loss, loss, 1e-9 * std::abs(loss));
+}
+
+/// Mean and standard error of `runs` independent estimates.
+struct Estimate {
+  double mean = 0, se = 0;
+};
+template <class F>
+Estimate estimate(int runs, F&& one) {
+  std::vector<double> v;
+  for (int i = 0; i < runs; ++i) v.push_back(one(uint64_t(1000 + 17 * i)));
+  Estimate e;
+  e.mean = std::accumulate(v.begin(), v.end(), 0.0) / runs;
+  double var = 0;
+  for (double x : v) var += (x - e.mean) * (x - e.mean);
+  e.se = std::sqrt(var / (runs - 1) / runs);
+  return e;
+}
+
+/// The boundary-term check of the file comment for `param` of shape `shape_id` in a scene. The
+/// adjoint is the sign of a pilot forward-mode derivative per pixel-channel (its own seed), so
+/// that the weighted sum adds the derivative's magnitude everywhere instead of cancelling.
+void expect_boundary_agreement(const Scene& scene, const std::string& param, const std::string& shape_id, int runs) {
+  const std::vector<ParameterSpec> params = parse_parameters({param}, scene);
+  const std::vector<int> shapes = resolve_shapes(scene, {shape_id});
+  const SceneVelocities vel = compute_velocities(scene, params);
+  const Estimator forward(scene, EstimatorConfig::gradient(params, Method::Quadric));
+  const ReverseEstimator reverse(scene, ReverseConfig{shapes, Method::Quadric, 1});
+  RenderOptions pilot_options;
+  pilot_options.seed = 99;
+  pilot_options.progress = false;
+  const RenderResult pilot = forward.run(pilot_options);
+  std::vector<double> w(size_t(scene.camera.width) * scene.camera.height * 3);
+  for (int y = 0; y < scene.camera.height; ++y)
+    for (int x = 0; x < scene.camera.width; ++x)
+      for (int c = 0; c < 3; ++c) {
+        const double d = pilot.film.mean(forward.layout().derivative(0, c), x, y);
+        w[3 * (size_t(y) * scene.camera.width + x) + c] = d > 0 ? 1.0 : (d < 0 ? -1.0 : 0.0);
+      }
+  // Forward mode's seeds are the reverse runs' + 1: independent samples.
+  const Estimate a = estimate(runs, [&](uint64_t seed) {
+    RenderOptions opt;
+    opt.seed = seed + 1;
+    opt.progress = false;
+    return forward_dot(forward.run(opt).film, forward.layout(), 0, w);
+  });
+  const Estimate b = estimate(runs, [&](uint64_t seed) {
+    RenderOptions opt;
+    opt.seed = seed;
+    opt.progress = false;
+    return reverse_dot(reverse.run(w, opt), shapes, vel, 0);
+  });
+  // Central finite differences with common random numbers (step 1e-2, as gradient_check's cases),
+  // at 4x the spp: FD is cheap per sample and noisier at silhouettes.
+  const Estimator fd(scene, EstimatorConfig::finite_differences(params, {1e-2}));
+  const Estimate c = estimate(runs, [&](uint64_t seed) {
+    RenderOptions opt;
+    opt.spp = 4 * scene.camera.spp;
+    opt.seed = seed + 2;
+    opt.progress = false;
+    return forward_dot(fd.run(opt).film, fd.layout(), 0, w);
+  });
+  const double se = std::hypot(a.se, b.se), se_fd = std::hypot(c.se, b.se);
+  std::printf("%s: forward %.5g +- %.3g, reverse %.5g +- %.3g (z %.2f), FD %.5g +- %.3g (z %.2f)\n", param.c_str(),
+              a.mean, a.se, b.mean, b.se, (b.mean - a.mean) / se, c.mean, c.se, (b.mean - c.mean) / se_fd);
+  EXPECT_LT(se, 0.04 * std::abs(a.mean)) << "no power";
+  EXPECT_NEAR(b.mean, a.mean, 3.5 * se);
+  EXPECT_LT(se_fd, 0.04 * std::abs(c.mean)) << "no power";
+  EXPECT_NEAR(b.mean, c.mean, 3.5 * se_fd);
+}
+
+TEST(ReverseMode, SecondaryBoundaryTermAgreesWithForwardMode) {
+  // Spot translating under a small light: its shadows on itself (a moving p sees the static
+  // light's outline and Spot's own silhouettes move), and its outline against the environment.
+  const Scene scene = load_scene(test::data_file("tests/data/gradient/spot-selfshadow.xml"),
+                                 {{"res", "16"}, {"spp", "192"}});
+  expect_boundary_agreement(scene, "spot:translate:1,0,0", "spot", 8);
+}
+
+TEST(ReverseMode, PrimaryBoundaryTermAgreesWithForwardMode) {
+  // Spot under a constant environment with one segment: Spot is black and the environment is
+  // seen around it, so the derivative is Spot's outline moving across the image, the primary
+  // boundary term alone.
+  const Scene scene = load_scene(test::data_file("tests/data/gradient/spot-selfshadow.xml"),
+                                 {{"res", "16"}, {"spp", "64"}, {"max_depth", "1"}});
+  expect_boundary_agreement(scene, "spot:translate:1,0,0", "spot", 8);
+}
+
+TEST(ReverseMode, SameGradientForAnyThreadCount) {
+  const Scene scene = load_scene(test::data_file("tests/data/gradient/spot-selfshadow.xml"),
+                                 {{"res", "16"}, {"spp", "4"}});
+  const ReverseEstimator reverse(scene, ReverseConfig{resolve_shapes(scene, {"spot"}), Method::Quadric, 1});
+  const std::vector<double> w = random_adjoint(scene, 5);
+  RenderOptions opt;
+  opt.seed = 3;
+  opt.progress = false;
+  opt.threads = 1;
+  const ReverseResult one = reverse.run(w, opt);
+  opt.threads = 2;
+  const ReverseResult two = reverse.run(w, opt);
+  ASSERT_EQ(one.gradient.size(), two.gradient.size());
+  size_t nonzero = 0;
+  for (size_t v = 0; v < one.gradient[0].size(); ++v) {
+    EXPECT_EQ(one.gradient[0][v], two.gradient[0][v]) << "vertex " << v;
+    nonzero += !one.gradient[0][v].isZero(0.0);
+  }
+  EXPECT_GT(nonzero, 100u);
+  EXPECT_EQ(one.loss, two.loss);
+}
+
+TEST(ReverseMode, BadInputGetsAOneLineError) {
+  const Scene scene = load_scene(test::data_file("tests/data/gradient/spot-selfshadow.xml"),
+                                 {{"res", "8"}, {"spp", "1"}});
+  auto message = [](auto&& f) {
+    try {
+      f();
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_EQ(message([&] { resolve_shapes(scene, {"cow"}); }).rfind("--shape 'cow': no shape with this id in ", 0), 0u);
+  EXPECT_EQ(message([&] { resolve_shapes(scene, {"spot", "spot"}); }), "--shape 'spot': given twice");
+  EXPECT_EQ(message([&] { ReverseEstimator(scene, ReverseConfig{{7}, Method::None, 1}); }),
+            "reverse mode: shape index 7 out of range (the scene has 2 shapes)");
+  EXPECT_EQ(message([&] { ReverseEstimator(scene, ReverseConfig{{}, Method::None, 1}); }),
+            "reverse mode: no shape to differentiate");
+  const ReverseEstimator reverse(scene, ReverseConfig{{0}, Method::None, 1});
+  RenderOptions opt;
+  opt.progress = false;
+  EXPECT_EQ(message([&] { reverse.run(std::vector<double>(10, 0.0), opt); }),
+            "adjoint image: expected 8 x 8 x 3 = 192 values (got 10)");
+  std::vector<double> w(192, 0.0);
+  w[3 * (8 * 2 + 5) + 1] = std::nan("");
+  EXPECT_EQ(message([&] { reverse.run(w, opt); }), "adjoint image: non-finite weight at pixel (5, 2)");
+}
+
+}  // namespace
+}  // namespace qsil
