@@ -1,7 +1,7 @@
 #pragma once
 /// @file reverse.h
 /// Reverse mode: the gradient of a scalar loss with respect to every vertex position of chosen
-/// shapes (docs/architecture.md §9), for the inverse-rendering loop of [QSS §5.5]. The loss is
+/// shapes (docs/architecture.md §13), for the inverse-rendering loop of [QSS §5.5]. The loss is
 ///   L = sum over pixels x and channels c of w_c(x) I_c(x),
 /// w an adjoint image (for an L2 loss sum (I - I_target)^2: w = 2 (I - I_target)). The estimate
 /// is that of `qsil grad` in the same fixed-direction parametrization, read backwards:

@@ -1,0 +1,208 @@
+/// @file qsil_module.cpp
+/// The Python module `qsil` (pybind11 and NumPy from Debian; built by CMake beside the library,
+/// <build>/python/qsil*.so; docs/architecture.md §13): load a scene, read and set vertex
+/// positions, render, forward-mode derivative images and reverse-mode per-vertex gradients, as
+/// NumPy arrays. Images are (height, width, 3) float64 arrays, row 0 the top of the picture.
+/// Every qsil::Error becomes `qsil.Error` (a ValueError) with the one-line message; rendering
+/// releases the GIL.
+
+#include "qsil/error.h"
+#include "qsil/integrators/estimator.h"
+#include "qsil/integrators/reverse.h"
+#include "qsil/method.h"
+#include "qsil/parameters.h"
+#include "qsil/scene.h"
+
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <cmath>
+#include <optional>
+
+namespace py = pybind11;
+
+namespace qsil {
+namespace {
+
+using Array = py::array_t<double, py::array::c_style | py::array::forcecast>;
+
+/// The index of shape `id`; throws qsil::Error naming it when the scene has none.
+int shape_index(const Scene& scene, const std::string& id) {
+  const int s = scene.find_shape(id);
+  if (s < 0) throw Error("shape '" + id + "': no shape with this id in " + scene.file.string());
+  return s;
+}
+
+/// Render options from the keyword arguments (spp <= 0: the scene's sample count).
+RenderOptions options(int spp, uint64_t seed, int threads) {
+  RenderOptions o;
+  o.spp = spp;
+  o.seed = seed;
+  o.threads = threads;
+  o.progress = false;
+  return o;
+}
+
+/// Channel `channel(c)` of a film's pixel means as an (H, W, 3) array.
+template <class Channel>
+Array film_image(const Film& film, Channel&& channel) {
+  Array out({film.height(), film.width(), 3});
+  auto m = out.mutable_unchecked<3>();
+  for (int y = 0; y < film.height(); ++y)
+    for (int x = 0; x < film.width(); ++x)
+      for (int c = 0; c < 3; ++c) m(y, x, c) = film.mean(channel(c), x, y);
+  return out;
+}
+
+/// Sets shape `id`'s vertex positions from a (V, 3) array and recomputes its area-weighted vertex
+/// normals (unless it uses face normals), as a displaced scene does. Throws qsil::Error for a
+/// wrong shape or a non-finite or too large coordinate.
+void set_vertices(Scene& scene, const std::string& id, const Array& v) {
+  Shape& shape = scene.shapes[size_t(shape_index(scene, id))];
+  TriangleMesh& mesh = shape.mesh;
+  if (v.ndim() != 2 || v.shape(1) != 3 || v.shape(0) != mesh.num_vertices())
+    throw Error("set_vertices('" + id + "'): expected an array of shape (" + std::to_string(mesh.num_vertices()) +
+                ", 3)");
+  auto a = v.unchecked<2>();
+  std::vector<Vec3> pos(size_t(mesh.num_vertices()));
+  for (py::ssize_t i = 0; i < v.shape(0); ++i) {
+    pos[size_t(i)] = Vec3(a(i, 0), a(i, 1), a(i, 2));
+    if (!pos[size_t(i)].allFinite() || pos[size_t(i)].cwiseAbs().maxCoeff() > kMaxCoordinate)
+      throw Error("set_vertices('" + id + "'): vertex " + std::to_string(i) +
+                  " is non-finite or beyond 1e12 scene units");
+  }
+  mesh.positions = std::move(pos);
+  if (!shape.face_normals) mesh.normals = vertex_normals(mesh);
+}
+
+}  // namespace
+}  // namespace qsil
+
+PYBIND11_MODULE(qsil, m) {
+  using namespace qsil;
+  m.doc() = "qsil: a differentiable path tracer with quadric-based silhouette sampling (Python bindings)";
+  py::register_exception<Error>(m, "Error", PyExc_ValueError);
+
+  py::class_<Scene>(m, "Scene", "A scene loaded from Mitsuba 3 XML (geometry in world space)")
+      .def(py::init([](const std::string& path, const std::map<std::string, std::string>& defines) {
+             return load_scene(path, defines);
+           }),
+           py::arg("path"), py::arg("defines") = std::map<std::string, std::string>{},
+           "Loads PATH; `defines` override <default> values (the CLI's -D name=value). Raises qsil.Error.")
+      .def_property_readonly("width", [](const Scene& s) { return s.camera.width; })
+      .def_property_readonly("height", [](const Scene& s) { return s.camera.height; })
+      .def_property_readonly("spp", [](const Scene& s) { return s.camera.spp; }, "the scene's sample count")
+      .def_property_readonly("shape_ids",
+                             [](const Scene& s) {
+                               std::vector<std::string> ids;
+                               for (const Shape& sh : s.shapes) ids.push_back(sh.id);
+                               return ids;
+                             })
+      .def(
+          "vertices",
+          [](const Scene& s, const std::string& id) {
+            const TriangleMesh& mesh = s.shapes[size_t(shape_index(s, id))].mesh;
+            Array out({mesh.num_vertices(), 3});
+            auto a = out.mutable_unchecked<2>();
+            for (int i = 0; i < mesh.num_vertices(); ++i)
+              for (int r = 0; r < 3; ++r) a(i, r) = mesh.positions[size_t(i)][r];
+            return out;
+          },
+          py::arg("shape"), "Vertex positions (V, 3) of a shape, world space (a copy)")
+      .def(
+          "triangles",
+          [](const Scene& s, const std::string& id) {
+            const TriangleMesh& mesh = s.shapes[size_t(shape_index(s, id))].mesh;
+            py::array_t<int> out({mesh.num_triangles(), 3});
+            auto a = out.mutable_unchecked<2>();
+            for (int f = 0; f < mesh.num_triangles(); ++f)
+              for (int r = 0; r < 3; ++r) a(f, r) = mesh.triangles[size_t(f)][r];
+            return out;
+          },
+          py::arg("shape"), "Triangles (T, 3) of a shape: vertex indices, counter-clockwise = outward")
+      .def("set_vertices", &set_vertices, py::arg("shape"), py::arg("positions"),
+           "Sets a shape's vertex positions (V, 3) and recomputes its area-weighted vertex normals");
+
+  m.def(
+      "render",
+      [](const Scene& scene, int spp, uint64_t seed, int threads) {
+        std::optional<RenderResult> r;
+        {
+          py::gil_scoped_release release;
+          r = Estimator(scene, EstimatorConfig::primal()).run(options(spp, seed, threads));
+        }
+        const FilmLayout layout;
+        return film_image(r->film, [&](int c) { return layout.primal(c); });
+      },
+      py::arg("scene"), py::arg("spp") = 0, py::arg("seed") = 0, py::arg("threads") = 0,
+      "The primal image (H, W, 3); spp 0: the scene's sample count");
+
+  m.def(
+      "grad",
+      [](const Scene& scene, const std::vector<std::string>& params, int spp, uint64_t seed, int threads,
+         const std::string& boundary, int boundary_spp) {
+        const Method method = parse_method(boundary, "boundary", kBoundaryMethods);
+        const std::vector<ParameterSpec> specs = parse_parameters(params, scene);
+        std::optional<Estimator> e;
+        std::optional<RenderResult> r;
+        {
+          py::gil_scoped_release release;
+          e.emplace(scene, EstimatorConfig::gradient(specs, method, boundary_spp));
+          r = e->run(options(spp, seed, threads));
+        }
+        const FilmLayout& layout = e->layout();
+        Array d({py::ssize_t(specs.size()), py::ssize_t(scene.camera.height), py::ssize_t(scene.camera.width),
+                 py::ssize_t(3)});
+        auto a = d.mutable_unchecked<4>();
+        for (int k = 0; k < int(specs.size()); ++k)
+          for (int y = 0; y < scene.camera.height; ++y)
+            for (int x = 0; x < scene.camera.width; ++x)
+              for (int c = 0; c < 3; ++c) a(k, y, x, c) = r->film.mean(layout.derivative(k, c), x, y);
+        return py::make_tuple(film_image(r->film, [&](int c) { return layout.primal(c); }), d);
+      },
+      py::arg("scene"), py::arg("params"), py::arg("spp") = 0, py::arg("seed") = 0, py::arg("threads") = 0,
+      py::arg("boundary") = "quadric", py::arg("boundary_spp") = 1,
+      "Forward mode: (image (H, W, 3), derivatives (K, H, W, 3)) for 1-8 parameter specs "
+      "('ID:translate:X,Y,Z', 'ID:rotate:X,Y,Z', 'ID:scale', 'ID:vertex:I:X,Y,Z')");
+
+  m.def(
+      "reverse",
+      [](const Scene& scene, const std::vector<std::string>& shapes, const Array& adjoint, int spp, uint64_t seed,
+         int threads, const std::string& boundary, int boundary_spp) {
+        const Method method = parse_method(boundary, "boundary", kBoundaryMethods);
+        const int W = scene.camera.width, H = scene.camera.height;
+        if (adjoint.ndim() != 3 || adjoint.shape(0) != H || adjoint.shape(1) != W || adjoint.shape(2) != 3)
+          throw Error("adjoint image: expected an array of shape (" + std::to_string(H) + ", " + std::to_string(W) +
+                      ", 3)");
+        const std::vector<double> w(adjoint.data(), adjoint.data() + adjoint.size());
+        const std::vector<int> indices = resolve_shapes(scene, shapes);
+        std::optional<ReverseResult> r;
+        {
+          py::gil_scoped_release release;
+          const ReverseEstimator e(scene, ReverseConfig{indices, method, boundary_spp});
+          r = e.run(w, options(spp, seed, threads));
+        }
+        Array image({H, W, 3});
+        std::copy(r->image.begin(), r->image.end(), image.mutable_data());
+        py::dict gradient;
+        for (size_t i = 0; i < shapes.size(); ++i) {
+          Array g({py::ssize_t(r->gradient[i].size()), py::ssize_t(3)});
+          auto a = g.mutable_unchecked<2>();
+          for (size_t v = 0; v < r->gradient[i].size(); ++v)
+            for (int c = 0; c < 3; ++c) a(py::ssize_t(v), c) = r->gradient[i][v][c];
+          gradient[py::str(shapes[i])] = g;
+        }
+        py::dict out;
+        out["image"] = image;
+        out["loss"] = r->loss;
+        out["gradient"] = gradient;
+        out["seconds"] = r->seconds;
+        out["nonfinite"] = r->nonfinite;
+        return out;
+      },
+      py::arg("scene"), py::arg("shapes"), py::arg("adjoint"), py::arg("spp") = 0, py::arg("seed") = 0,
+      py::arg("threads") = 0, py::arg("boundary") = "quadric", py::arg("boundary_spp") = 1,
+      "Reverse mode: for the loss L = sum(adjoint * I), a dict with 'image' (H, W, 3), 'loss' (of that image), "
+      "'gradient' {shape id: dL/dx (V, 3)}, 'seconds', 'nonfinite'");
+}
