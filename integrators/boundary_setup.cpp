@@ -63,4 +63,19 @@ void set_light_importance(const Scene& scene, const EnvironmentLight& environmen
   if (context.lights.empty() && context.env_weight == 0) context.env_weight = 1.0;  // plain [QSS 3.5] importance
 }
 
+void describe_boundary_setup(const BoundarySetup& boundary, Method method, int primary_edges, SetupReport& setup) {
+  setup.edge_seconds = boundary.seconds;
+  setup.edges = int(boundary.edges->edges().size() + boundary.edges->always_edges().size());
+  setup.primary_edges = primary_edges;
+  if (boundary.forest) {
+    for (const auto& st : boundary.forest->stats()) {
+      setup.fitted_nodes += st.fitted;
+      setup.quadric_nodes += st.quadrics;
+    }
+    setup.structure = uses_quadrics(method) ? "edge forest (dual box + quadrics)" : "edge forest (dual box)";
+  } else {
+    setup.structure = method == Method::Uniform ? "edge set + uniform tables" : "edge set + v-sphere tree";
+  }
+}
+
 }  // namespace qsil

@@ -8,6 +8,7 @@
 #include "qsil/edgetree/edge_forest.h"
 #include "qsil/edgetree/edge_sampler.h"
 #include "qsil/integrators/boundary_term.h"
+#include "qsil/integrators/estimator.h"
 #include "qsil/method.h"
 #include "qsil/scene.h"
 
@@ -37,5 +38,11 @@ BoundarySetup build_boundary_setup(const Scene& scene, Method method);
 /// shape's emitted luminance (the outline of any emitter weighs it); and, from
 /// context.velocities (set it first; none: no scale), each parameter's velocity scale.
 void set_light_importance(const Scene& scene, const EnvironmentLight& environment, BoundaryContext& context);
+
+/// Fills the set-up report's edge-structure fields from a built boundary method: build time, edge
+/// count, fitted and quadric node counts, `primary_edges`, and the structure's name ("edge forest
+/// (dual box + quadrics)", "edge forest (dual box)", "edge set + uniform tables", "edge set +
+/// v-sphere tree").
+void describe_boundary_setup(const BoundarySetup& boundary, Method method, int primary_edges, SetupReport& setup);
 
 }  // namespace qsil

@@ -102,7 +102,7 @@ class GradientEstimator final : public Estimator::Impl {
       bctx.samples_per_vertex = std::max(1, config.boundary_spp);
       set_light_importance(s, lights.environment, bctx);
       primary = find_primary_edges(s, *boundary.edges, vel.moving);
-      describe_structure();
+      describe_boundary_setup(boundary, config.method, int(primary.size()), setup);
     }
   }
 
@@ -157,21 +157,6 @@ class GradientEstimator final : public Estimator::Impl {
   }
 
  private:
-  void describe_structure() {
-    setup.edge_seconds = boundary.seconds;
-    setup.edges = int(boundary.edges->edges().size() + boundary.edges->always_edges().size());
-    setup.primary_edges = int(primary.size());
-    if (boundary.forest) {
-      for (const auto& st : boundary.forest->stats()) {
-        setup.fitted_nodes += st.fitted;
-        setup.quadric_nodes += st.quadrics;
-      }
-      setup.structure = uses_quadrics(config.method) ? "edge forest (dual box + quadrics)" : "edge forest (dual box)";
-    } else {
-      setup.structure = config.method == Method::Uniform ? "edge set + uniform tables" : "edge set + v-sphere tree";
-    }
-  }
-
   SceneVelocities vel;
   RayTracer tracer;
   LightSetup lights;

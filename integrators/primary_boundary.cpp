@@ -88,9 +88,9 @@ void run_chunk(const PathContext& ctx, const SceneVelocities& vel, const std::ve
   const int K = vel.num_params;
   const FilmLayout layout(K);
   Eigen::Matrix<double, 1, N> J;
+  const Eigen::Matrix<double, 3, N> dp = Eigen::Matrix<double, 3, N>::Zero();  // the camera does not move
   auto accept = [&](const edgetree::ForestEdge& e, double t, const Vec3& g) {
-    const auto& V = vel.position[e.shape];
-    J = g.transpose() * ((1 - t) * V[e.v0].template leftCols<N>() + t * V[e.v1].template leftCols<N>());
+    J = edge_point_jacobian<N>(vel, e, t, g, dp);
     return !J.isZero(0.0);
   };
   auto emit = [&](int px, int py, const edgetree::ForestEdge&, double, const Color& weight, const Vec3&) {

@@ -130,59 +130,27 @@ struct ReverseBoundaryHook {
 
   void operator()(const SurfaceInteraction<RDual>& si, const ShadingPoint<RDual>& sp, const Vec3& wo_local,
                   const ColorT<RDual>& beta, int seg, Sampler&, PathStats& stats, ColorT<RDual>& L) const {
-    const auto t0 = std::chrono::steady_clock::now();
     Eigen::Matrix<double, 3, kSlots> dp;
     for (int i = 0; i < 3; ++i) dp.row(i) = si.p[i].derivatives().transpose();
-    edgetree::SilhouetteQuery q;
-    q.p = value(si.p);
-    q.frame = sp.frame_value;
-    q.ltc = bsdf_ltc(*sp.bsdf, wo_local);
+    edgetree::SilhouetteQuery q = boundary_query(*bctx, si, sp, wo_local);
     q.eligible = tape->moving ? &bctx->all : &bctx->moving;
-    q.lights = &bctx->lights;
-    q.env_weight = bctx->env_weight;
-    q.emission = &bctx->emission;
     q.velocities = nullptr;  // a parameter per vertex: no normal-velocity factor
-    const Color T = value(beta);
-    const Vec3 wo_world = q.frame.to_world(wo_local);
-    edgetree::SilhouetteSampleSet set;
-    for (int sample = 0; sample < bctx->samples_per_vertex; ++sample) {
-      ++stats.boundary_traversals;
-      bctx->sampler->sample_set(q, [this] { return sampler->next(); }, set);
-      bool contributed = false;
-      for (int k = 0; k < set.count; ++k) {
-        const edgetree::SilhouetteSample& s = set.samples[size_t(k)];
-        if (!(s.pdf > 0)) continue;
-        const edgetree::ForestEdge& e = *s.edge;
-        const Vec3 w = (e.p0 + s.t * (e.p1 - e.p0) - q.p).normalized();
-        const Color f = bsdf_eval<double>(*sp.bsdf, q.frame.to_local(w), wo_local);
-        Color jump;
-        Vec3 g;
-        if ((f == 0).all() ||
-            !edge_jump_with(*ctx, e, s.t, q.p, spawn_origin(si, w), leaves_below(si, wo_world, w), seg, *sampler,
-                            stats, jump,
-                            [&](const Vec3& gv) {
-                              g = gv;
-                              return true;
-                            }) ||
-            (jump == 0).all())
-          continue;
-        contributed = true;
-        const Color weight = T * f * jump / (s.pdf * bctx->samples_per_vertex);
-        // p's share: J = g . (v_edge - dp), the -g . dp part through L's slots.
-        const Eigen::Matrix<double, 1, kSlots> Jp = -(g.transpose() * dp);
-        if (!Jp.isZero(0.0))
-          for (int c = 0; c < 3; ++c) L[c] += RDual(0.0, (weight[c] * Jp).transpose());
-        // The edge's share: its vertices' velocities, (1 - t) v0 + t v1.
-        const int ci = (*chosen_index)[size_t(e.shape)];
-        if (edges && ci >= 0) {
-          const double a = (adjoint * weight).sum();
-          out->push_back({ci, e.v0, false, Vec3(a * (1 - s.t) * g)});
-          out->push_back({ci, e.v1, false, Vec3(a * s.t * g)});
-        }
-      }
-      stats.boundary_zero += !contributed;
-    }
-    stats.boundary_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    for_each_boundary_sample(
+        *ctx, *bctx, *sampler, si, sp, q, wo_local, value(beta), seg, stats,
+        [](const edgetree::ForestEdge&, double, const Vec3&) { return true; },
+        [&](const edgetree::ForestEdge& e, double t, const Color& weight, const Vec3& g) {
+          // p's share: J = g . (v_edge - dp), the -g . dp part through L's slots.
+          const Eigen::Matrix<double, 1, kSlots> Jp = -(g.transpose() * dp);
+          if (!Jp.isZero(0.0))
+            for (int c = 0; c < 3; ++c) L[c] += RDual(0.0, (weight[c] * Jp).transpose());
+          // The edge's share: its vertices' velocities, (1 - t) v0 + t v1.
+          const int ci = (*chosen_index)[size_t(e.shape)];
+          if (edges && ci >= 0) {
+            const double a = (adjoint * weight).sum();
+            out->push_back({ci, e.v0, false, Vec3(a * (1 - t) * g)});
+            out->push_back({ci, e.v1, false, Vec3(a * t * g)});
+          }
+        });
   }
 };
 
@@ -212,7 +180,6 @@ class ReverseEstimator::Impl {
     if (config.method != Method::None && !samples_edges(config.method))
       throw Error("method " + std::string(method_name(config.method)) + " cannot estimate derivatives");
     ctx = lights.context(s, tracer);
-    setup.structure = "none";
     if (samples_edges(config.method)) {
       boundary = build_boundary_setup(s, config.method);
       bctx.sampler = boundary.sampler.get();
@@ -222,18 +189,7 @@ class ReverseEstimator::Impl {
       bctx.samples_per_vertex = std::max(1, config.boundary_spp);
       set_light_importance(s, lights.environment, bctx);
       primary = find_primary_edges(s, *boundary.edges, chosen);
-      setup.edge_seconds = boundary.seconds;
-      setup.edges = int(boundary.edges->edges().size() + boundary.edges->always_edges().size());
-      setup.primary_edges = int(primary.size());
-      if (boundary.forest)
-        for (const auto& st : boundary.forest->stats()) {
-          setup.fitted_nodes += st.fitted;
-          setup.quadric_nodes += st.quadrics;
-        }
-      setup.structure = boundary.forest ? (uses_quadrics(config.method) ? "edge forest (dual box + quadrics)"
-                                                                         : "edge forest (dual box)")
-                                        : (config.method == Method::Uniform ? "edge set + uniform tables"
-                                                                            : "edge set + v-sphere tree");
+      describe_boundary_setup(boundary, config.method, int(primary.size()), setup);
     }
   }
 

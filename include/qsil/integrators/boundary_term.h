@@ -164,20 +164,85 @@ bool edge_jump_with(const PathContext& ctx, const edgetree::ForestEdge& e, doubl
   return true;
 }
 
-/// edge_jump_with for forward mode: J[k] = g . v_t for every parameter k, v_t the velocity of the
-/// edge point (from `vel`) minus dp; a zero J is a zero contribution (no rays traced).
+/// Forward mode's Jacobian of an edge point: J[k] = g . v_t for every parameter k, v_t the velocity
+/// of the edge point (1 - t) v0 + t v1 (from `vel`) minus dp (3 x N, p's velocity).
+template <int N>
+Eigen::Matrix<double, 1, N> edge_point_jacobian(const SceneVelocities& vel, const edgetree::ForestEdge& e, double t,
+                                                const Vec3& g, const Eigen::Matrix<double, 3, N>& dp) {
+  const auto& V = vel.position[e.shape];
+  return g.transpose() * ((1 - t) * V[e.v0].template leftCols<N>() + t * V[e.v1].template leftCols<N>() - dp);
+}
+
+/// edge_jump_with for forward mode: J = edge_point_jacobian; a zero J is a zero contribution (no
+/// rays traced).
 template <int N>
 bool edge_jump(const PathContext& ctx, const SceneVelocities& vel, const edgetree::ForestEdge& e, double t,
                const Vec3& p, const Vec3& vis_origin, bool through_back_faces, const Eigen::Matrix<double, 3, N>& dp,
                int seg, Sampler& sampler, PathStats& stats, Color& jump, Eigen::Matrix<double, 1, N>& J) {
   return edge_jump_with(ctx, e, t, p, vis_origin, through_back_faces, seg, sampler, stats, jump, [&](const Vec3& g) {
-    // ---- J for every parameter: velocity of the edge point relative to p.
-    const auto& V = vel.position[e.shape];
-    const Eigen::Matrix<double, 3, N> ve =
-        (1 - t) * V[e.v0].template leftCols<N>() + t * V[e.v1].template leftCols<N>() - dp;
-    J = g.transpose() * ve;
+    J = edge_point_jacobian<N>(vel, e, t, g, dp);
     return !J.isZero(0.0);
   });
+}
+
+/// The secondary boundary term's samples at one path vertex (shared by forward mode, BoundaryHook,
+/// and reverse mode, integrators/reverse.cpp): bctx.samples_per_vertex traversals of bctx.sampler
+/// for query `q` (set up by the caller: eligibility, velocities), drawing from `sampler`; for each
+/// edge point with f_s != 0, `accept(edge, t, g)` decides before any ray whether it can contribute
+/// (edge_jump_with), and each contributing one is handed to `visit(edge, t, weight, g)` with
+/// weight = T f_s jump / (pdf samples_per_vertex), T the detached throughput (the vertex's
+/// derivative gains weight (g . v_t)). Counts traversals, zero traversals and thread time.
+template <class T, class Accept, class Visit>
+void for_each_boundary_sample(const PathContext& ctx, const BoundaryContext& bctx, Sampler& sampler,
+                              const SurfaceInteraction<T>& si, const ShadingPoint<T>& sp,
+                              const edgetree::SilhouetteQuery& q, const Vec3& wo_local, const Color& throughput,
+                              int seg, PathStats& stats, Accept&& accept, Visit&& visit) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const Vec3 wo_world = q.frame.to_world(wo_local);
+  edgetree::SilhouetteSampleSet set;
+  for (int sample = 0; sample < bctx.samples_per_vertex; ++sample) {
+    ++stats.boundary_traversals;
+    bctx.sampler->sample_set(q, [&sampler] { return sampler.next(); }, set);
+    // Counted per traversal: zero when none of its edge points contributed.
+    bool contributed = false;
+    for (int k = 0; k < set.count; ++k) {
+      const edgetree::SilhouetteSample& s = set.samples[size_t(k)];
+      if (!(s.pdf > 0)) continue;
+      const edgetree::ForestEdge& e = *s.edge;
+      const Vec3 w = (e.p0 + s.t * (e.p1 - e.p0) - q.p).normalized();
+      const Color f = bsdf_eval<double>(*sp.bsdf, q.frame.to_local(w), wo_local);
+      if ((f == 0).all()) continue;
+      Color jump;
+      Vec3 g;
+      if (!edge_jump_with(ctx, e, s.t, q.p, spawn_origin(si, w), leaves_below(si, wo_world, w), seg, sampler, stats,
+                          jump,
+                          [&](const Vec3& gv) {
+                            g = gv;
+                            return accept(e, s.t, gv);
+                          }) ||
+          (jump == 0).all())
+        continue;
+      contributed = true;
+      visit(e, s.t, Color(throughput * f * jump / (s.pdf * bctx.samples_per_vertex)), g);
+    }
+    stats.boundary_zero += !contributed;
+  }
+  stats.boundary_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+/// The shading point's part of a boundary query: position, frame, the BSDF's LTC toward wo and the
+/// importance inputs of bctx (eligibility, velocities: the caller's).
+template <class T>
+edgetree::SilhouetteQuery boundary_query(const BoundaryContext& bctx, const SurfaceInteraction<T>& si,
+                                         const ShadingPoint<T>& sp, const Vec3& wo_local) {
+  edgetree::SilhouetteQuery q;
+  q.p = value(si.p);
+  q.frame = sp.frame_value;
+  q.ltc = bsdf_ltc(*sp.bsdf, wo_local);
+  q.lights = &bctx.lights;
+  q.env_weight = bctx.env_weight;
+  q.emission = &bctx.emission;
+  return q;
 }
 
 /// The vertex hook of trace_path that adds the secondary boundary term (DualView<N> paths only).
@@ -189,50 +254,25 @@ struct BoundaryHook {
 
   void operator()(const SurfaceInteraction<Dual<N>>& si, const ShadingPoint<Dual<N>>& sp, const Vec3& wo_local,
                   const ColorT<Dual<N>>& beta, int seg, Sampler&, PathStats& stats, ColorT<Dual<N>>& L) const {
-    const auto t0 = std::chrono::steady_clock::now();
     // ---- dp/dtheta: does the shading point move?
     Eigen::Matrix<double, 3, N> dp;
     for (int i = 0; i < 3; ++i) dp.row(i) = si.p[i].derivatives().transpose();
-    const bool p_moving = !dp.isZero(0.0);
-    edgetree::SilhouetteQuery q;
-    q.p = value(si.p);
-    q.frame = sp.frame_value;
-    q.ltc = bsdf_ltc(*sp.bsdf, wo_local);
-    q.eligible = p_moving ? &bctx->all : &bctx->moving;
-    q.lights = &bctx->lights;
-    q.env_weight = bctx->env_weight;
-    q.emission = &bctx->emission;
+    edgetree::SilhouetteQuery q = boundary_query(*bctx, si, sp, wo_local);
+    q.eligible = !dp.isZero(0.0) ? &bctx->all : &bctx->moving;
     q.velocities = bctx->velocities;
     q.dp.setZero();
     q.dp.template leftCols<N>() = dp;
     q.velocity_scale = bctx->velocity_scale;
-    const Color T = value(beta);
-    const Vec3 wo_world = q.frame.to_world(wo_local);
-    edgetree::SilhouetteSampleSet set;
-    for (int sample = 0; sample < bctx->samples_per_vertex; ++sample) {
-      ++stats.boundary_traversals;
-      bctx->sampler->sample_set(q, [this] { return sampler->next(); }, set);
-      // Counted per traversal: zero when none of its edge points contributed.
-      bool contributed = false;
-      for (int k = 0; k < set.count; ++k) {
-        const edgetree::SilhouetteSample& s = set.samples[size_t(k)];
-        if (!(s.pdf > 0)) continue;
-        const Vec3 w = (s.edge->p0 + s.t * (s.edge->p1 - s.edge->p0) - q.p).normalized();
-        const Color f = bsdf_eval<double>(*sp.bsdf, q.frame.to_local(w), wo_local);
-        Color jump;
-        Eigen::Matrix<double, 1, N> J;
-        if ((f == 0).all() ||
-            !edge_jump<N>(*ctx, *bctx->velocities, *s.edge, s.t, q.p, spawn_origin(si, w),
-                          leaves_below(si, wo_world, w), dp, seg, *sampler, stats, jump, J) ||
-            (jump == 0).all())
-          continue;
-        contributed = true;
-        const Color weight = T * f * jump / (s.pdf * bctx->samples_per_vertex);
-        for (int c = 0; c < 3; ++c) L[c] += Dual<N>(0.0, (weight[c] * J).transpose());
-      }
-      stats.boundary_zero += !contributed;
-    }
-    stats.boundary_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    Eigen::Matrix<double, 1, N> J;  // of the sample being evaluated
+    for_each_boundary_sample(
+        *ctx, *bctx, *sampler, si, sp, q, wo_local, value(beta), seg, stats,
+        [&](const edgetree::ForestEdge& e, double t, const Vec3& g) {
+          J = edge_point_jacobian<N>(*bctx->velocities, e, t, g, dp);
+          return !J.isZero(0.0);
+        },
+        [&](const edgetree::ForestEdge&, double, const Color& weight, const Vec3&) {
+          for (int c = 0; c < 3; ++c) L[c] += Dual<N>(0.0, (weight[c] * J).transpose());
+        });
   }
 };
 
