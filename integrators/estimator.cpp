@@ -299,11 +299,16 @@ Estimator::~Estimator() = default;
 Estimator::Estimator(Estimator&&) noexcept = default;
 Estimator& Estimator::operator=(Estimator&&) noexcept = default;
 
-RenderResult Estimator::run(const RenderOptions& options) const {
-  const int count = options.spp > 0 ? options.spp : impl_->scene.camera.spp;
+int sample_range_count(const RenderOptions& options, const Camera& camera) {
+  const int count = options.spp > 0 ? options.spp : camera.spp;
   if (count <= 0) throw Error("spp must be positive (got " + std::to_string(count) + ")");
   if (options.first_sample < 0)
     throw Error("the first sample index must be >= 0 (got " + std::to_string(options.first_sample) + ")");
+  return count;
+}
+
+RenderResult Estimator::run(const RenderOptions& options) const {
+  const int count = sample_range_count(options, impl_->scene.camera);
   if (options.parts < 1 || options.part < 0 || options.part >= options.parts)
     throw Error("part " + std::to_string(options.part) + " of " + std::to_string(options.parts) +
                 " parts: expected 0 <= part < parts");

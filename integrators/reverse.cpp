@@ -257,10 +257,7 @@ ReverseResult ReverseEstimator::run(const std::vector<double>& adjoint, const Re
     if (!std::isfinite(adjoint[i]))
       throw Error("adjoint image: non-finite weight at pixel (" + std::to_string((i / 3) % size_t(W)) + ", " +
                   std::to_string((i / 3) / size_t(W)) + ")");
-  const int count = options.spp > 0 ? options.spp : cam.spp;
-  if (count <= 0) throw Error("spp must be positive (got " + std::to_string(count) + ")");
-  if (options.first_sample < 0)
-    throw Error("the first sample index must be >= 0 (got " + std::to_string(options.first_sample) + ")");
+  const int count = sample_range_count(options, cam);
   if (options.parts != 1) throw Error("reverse mode runs in one process (parts = 1)");
   const int first = options.first_sample;
   const auto t0 = std::chrono::steady_clock::now();

@@ -46,9 +46,7 @@ std::unique_ptr<World> make_world() {
   sheet.positions = {{-1, -0.8, -1}, {1, -0.8, -1}, {1, -0.8, 1}, {-1, -0.8, 1}};
   sheet.triangles = {{0, 2, 1}, {0, 3, 2}};
   w->meshes.push_back(sheet);
-  std::vector<ForestShapeInput> in;
-  for (size_t i = 0; i < w->meshes.size(); ++i) in.push_back({&w->meshes[i], int(i)});
-  w->forest = EdgeForest::build(in);
+  w->forest = forest_over(w->meshes);
   return w;
 }
 

@@ -49,9 +49,7 @@ std::unique_ptr<World> make_world() {
   sheet.positions = {{-0.4, 1.2, -0.4}, {0.4, 1.2, -0.4}, {0.4, 1.2, 0.4}, {-0.4, 1.2, 0.4}};
   sheet.triangles = {{0, 1, 2}, {0, 2, 3}};
   w->meshes.push_back(sheet);
-  std::vector<ForestShapeInput> in;
-  for (size_t i = 0; i < w->meshes.size(); ++i) in.push_back({&w->meshes[i], int(i)});
-  w->forest = EdgeForest::build(in);
+  w->forest = forest_over(w->meshes);
   return w;
 }
 

@@ -144,6 +144,11 @@ class Estimator {
   std::unique_ptr<Impl> impl_;
 };
 
+/// The length of a run's sample range: options.spp, or the camera's sample count when it is <= 0.
+/// Throws qsil::Error "spp must be positive (got N)" for an empty range and "the first sample
+/// index must be >= 0 (got N)" for a negative start. Every estimator's run() checks its range here.
+int sample_range_count(const RenderOptions& options, const Camera& camera);
+
 /// Default finite-difference step of a parameter: 1e-3 of the scene's bounding-box diagonal
 /// divided by |direction| for translate and vertex (so the displacement is 1e-3 diagonal),
 /// 1e-3 radians for rotate, 1e-3 (relative) for scale.
