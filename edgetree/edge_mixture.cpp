@@ -13,14 +13,12 @@ namespace {
 const EdgePointSampler kEmpty(Vec3::Zero(), Vec3::Zero(), LTC{});
 
 /// The interval [lo, hi] of t where w0 + t (w1 − w0) lies inside the pyramid from the origin over
-/// the quad c (all local, relative to p); hi < lo when the segment misses it.
-void pyramid_interval(const std::array<Vec3, 4>& c, const Vec3& w0, const Vec3& w1, double& lo, double& hi) {
-  const Vec3 inside = c[0] + c[1] + c[2] + c[3];
+/// the light (all local, relative to p); hi < lo when the segment misses it.
+void pyramid_interval(const LocalLight& light, const Vec3& w0, const Vec3& w1, double& lo, double& hi) {
   lo = 0.0;
   hi = 1.0;
   for (int i = 0; i < 4 && hi >= lo; ++i) {
-    Vec3 n = c[size_t(i)].cross(c[size_t((i + 1) % 4)]);
-    if (n.dot(inside) < 0) n = -n;
+    const Vec3& n = light.sides[size_t(i)];
     const double a = n.dot(w0), b = n.dot(w1);  // n . w(t) >= 0 on the light's side
     if (a >= 0 && b >= 0) continue;
     if (a < 0 && b < 0) {
@@ -37,24 +35,26 @@ void pyramid_interval(const std::array<Vec3, 4>& c, const Vec3& w0, const Vec3& 
 
 }  // namespace
 
-EdgeMixture::EdgeMixture(const ForestEdge& e, const SilhouetteQuery& q)
+EdgeMixture::EdgeMixture(const ForestEdge& e, const SilhouetteQuery& q) : EdgeMixture(e, q, [&] {
+  std::vector<LocalLight> lights;
+  local_lights(q, lights);
+  return lights;
+}()) {}
+
+EdgeMixture::EdgeMixture(const ForestEdge& e, const SilhouetteQuery& q, std::span<const LocalLight> lights)
     : comp_{kEmpty, kEmpty, kEmpty, kEmpty, kEmpty} {
   const Vec3 w0 = q.frame.to_local(e.p0 - q.p), w1 = q.frame.to_local(e.p1 - q.p);
   double base = q.env_weight;
   if (q.emission && e.shape >= 0 && e.shape < int(q.emission->size())) base += (*q.emission)[size_t(e.shape)];
   add(EdgePointSampler(w0, w1, q.ltc), base);  // also the angle-uniform part (comp_[0])
-  if (q.lights) {
-    int used = 0;
-    for (const LightPolygon& light : *q.lights) {
-      if (used == kMaxLights) break;
-      std::array<Vec3, 4> c;
-      if (!light_toward(light, q, c)) continue;
-      double lo, hi;
-      pyramid_interval(c, w0, w1, lo, hi);
-      if (!(hi > lo)) continue;
-      add(EdgePointSampler(w0, w1, q.ltc, kEdgeDefensiveShare, lo, hi), light.weight);
-      ++used;
-    }
+  int used = 0;
+  for (const LocalLight& light : lights) {
+    if (used == kMaxLights) break;
+    double lo, hi;
+    pyramid_interval(light, w0, w1, lo, hi);
+    if (!(hi > lo)) continue;
+    add(EdgePointSampler(w0, w1, q.ltc, kEdgeDefensiveShare, lo, hi), light.weight);
+    ++used;
   }
   eps_ = total_ > 0 ? kEdgeDefensiveShare : 1.0;
 }

@@ -8,6 +8,8 @@
 #include "qsil/edgetree/silhouette_sampler.h"
 
 #include <array>
+#include <span>
+#include <vector>
 
 namespace qsil::edgetree {
 
@@ -27,7 +29,11 @@ class EdgeMixture {
   /// component and the defensive share).
   static constexpr int kMaxLights = 4;
 
+  /// The mixture of edge e for the query; lights from q.lights (set up here).
   EdgeMixture(const ForestEdge& e, const SilhouetteQuery& q);
+  /// The same with the query's lights already set up (`lights` = local_lights(q)): what the
+  /// traversal uses, once per query instead of once per edge.
+  EdgeMixture(const ForestEdge& e, const SilhouetteQuery& q, std::span<const LocalLight> lights);
 
   /// W: the radiance-weighted LTC integral over the edge (luminance × per scene unit, ≥ 0).
   double total() const { return total_; }

@@ -94,6 +94,20 @@ inline bool light_toward(const LightPolygon& light, const SilhouetteQuery& q, st
   return true;
 }
 
+/// A light as seen from one query point: the corners of its quad relative to p in the local
+/// shading frame, and the normals of the four sides of the pyramid from p over it, oriented so
+/// that n · w >= 0 for directions w inside. The per-query constants of the light-aware importance
+/// [QSS 3.6], computed once per traversal (local_lights) instead of at every node.
+struct LocalLight {
+  std::array<Vec3, 4> corners;  ///< local frame, relative to p (scene units)
+  std::array<Vec3, 4> sides;    ///< inward side normals of the pyramid (local frame, not unit)
+  double weight = 0;            ///< the light's radiance (luminance)
+};
+
+/// The lights of `q` that emit toward q.p (light_toward), in order, as LocalLight; `out` is
+/// cleared first. Empty when q.lights is null.
+void local_lights(const SilhouetteQuery& q, std::vector<LocalLight>& out);
+
 /// A sampled edge point and its probability.
 struct SilhouetteSample {
   const ForestEdge* edge = nullptr;  ///< nullptr: no edge (every candidate was rejected)
