@@ -143,6 +143,7 @@ Agreement agreement(const Reference& a, const Reference& b, int block) {
   const int W = a.image.width, H = a.image.height;
   double chi2 = 0;
   long long above = 0;
+  double diff2 = 0, noise2 = 0, mean2 = 0;  // per pixel: (a - b)^2, se_a^2 + se_b^2, ((a + b) / 2)^2
   for (int k = 0; k < a.num_params; ++k)
     for (int c = 0; c < 3; ++c) {
       const std::string name = FilmLayout::derivative_name(k, c);
@@ -153,10 +154,14 @@ Agreement agreement(const Reference& a, const Reference& b, int block) {
           double sum_a = 0, sum_b = 0, var = 0;
           for (int y = y0; y < std::min(H, y0 + block); ++y)
             for (int x = x0; x < std::min(W, x0 + block); ++x) {
-              sum_a += a.image.at(va, x, y);
-              sum_b += b.image.at(vb, x, y);
+              const double pa = a.image.at(va, x, y), pb = b.image.at(vb, x, y);
+              sum_a += pa;
+              sum_b += pb;
               const double ea = a.image.at(sa, x, y), eb = b.image.at(sb, x, y);
               var += ea * ea + eb * eb;
+              diff2 += (pa - pb) * (pa - pb);
+              noise2 += ea * ea + eb * eb;
+              mean2 += 0.25 * (pa + pb) * (pa + pb);
             }
           const double d = sum_a - sum_b;
           if (var == 0) {
@@ -172,6 +177,8 @@ Agreement agreement(const Reference& a, const Reference& b, int block) {
     }
   g.chi2_per_dof = g.tests ? chi2 / double(g.tests) : 0.0;
   g.frac_above_3 = g.tests ? double(above) / double(g.tests) : 0.0;
+  g.excess_rel_mse = mean2 > 0 ? (diff2 - noise2) / mean2 : 0.0;
+  g.noise_rel_mse = mean2 > 0 ? noise2 / mean2 : 0.0;
   return g;
 }
 

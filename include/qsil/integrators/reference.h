@@ -75,6 +75,14 @@ struct Agreement {
   double chi2_per_dof = 0;      ///< mean z^2 over the block tests
   double max_abs_z = 0;         ///< largest block |z|
   double frac_above_3 = 0;      ///< share of block tests with |z| > 3 (0.27 % if Gaussian)
+  /// The squared difference of the two references' expectations, per pixel and derivative
+  /// channel, relative to the images' mean square: (sum (a - b)^2 - sum (se_a^2 + se_b^2)) /
+  /// sum ((a + b) / 2)^2 over every pixel and derivative channel (the charts' relative MSE of one
+  /// against the other, with both noises removed; an unbiased estimate, so it can be < 0). The
+  /// bias of a finite-difference step against a smaller one (tools/references.py): a step whose
+  /// silhouettes move more than a pixel blurs the derivative image, which block sums hide.
+  double excess_rel_mse = 0;
+  double noise_rel_mse = 0;     ///< sum (se_a^2 + se_b^2) / sum ((a + b) / 2)^2: what excess_rel_mse removed
   double chi2_limit() const;    ///< the agrees() bound on chi2_per_dof
   bool agrees() const;          ///< see above
 };
