@@ -13,8 +13,9 @@ For each chart scene and parameter set, three steps, each logged and recorded:
    z-tests. The chosen step is the largest h whose image agrees with all of them in both. The
    per-pixel test is the one that matters: a step whose silhouettes move about a pixel blurs the
    derivative image along the motion, which block sums hide (h0 on `direct` moved Spot's outline
-   2.2 pixels: the 8x8 test agreed with h0/8, the per-pixel one did not, and the blur was 0.51 of
-   the image's mean square). Every pair's per-pixel squared difference beyond noise
+   2.2 pixels: the 8x8 test agreed with h0/8, and the blur was 0.51 of the images' mean square;
+   the per-pixel z-test refused it at 256 spp, chi2/dof 1.43 against a limit of 1.27, but not at
+   128 spp, 1.23, so the excess bound below is what decides). Every pair's per-pixel squared difference beyond noise
    (`qsil agree`'s excess, relative to the images' mean square) is recorded, and the chosen step
    must also be within --max-step-bias of the smallest (the z-tests' slack lets a blur of 0.08 x
    the mean square through); without such a step the smallest, h0/8, is used (its own bias is

@@ -166,14 +166,23 @@ def targets_text(results):
         f = lambda m: f"{own[m] / q:.3g}" if m in own else "–"
         goal = "FD / quadric ≥ 1 (≥ 0.5 on shadow-quad)" if k == 1 else "FD / quadric ≥ 5"
         lines.append(f"| {scene} | {k} | {f('fd')} | {f('vsphere')} | {f('uniform')} | {goal}; vsphere ≥ 10 with secondary silhouettes; uniform ≥ 1 |")
-    lines += ["", "Where FD / quadric is below its target, finite differences are the more efficient estimator "
-              "today. Why, measured: the boundary term takes 80–90 % of `grad`'s time (node importance: the box's "
-              "silhouette polygon, its LTC integral and clipping, and the rejection tests; Embree takes 7–11 %), "
-              "`grad` costs 11–26× `render` per sample (tools/bench/grad_cost.py), and its per-pixel samples are heavy-tailed (a pixel's "
-              "edge sample is rare and large), while FD with common random numbers subtracts two almost equal "
-              "renders: soft shadows, glossy reflections and diffuse shading are smooth in θ, so its noise is "
-              "small. FD's weaknesses are elsewhere: it needs 2k renders for k parameters, and a step per scene "
-              "(O(h²) bias; `docs/gradient-checks.md`).", ""]
+    lines += ["", "Where best FD / quadric is below its target, finite differences at a well-chosen step are the "
+              "more efficient estimator today. The step matters: at qsil's default step h0 the silhouettes move "
+              "about two pixels over 2h, and that blur of the derivative image is FD's largest error (compare the "
+              "`fd` and `fd (ref. step)` columns); the step that avoids it must be found per scene, as the "
+              "reference's step study does, and costs variance ∝ 1/h where silhouettes cross pixels. References "
+              "made before the per-pixel study (flagged below) share FD's h0 blur, so there FD's error is "
+              "understated and the quadric method's overstated (against the old h0 references `direct` showed "
+              "quadric 0.88 and `shadow-quad` 1.56 at 60 s; 93 % of the former was the reference's blur). "
+              "Why FD at a good step still wins, measured: the boundary term takes 80–90 % of `grad`'s time "
+              "(node importance: the box's silhouette polygon, its LTC integral and clipping, and the rejection "
+              "tests; Embree takes 7–11 %), `grad` costs 11–26× `render` per sample (tools/bench/grad_cost.py), "
+              "and its per-pixel samples are heavy-tailed: on `shadow-quad` the secondary boundary term (edges "
+              "in front of the area light seen from the moving bunny), on `direct` the interior term (grazing "
+              "hits on the smooth moving mesh, `docs/design-notes.md`: 0.26 of its 0.36 per-pixel variance at "
+              "8 spp), while FD with common random numbers subtracts two almost equal renders of a scene that is "
+              "smooth in θ. FD's weaknesses are elsewhere: 2k renders for k parameters, and a step per scene "
+              "(`docs/gradient-checks.md`, \"The FD step at pixel scale\").", ""]
     return lines
 
 
