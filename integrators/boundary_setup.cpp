@@ -8,6 +8,7 @@
 #include "qsil/edgetree/uniform_sampler.h"
 #include "qsil/edgetree/vsphere_sampler.h"
 
+#include <algorithm>
 #include <chrono>
 
 namespace qsil {
@@ -76,6 +77,21 @@ void describe_boundary_setup(const BoundarySetup& boundary, Method method, int p
   } else {
     setup.structure = method == Method::Uniform ? "edge set + uniform tables" : "edge set + v-sphere tree";
   }
+}
+
+void set_up_boundary_term(const Scene& scene, Method method, const SceneVelocities* velocities,
+                          const std::vector<bool>& moving, int boundary_spp, const EnvironmentLight& environment,
+                          BoundarySetup& boundary, BoundaryContext& bctx, std::vector<PrimaryEdge>& primary,
+                          SetupReport& setup) {
+  boundary = build_boundary_setup(scene, method);
+  bctx.sampler = boundary.sampler.get();
+  bctx.velocities = velocities;
+  bctx.moving = moving;
+  bctx.all.assign(scene.shapes.size(), true);
+  bctx.samples_per_vertex = std::max(1, boundary_spp);
+  set_light_importance(scene, environment, bctx);
+  primary = find_primary_edges(scene, *boundary.edges, moving);
+  describe_boundary_setup(boundary, method, int(primary.size()), setup);
 }
 
 }  // namespace qsil

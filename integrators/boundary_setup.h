@@ -2,9 +2,10 @@
 /// @file boundary_setup.h
 /// The set-up of a boundary method (docs/architecture.md §7): the edge structure its sampler
 /// needs and nothing else, the secondary edge sampler, and the importance inputs of the boundary
-/// term. Used by the gradient estimator (estimator.cpp) and by tests that drive the boundary
+/// term. Used by the gradient and reverse estimators (estimator.cpp, reverse.cpp) and by tests that drive the boundary
 /// term directly.
 
+#include "integrators/primary_boundary.h"
 #include "qsil/edgetree/edge_forest.h"
 #include "qsil/edgetree/edge_sampler.h"
 #include "qsil/integrators/boundary_term.h"
@@ -44,5 +45,16 @@ void set_light_importance(const Scene& scene, const EnvironmentLight& environmen
 /// (dual box + quadrics)", "edge forest (dual box)", "edge set + uniform tables", "edge set +
 /// v-sphere tree").
 void describe_boundary_setup(const BoundarySetup& boundary, Method method, int primary_edges, SetupReport& setup);
+
+/// The boundary term of a run, set up once (what GradientEstimator and ReverseEstimator both do):
+/// build_boundary_setup of `method` into `boundary`; `bctx` with its sampler, `velocities` (forward
+/// mode's; null in reverse mode: velocity factor 1), `moving` (the shapes whose edges are eligible
+/// at a static shading point), every shape eligible at a moving one, max(1, boundary_spp) samples
+/// per vertex and set_light_importance; `primary` = find_primary_edges of the `moving` shapes; and
+/// describe_boundary_setup into `setup`. `scene` and `velocities` must outlive the results.
+void set_up_boundary_term(const Scene& scene, Method method, const SceneVelocities* velocities,
+                          const std::vector<bool>& moving, int boundary_spp, const EnvironmentLight& environment,
+                          BoundarySetup& boundary, BoundaryContext& bctx, std::vector<PrimaryEdge>& primary,
+                          SetupReport& setup);
 
 }  // namespace qsil

@@ -94,15 +94,8 @@ class GradientEstimator final : public Estimator::Impl {
     ctx = lights.context(s, tracer);
     // ---- The boundary method's structures, only when something moves.
     if (samples_edges(config.method) && vel.any_moving()) {
-      boundary = build_boundary_setup(s, config.method);
-      bctx.sampler = boundary.sampler.get();
-      bctx.velocities = &vel;
-      bctx.moving = vel.moving;
-      bctx.all.assign(s.shapes.size(), true);
-      bctx.samples_per_vertex = std::max(1, config.boundary_spp);
-      set_light_importance(s, lights.environment, bctx);
-      primary = find_primary_edges(s, *boundary.edges, vel.moving);
-      describe_boundary_setup(boundary, config.method, int(primary.size()), setup);
+      set_up_boundary_term(s, config.method, &vel, vel.moving, config.boundary_spp, lights.environment, boundary, bctx,
+                           primary, setup);
     }
   }
 

@@ -181,15 +181,8 @@ class ReverseEstimator::Impl {
       throw Error("method " + std::string(method_name(config.method)) + " cannot estimate derivatives");
     ctx = lights.context(s, tracer);
     if (samples_edges(config.method)) {
-      boundary = build_boundary_setup(s, config.method);
-      bctx.sampler = boundary.sampler.get();
-      bctx.velocities = nullptr;
-      bctx.moving = chosen;
-      bctx.all.assign(s.shapes.size(), true);
-      bctx.samples_per_vertex = std::max(1, config.boundary_spp);
-      set_light_importance(s, lights.environment, bctx);
-      primary = find_primary_edges(s, *boundary.edges, chosen);
-      describe_boundary_setup(boundary, config.method, int(primary.size()), setup);
+      set_up_boundary_term(s, config.method, nullptr, chosen, config.boundary_spp, lights.environment, boundary, bctx,
+                           primary, setup);
     }
   }
 
