@@ -47,33 +47,39 @@ def cpu_model():
     return platform.processor() or "unknown"
 
 
-def compare(args, scene, kset, res, budgets, entry):
-    """Runs `qsil compare` for one scene and parameter set against its reference; returns results.json.
-    With --reuse, an earlier run's results.json against the same reference (file, spp and steps, kept
-    in reference.json beside it) and budgets is kept."""
-    xml = os.path.join("scenes", scene + ".xml")
-    name = f"{scene}-{kset}"
-    d = os.path.join("out", "results", name)
+def compare_run(args, d, entry, budgets, cmd):
+    """Runs `qsil compare` (`cmd`, writing into `d`), or with --reuse keeps d's earlier results.json when
+    it was made against the same reference (file, spp and steps, kept in d/reference.json) and budgets.
+    Returns (results.json, whether it was reused)."""
     done = os.path.join(ROOT, d, "results.json")
     key_path = os.path.join(ROOT, d, "reference.json")
     key = {"file": entry["file"], "spp": entry["spp"], "steps": entry["steps"]}
     if args.reuse and os.path.exists(done) and os.path.exists(key_path):
         old = json.load(open(done))
         if json.load(open(key_path)) == key and old["targets"] == [float(b) for b in budgets.split(",")]:
-            print(f"results_report: {name}: reusing {d}/results.json", flush=True)
-            if not os.path.exists(os.path.join(ROOT, d, "grid.png")):
-                run([sys.executable, os.path.join("tools", "plot_compare.py"), d])
-            copy_charts(d, name)
-            return old
+            print(f"results_report: reusing {d}/results.json", flush=True)
+            return old, True
+    run(cmd)
+    with open(key_path, "w") as f:
+        json.dump(key, f)
+    return json.load(open(done)), False
+
+
+def compare(args, scene, kset, res, budgets, entry):
+    """Runs `qsil compare` for one scene and parameter set against its reference (or reuses it,
+    compare_run); returns results.json."""
+    xml = os.path.join("scenes", scene + ".xml")
+    name = f"{scene}-{kset}"
+    d = os.path.join("out", "results", name)
     cmd = [args.qsil, "compare", xml, "-D", f"res={res}", *sum((["--param", p] for p in entry["params"]), []),
            "--threads", str(args.threads), "--methods", ",".join(METHODS), "--budgets", budgets,
            "--reference", entry["file"], "-q", "--out", d]
     os.environ.setdefault("QSIL_PYTHON", sys.executable)  # compare draws its charts with this python
-    run(cmd)
-    with open(key_path, "w") as f:
-        json.dump(key, f)
+    result, reused = compare_run(args, d, entry, budgets, cmd)
+    if reused and not os.path.exists(os.path.join(ROOT, d, "grid.png")):
+        run([sys.executable, os.path.join("tools", "plot_compare.py"), d])
     copy_charts(d, name)
-    return json.load(open(os.path.join(ROOT, d, "results.json")))
+    return result
 
 
 def compare_fd_at_reference_step(args, scene, kset, res, budgets, entry):
@@ -83,18 +89,10 @@ def compare_fd_at_reference_step(args, scene, kset, res, budgets, entry):
         return []
     xml = os.path.join("scenes", scene + ".xml")
     d = os.path.join("out", "results", f"{scene}-{kset}-fd-ref-step")
-    done = os.path.join(ROOT, d, "results.json")
-    key_path = os.path.join(ROOT, d, "reference.json")
-    key = {"file": entry["file"], "spp": entry["spp"], "steps": entry["steps"]}
-    targets = [float(b) for b in budgets.split(",")]
-    if not (args.reuse and os.path.exists(done) and os.path.exists(key_path) and json.load(open(key_path)) == key
-            and json.load(open(done))["targets"] == targets):
-        run([args.qsil, "compare", xml, "-D", f"res={res}", *sum((["--param", p] for p in entry["params"]), []),
-             "--threads", str(args.threads), "--methods", "fd", "--budgets", budgets, "--reference", entry["file"],
-             *sum((["--h", f"{h:.9g}"] for h in entry["steps"]), []), "-q", "--no-plot", "--out", d])
-        with open(key_path, "w") as f:
-            json.dump(key, f)
-    rows = json.load(open(done))["rows"]
+    cmd = [args.qsil, "compare", xml, "-D", f"res={res}", *sum((["--param", p] for p in entry["params"]), []),
+           "--threads", str(args.threads), "--methods", "fd", "--budgets", budgets, "--reference", entry["file"],
+           *sum((["--h", f"{h:.9g}"] for h in entry["steps"]), []), "-q", "--no-plot", "--out", d]
+    rows = compare_run(args, d, entry, budgets, cmd)[0]["rows"]
     for r in rows:
         r["method"] = FD_REF
     return rows
