@@ -144,6 +144,8 @@ Agreement agreement(const Reference& a, const Reference& b, int block) {
   double chi2 = 0;
   long long above = 0;
   double diff2 = 0, noise2 = 0, mean2 = 0;  // per pixel: (a - b)^2, se_a^2 + se_b^2, ((a + b) / 2)^2
+  double excess2 = 0;                       // per pixel: ((a - b)^2 - se_a^2 - se_b^2)^2
+  long long pixels = 0;
   for (int k = 0; k < a.num_params; ++k)
     for (int c = 0; c < 3; ++c) {
       const std::string name = FilmLayout::derivative_name(k, c);
@@ -161,6 +163,9 @@ Agreement agreement(const Reference& a, const Reference& b, int block) {
               var += ea * ea + eb * eb;
               diff2 += (pa - pb) * (pa - pb);
               noise2 += ea * ea + eb * eb;
+              const double excess = (pa - pb) * (pa - pb) - (ea * ea + eb * eb);
+              excess2 += excess * excess;
+              ++pixels;
               mean2 += 0.25 * (pa + pb) * (pa + pb);
             }
           const double d = sum_a - sum_b;
@@ -179,6 +184,10 @@ Agreement agreement(const Reference& a, const Reference& b, int block) {
   g.frac_above_3 = g.tests ? double(above) / double(g.tests) : 0.0;
   g.excess_rel_mse = mean2 > 0 ? (diff2 - noise2) / mean2 : 0.0;
   g.noise_rel_mse = mean2 > 0 ? noise2 / mean2 : 0.0;
+  if (mean2 > 0 && pixels > 0) {
+    const double sum = diff2 - noise2;
+    g.excess_se = std::sqrt(std::max(0.0, excess2 - sum * sum / double(pixels))) / mean2;
+  }
   return g;
 }
 

@@ -65,8 +65,9 @@ const CommandRegistrar registrar{
              "zero-variance blocks unequal\n",
              g.block, g.block, g.tests, g.chi2_per_dof, g.chi2_limit(), g.max_abs_z, 100 * g.frac_above_3,
              g.unequal_exact);
-         std::printf("  per-pixel squared difference beyond noise: %.4g x mean square (noise removed: %.4g)\n",
-                     g.excess_rel_mse, g.noise_rel_mse);
+         std::printf(
+             "  per-pixel squared difference beyond noise: %.4g +- %.2g x mean square (noise removed: %.4g)\n",
+             g.excess_rel_mse, g.excess_se, g.noise_rel_mse);
          std::printf("agree: %s\n", g.agrees() ? "yes" : "NO");
          return g.agrees() ? 0 : 1;
        };

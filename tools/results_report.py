@@ -115,12 +115,20 @@ def reference_text(entry, res_json):
         if not per_pixel:
             return f"h0·{p['h_factor']:g} vs h0·{p['smaller_factor']:g}: {'agree' if p['agree'] else 'DIFFER'}"
         return (f"h0·{p['h_factor']:g} vs h0·{p['smaller_factor']:g}: blocks {'agree' if p['agree_blocks'] else 'DIFFER'}, "
-                f"pixels {'agree' if p['agree_pixels'] else 'DIFFER'}, excess {p['excess_rel_mse']:.3g}")
+                f"pixels {'agree' if p['agree_pixels'] else 'DIFFER'}, excess {p['excess_rel_mse']:.3g}"
+                + (f" ± {p['excess_se']:.2g}" if "excess_se" in p else ""))
     pairs = "; ".join(pair_text(p) for p in study["pairs"])
     if per_pixel:
-        bias = study.get("step_bias_rel")
+        bias, bias_se = study.get("step_bias_rel"), study.get("step_bias_se")
+        bound = entry["key"].get("max_step_bias", 0.01)
+        se_text = ("" if bias is None else
+                   f" ± {bias_se:.2g} (s.e.; within the bound {bound:g} with 97.7 % confidence)" if bias_se is not None
+                   and bias + 2 * bias_se <= bound else
+                   f" ± {bias_se:.2g} (s.e.; chosen by the estimate alone, before the study bounded it by "
+                   f"excess + 2 s.e.: that upper bound, {bias + 2 * bias_se:.2g}, exceeds {bound:g})"
+                   if bias_se is not None else " (its standard error was not recorded)")
         bias_text = (f"Step bias (per-pixel squared difference from h0/8 beyond noise, × mean square): "
-                     f"{bias:.3g}. " if bias is not None else
+                     f"{bias:.3g}{se_text}. " if bias is not None else
                      "The step is the study's smallest, h0/8 (no larger step was within the bias bound); its own "
                      "bias is not measured (about 1/4 of h0/4's excess if it halves like the larger steps'). ")
     else:

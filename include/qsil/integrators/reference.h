@@ -83,6 +83,11 @@ struct Agreement {
   /// silhouettes move more than a pixel blurs the derivative image, which block sums hide.
   double excess_rel_mse = 0;
   double noise_rel_mse = 0;     ///< sum (se_a^2 + se_b^2) / sum ((a + b) / 2)^2: what excess_rel_mse removed
+  /// Standard error of excess_rel_mse, from the spread of its per-pixel terms d = (a - b)^2 -
+  /// (se_a^2 + se_b^2) (pixels independent): sqrt(sum (d - mean d)^2) / sum ((a + b) / 2)^2. When
+  /// it is not small against a bias bound, excess_rel_mse cannot show that a step is within the
+  /// bound (tools/references.py takes excess + 2 se, a one-sided 97.7 % upper bound).
+  double excess_se = 0;
   double chi2_limit() const;    ///< the agrees() bound on chi2_per_dof
   bool agrees() const;          ///< see above
 };
