@@ -230,7 +230,7 @@ def main():
              "measured against an **independent reference: central finite differences with common random "
              "numbers**, at a step chosen by a step study (the largest of h0, h0/2, h0/4, h0/8 that agrees with "
              "every smaller one under `qsil agree`'s image-sum, 8×8 block and per-pixel z-tests and whose "
-             "per-pixel squared difference from h0/8 is at most 0.01 × the mean square; a step whose silhouettes "
+             "per-pixel squared difference from h0/8 is at most 0.01 × the mean square with 97.7 % confidence, excess + 2 s.e.; a step whose silhouettes "
              "move about a pixel blurs the derivative image, which block tests cannot see), over every pixel and derivative "
              "channel; relative MSE = MSE / mean(reference²). The dashed line is the reference's own noise floor "
              "(mean of its squared per-pixel standard errors): a measured MSE is the method's plus the floor. "
