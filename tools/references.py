@@ -92,10 +92,11 @@ def scene_digest(xml):
     return h.hexdigest()
 
 
-def default_steps(qsil, xml, params, res):
-    """qsil's default FD step h0 per parameter (printed by a 1-spp `qsil fd` run)."""
+def default_steps(qsil, xml, params, res, image=os.path.join(OUT, "h0.exr")):
+    """qsil's default FD step h0 per parameter (printed by a 1-spp `qsil fd` run writing `image`,
+    relative to ROOT, whose folder must exist)."""
     _, out, _ = run([qsil, "fd", xml, "-D", f"res={res}", *sum((["--param", p] for p in params), []), "--spp", "1",
-                     "-q", "-o", os.path.join(OUT, "h0.exr")])
+                     "-q", "-o", image])
     return [float(x) for x in re.findall(r"h\d+ = ([0-9.eE+-]+)", out)]
 
 
