@@ -18,10 +18,11 @@ For each chart scene and parameter set, three steps, each logged and recorded:
    128 spp, 1.23, so the excess bound below is what decides). Every pair's per-pixel squared difference beyond noise
    (`qsil agree`'s excess, relative to the images' mean square, with its standard error) is
    recorded, and the chosen step must also be within --max-step-bias of the smallest with 97.7 %
-   confidence, excess + 2 s.e. <= bound (the z-tests' slack lets a blur of 0.08 x the mean square
-   through, and a noisy excess estimate alone can pass anything: h0 of shadow-quad's eight
-   parameters at 64 spp gave -0.056 with an s.e. near 0.1); a study whose renders are too noisy to
-   bound the excess therefore falls to the smallest step, h0/8 (its own bias is
+   confidence, |excess| + 2 s.e. <= bound (the z-tests' slack lets a blur of 0.08 x the mean square
+   through; a noisy excess estimate alone can pass anything, and one far below its true value's
+   floor of 0 shows an s.e. too small for heavy-tailed noise: shadow-quad's eight parameters at 64
+   spp gave -0.147 +- 0.037 for h0/2); a study whose renders are too noisy to bound the excess
+   therefore falls to the smallest step, h0/8 (its own bias is
    then not measured; on `direct` and `shadow-quad` the excess fell about 4x per halving: 0.51,
    0.082, 0.011 for h0, h0/2, h0/4 against h0/8 on `direct` at 256 spp).
 2. Reference. FD at the chosen step with as many spp as fit in --seconds (from the study's time
@@ -145,12 +146,15 @@ def step_study(qsil, xml, params, res, spp, name, max_bias):
     # (chi2/dof limit 1 + 5 sqrt(2/dof) + 0.25) lets through a blur of 0.08 x the mean square (h0/2
     # on `direct` at 256 spp), so the excess is bounded too, by its one-sided 97.7 % upper bound
     # (excess + 2 s.e.): the estimate alone passed h0 on shadow-quad's eight parameters at 64 spp
-    # (-0.056 +- ~0.1, noise-dominated). Without such a step, the smallest.
+    # (-0.056, noise-dominated). The true excess is >= 0, so an estimate far below 0 means the
+    # heavy-tailed per-pixel noise made its s.e. too small (h0/2 there: -0.147 +- 0.037): |excess|
+    # is bounded, not excess. Without such a step, the smallest.
     def to_smallest(f):
         return next(p for p in pairs if p["h_factor"] == f and p["smaller_factor"] == factors[-1])
     chosen = next((r["factor"] for r in runs[:-1]
                    if all(p["agree"] for p in pairs if p["h_factor"] == r["factor"])
-                   and to_smallest(r["factor"])["excess_rel_mse"] + 2 * to_smallest(r["factor"])["excess_se"] <= max_bias),
+                   and abs(to_smallest(r["factor"])["excess_rel_mse"]) + 2 * to_smallest(r["factor"])["excess_se"]
+                   <= max_bias),
                   factors[-1])
     # The chosen step's bias against the smallest (the smallest's own: not measured).
     bias = to_smallest(chosen)["excess_rel_mse"] if chosen != factors[-1] else None

@@ -123,9 +123,9 @@ def reference_text(entry, res_json):
         bound = entry["key"].get("max_step_bias", 0.01)
         se_text = ("" if bias is None else
                    f" ± {bias_se:.2g} (s.e.; within the bound {bound:g} with 97.7 % confidence)" if bias_se is not None
-                   and bias + 2 * bias_se <= bound else
+                   and abs(bias) + 2 * bias_se <= bound else
                    f" ± {bias_se:.2g} (s.e.; chosen by the estimate alone, before the study bounded it by "
-                   f"excess + 2 s.e.: that upper bound, {bias + 2 * bias_se:.2g}, exceeds {bound:g})"
+                   f"|excess| + 2 s.e.: that upper bound, {abs(bias) + 2 * bias_se:.2g}, exceeds {bound:g})"
                    if bias_se is not None else " (its standard error was not recorded)")
         bias_text = (f"Step bias (per-pixel squared difference from h0/8 beyond noise, × mean square): "
                      f"{bias:.3g}{se_text}. " if bias is not None else
@@ -230,7 +230,7 @@ def main():
              "measured against an **independent reference: central finite differences with common random "
              "numbers**, at a step chosen by a step study (the largest of h0, h0/2, h0/4, h0/8 that agrees with "
              "every smaller one under `qsil agree`'s image-sum, 8×8 block and per-pixel z-tests and whose "
-             "per-pixel squared difference from h0/8 is at most 0.01 × the mean square with 97.7 % confidence, excess + 2 s.e.; a step whose silhouettes "
+             "per-pixel squared difference from h0/8 is at most 0.01 × the mean square with 97.7 % confidence, |excess| + 2 s.e.; a step whose silhouettes "
              "move about a pixel blurs the derivative image, which block tests cannot see), over every pixel and derivative "
              "channel; relative MSE = MSE / mean(reference²). The dashed line is the reference's own noise floor "
              "(mean of its squared per-pixel standard errors): a measured MSE is the method's plus the floor. "

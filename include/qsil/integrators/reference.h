@@ -86,7 +86,8 @@ struct Agreement {
   /// Standard error of excess_rel_mse, from the spread of its per-pixel terms d = (a - b)^2 -
   /// (se_a^2 + se_b^2) (pixels independent): sqrt(sum (d - mean d)^2) / sum ((a + b) / 2)^2. When
   /// it is not small against a bias bound, excess_rel_mse cannot show that a step is within the
-  /// bound (tools/references.py takes excess + 2 se, a one-sided 97.7 % upper bound).
+  /// bound (tools/references.py takes |excess| + 2 se: a 97.7 % upper bound, and a guard against an
+  /// s.e. that heavy-tailed noise made too small, which shows as an excess far below 0).
   double excess_se = 0;
   double chi2_limit() const;    ///< the agrees() bound on chi2_per_dof
   bool agrees() const;          ///< see above
