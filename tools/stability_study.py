@@ -156,8 +156,13 @@ def main():
         xml = os.path.join(sdir, name + ".xml")
         common = ["-D", f"res={args.res}", "--param", param, "--threads", str(args.threads)]
         ref = os.path.join(work, name + "-ref.exr")
-        steps = [h * args.ref_step_factor
-                 for h in default_steps(args.qsil, xml, [param], args.res, os.path.join(work, "h0.exr"))]
+        try:
+            steps = [h * args.ref_step_factor
+                     for h in default_steps(args.qsil, xml, [param], args.res, os.path.join(work, "h0.exr"))]
+        except SystemExit as e:  # references.run's failure: record it like a failed reference
+            table.append((name, param, question, {m: {"error": "reference step failed"} for m in METHODS}))
+            print(f"{name}: {e}", flush=True)
+            continue
         r = subprocess.run([args.qsil, "reference", xml, *common, "--method", "fd", "--spp", str(args.ref_spp), "-q",
                             "-o", ref, *sum((["--h", f"{h:.9g}"] for h in steps), [])], capture_output=True, text=True)
         if r.returncode != 0:
