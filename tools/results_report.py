@@ -172,14 +172,19 @@ def targets_text(results):
         f = lambda m: f"{own[m] / q:.3g}" if m in own else "–"
         goal = "FD / quadric ≥ 1 (≥ 0.5 on shadow-quad)" if k == 1 else "FD / quadric ≥ 5"
         lines.append(f"| {scene} | {k} | {f('fd')} | {f('vsphere')} | {f('uniform')} | {goal}; vsphere ≥ 10 with secondary silhouettes; uniform ≥ 1 |")
+    old_refs = any(not all("agree_pixels" in p for p in entry["step_study"]["pairs"])
+                   for entry, _ in results.values())
     lines += ["", "Where best FD / quadric is below its target, finite differences at a well-chosen step are the "
               "more efficient estimator today. The step matters: at qsil's default step h0 the silhouettes move "
-              "about two pixels over 2h, and that blur of the derivative image is FD's largest error (compare the "
-              "`fd` and `fd (ref. step)` columns); the step that avoids it must be found per scene, as the "
-              "reference's step study does, and costs variance ∝ 1/h where silhouettes cross pixels. References "
-              "made before the per-pixel study (flagged below) share FD's h0 blur, so there FD's error is "
-              "understated and the quadric method's overstated (against the old h0 references `direct` showed "
-              "quadric 0.88 and `shadow-quad` 1.56 at 60 s; 93 % of the former was the reference's blur). "
+              "about two pixels over 2h at 256², which blurs the derivative image; a smaller step avoids the blur "
+              "at the price of variance ∝ 1/h where silhouettes cross pixels (compare the `fd` and "
+              "`fd (ref. step)` columns: on `direct` and `shadow-quad` the reference's h0/4 wins, where the "
+              "study had to fall to h0/8 its noise costs more than h0's blur), so the best step must be found "
+              "per scene, as the reference's step study does. "
+              + ("References made before the per-pixel study (flagged below) share FD's h0 blur, so there FD's "
+                 "error is understated and the quadric method's overstated. " if old_refs else "")
+              + "Against the earlier h0 references `direct` showed quadric 0.88 and `shadow-quad` 1.56 at 60 s; 93 % "
+              "of the former was the reference's blur. "
               "Why FD at a good step still wins, measured: the boundary term takes 80–90 % of `grad`'s time "
               "(node importance: the box's silhouette polygon, its LTC integral and clipping, and the rejection "
               "tests; Embree takes 7–11 %), `grad` costs 11–26× `render` per sample (tools/bench/grad_cost.py), "
