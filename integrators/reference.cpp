@@ -160,11 +160,11 @@ Agreement agreement(const Reference& a, const Reference& b, int block) {
               sum_a += pa;
               sum_b += pb;
               const double ea = a.image.at(sa, x, y), eb = b.image.at(sb, x, y);
-              var += ea * ea + eb * eb;
-              diff2 += (pa - pb) * (pa - pb);
-              noise2 += ea * ea + eb * eb;
-              const double excess = (pa - pb) * (pa - pb) - (ea * ea + eb * eb);
-              excess2 += excess * excess;
+              const double d2 = (pa - pb) * (pa - pb), n2 = ea * ea + eb * eb;
+              var += n2;
+              diff2 += d2;
+              noise2 += n2;
+              excess2 += (d2 - n2) * (d2 - n2);
               ++pixels;
               mean2 += 0.25 * (pa + pb) * (pa + pb);
             }

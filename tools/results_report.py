@@ -23,6 +23,8 @@ import subprocess
 import sys
 import time
 
+from references import bias_upper_bound
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SCENES = [("spot-mirror", "spot:translate:0,1,0"), ("shadow-quad", "object:translate:0,1,0"),
           ("direct", "spot:translate:1,0,0")]
@@ -106,10 +108,15 @@ def copy_charts(d, name):
         shutil.copy(os.path.join(ROOT, d, f), os.path.join(dst, f))
 
 
+def per_pixel_study(entry):
+    """Whether a reference's step study compared steps per pixel too (not only by 8x8 blocks)."""
+    return all("agree_pixels" in p for p in entry["step_study"]["pairs"])
+
+
 def reference_text(entry, res_json):
     """One paragraph: how the reference was made and whether it can judge."""
     study = entry["step_study"]
-    per_pixel = all("agree_pixels" in p for p in study["pairs"])
+    per_pixel = per_pixel_study(entry)
 
     def pair_text(p):
         if not per_pixel:
@@ -121,12 +128,13 @@ def reference_text(entry, res_json):
     if per_pixel:
         bias, bias_se = study.get("step_bias_rel"), study.get("step_bias_se")
         bound = entry["key"].get("max_step_bias", 0.01)
-        se_text = ("" if bias is None else
-                   f" ± {bias_se:.2g} (s.e.; within the bound {bound:g} with 97.7 % confidence)" if bias_se is not None
-                   and abs(bias) + 2 * bias_se <= bound else
-                   f" ± {bias_se:.2g} (s.e.; chosen by the estimate alone, before the study bounded it by "
-                   f"|excess| + 2 s.e.: that upper bound, {abs(bias) + 2 * bias_se:.2g}, exceeds {bound:g})"
-                   if bias_se is not None else " (its standard error was not recorded)")
+        if bias is None or bias_se is None:
+            se_text = " (its standard error was not recorded)" if bias is not None else ""
+        elif bias_upper_bound(bias, bias_se) <= bound:
+            se_text = f" ± {bias_se:.2g} (s.e.; within the bound {bound:g} with 97.7 % confidence)"
+        else:
+            se_text = (f" ± {bias_se:.2g} (s.e.; chosen by the estimate alone, before the study bounded it by "
+                       f"|excess| + 2 s.e.: that upper bound, {bias_upper_bound(bias, bias_se):.2g}, exceeds {bound:g})")
         bias_text = (f"Step bias (per-pixel squared difference from h0/8 beyond noise, × mean square): "
                      f"{bias:.3g}{se_text}. " if bias is not None else
                      "The step is the study's smallest, h0/8 (no larger step was within the bias bound); its own "
@@ -172,8 +180,7 @@ def targets_text(results):
         f = lambda m: f"{own[m] / q:.3g}" if m in own else "–"
         goal = "FD / quadric ≥ 1 (≥ 0.5 on shadow-quad)" if k == 1 else "FD / quadric ≥ 5"
         lines.append(f"| {scene} | {k} | {f('fd')} | {f('vsphere')} | {f('uniform')} | {goal}; vsphere ≥ 10 with secondary silhouettes; uniform ≥ 1 |")
-    old_refs = any(not all("agree_pixels" in p for p in entry["step_study"]["pairs"])
-                   for entry, _ in results.values())
+    old_refs = any(not per_pixel_study(entry) for entry, _ in results.values())
     lines += ["", "Where best FD / quadric is below its target, finite differences at a well-chosen step are the "
               "more efficient estimator today. The step matters: at qsil's default step h0 the silhouettes move "
               "about two pixels over 2h at 256², which blurs the derivative image; a smaller step avoids the blur "
