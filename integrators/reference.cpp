@@ -141,7 +141,7 @@ Agreement agreement(const Reference& a, const Reference& b, int block) {
     g.sum_z.push_back(var > 0 ? d / std::sqrt(var) : (d == 0 ? 0.0 : INFINITY));
   }
   const int W = a.image.width, H = a.image.height;
-  double chi2 = 0;
+  double chi2 = 0, chi2_seen = 0;
   long long above = 0;
   double diff2 = 0, noise2 = 0, mean2 = 0;  // per pixel: (a - b)^2, se_a^2 + se_b^2, ((a + b) / 2)^2
   double excess2 = 0;                       // per pixel: ((a - b)^2 - se_a^2 - se_b^2)^2
@@ -153,13 +153,18 @@ Agreement agreement(const Reference& a, const Reference& b, int block) {
       const int vb = b.image.channel_index(name), sb = b.image.channel_index(name + ".se");
       for (int y0 = 0; y0 < H; y0 += block)
         for (int x0 = 0; x0 < W; x0 += block) {
-          double sum_a = 0, sum_b = 0, var = 0;
+          double sum_a = 0, sum_b = 0, var = 0, var_a = 0, var_b = 0;
+          bool blank_a = true, blank_b = true;  // every pixel 0 with s.e. 0: never sampled
           for (int y = y0; y < std::min(H, y0 + block); ++y)
             for (int x = x0; x < std::min(W, x0 + block); ++x) {
               const double pa = a.image.at(va, x, y), pb = b.image.at(vb, x, y);
               sum_a += pa;
               sum_b += pb;
               const double ea = a.image.at(sa, x, y), eb = b.image.at(sb, x, y);
+              var_a += ea * ea;
+              var_b += eb * eb;
+              blank_a = blank_a && pa == 0 && ea == 0;
+              blank_b = blank_b && pb == 0 && eb == 0;
               const double d2 = (pa - pb) * (pa - pb), n2 = ea * ea + eb * eb;
               var += n2;
               diff2 += d2;
@@ -175,6 +180,10 @@ Agreement agreement(const Reference& a, const Reference& b, int block) {
           }
           const double z = d / std::sqrt(var);
           chi2 += z * z;
+          if ((blank_a && var_b > 0) || (blank_b && var_a > 0))
+            ++g.unseen;
+          else
+            chi2_seen += z * z;
           g.max_abs_z = std::max(g.max_abs_z, std::abs(z));
           if (std::abs(z) > 3) ++above;
           ++g.tests;
@@ -182,6 +191,7 @@ Agreement agreement(const Reference& a, const Reference& b, int block) {
     }
   g.chi2_per_dof = g.tests ? chi2 / double(g.tests) : 0.0;
   g.frac_above_3 = g.tests ? double(above) / double(g.tests) : 0.0;
+  g.chi2_per_dof_seen = g.tests > g.unseen ? chi2_seen / double(g.tests - g.unseen) : 0.0;
   g.excess_rel_mse = mean2 > 0 ? (diff2 - noise2) / mean2 : 0.0;
   g.noise_rel_mse = mean2 > 0 ? noise2 / mean2 : 0.0;
   if (mean2 > 0 && pixels > 0) {

@@ -122,6 +122,13 @@ def agree(qsil, a, b, block=8):
     return code == 0, stats, float(m.group(1)) if m else float("nan"), float(m.group(2)) if m else float("nan")
 
 
+def write_index(index, path):
+    """Writes the index whole or not at all (a temporary file renamed over it)."""
+    with open(path + ".tmp", "w") as f:
+        json.dump(index, f, indent=1)
+    os.replace(path + ".tmp", path)
+
+
 def bias_upper_bound(excess, se):
     """What the step study holds against --max-step-bias: |excess| + 2 s.e. (97.7 % upper bound of a
     quantity >= 0; an estimate far below 0 means an s.e. made too small by heavy tails, see step_study)."""
@@ -184,6 +191,9 @@ def main():
     ap.add_argument("--scenes", default=",".join(SCENES))
     ap.add_argument("--params", default="k1", choices=["k1", "k8"])
     ap.add_argument("--force", action="store_true", help="recompute cached references")
+    ap.add_argument("--recheck", action="store_true",
+                    help="only re-judge the independence check of cached references with the current `qsil agree` "
+                         "(never renders; an error when the options match no cached reference)")
     args = ap.parse_args()
     qsil = os.path.abspath(args.qsil)
     os.makedirs(os.path.join(ROOT, OUT), exist_ok=True)
@@ -202,7 +212,15 @@ def main():
         old = index.get(name)
         if old and not args.force and old.get("key") == key and os.path.exists(os.path.join(ROOT, old["file"])):
             print(f"references: {name}: cached ({old['file']}, {old['spp']} spp)")
+            if args.recheck:
+                ok, stats, _, _ = agree(qsil, os.path.join(OUT, f"{name}-check-quadric.exr"),
+                                        os.path.join(OUT, f"{name}-check-fd.exr"))
+                old["quadric_check"].update({"agree": ok, "stats": stats})
+                write_index(index, index_path)
+                print(f"references: {name}: quadric agrees at 64x64: {ok} ({stats})")
             continue
+        if args.recheck:
+            raise SystemExit(f"references: {name}: no cached reference with these options to recheck")
         study = step_study(qsil, xml, params, args.res, args.study_spp, name, args.max_step_bias)
         spp = args.spp or max(args.study_spp, int(args.seconds / study["seconds_per_spp"]))
         path = os.path.join(OUT, name + ".exr")
@@ -216,9 +234,7 @@ def main():
                        "spp": spp, "steps": study["steps"], "seconds": seconds, "rel_noise_floor": floor,
                        "step_study": study,
                        "quadric_check": {"res": 64, "spp": args.check_spp, "agree": ok, "stats": stats}}
-        with open(index_path + ".tmp", "w") as f:
-            json.dump(index, f, indent=1)
-        os.replace(index_path + ".tmp", index_path)
+        write_index(index, index_path)
         print(f"references: {name}: {spp} spp, steps {study['steps']}, {seconds:.0f} s, rel. floor {floor:.3g}, "
               f"quadric agrees at 64x64: {ok}")
     return 0

@@ -143,6 +143,31 @@ TEST(Agreement, UnequalZeroVarianceBlockIsRefused) {
   EXPECT_FALSE(g.agrees());
 }
 
+// A block one reference never sampled (every pixel 0 with s.e. 0, as finite differences leave a
+// rare event's region) against a precise small value of the other (0.001 per pixel, s.e. 1e-5:
+// block z = 0.064 / 8e-5 = 800 per channel): the three tests are counted as unseen, and chi²/dof
+// without them is the independent references' (~1), while agrees() still refuses.
+TEST(Agreement, BlocksOneReferenceNeverSampledAreCounted) {
+  Reference a = synthetic(1, 1.0), b = synthetic(2, 1.0);
+  for (int c = 0; c < 3; ++c)
+    for (int y = 8; y < 16; ++y)
+      for (int x = 0; x < 8; ++x) {
+        a.image.at(2 * c, x, y) = 0.001f;
+        a.image.at(2 * c + 1, x, y) = 1e-5f;
+        b.image.at(2 * c, x, y) = 0.0f;
+        b.image.at(2 * c + 1, x, y) = 0.0f;
+      }
+  summarize_reference(a);
+  summarize_reference(b);
+  const Agreement g = agreement(a, b, 8);
+  EXPECT_EQ(g.unseen, 3);
+  EXPECT_EQ(g.tests, 63 * 3);
+  EXPECT_GT(g.chi2_per_dof, 100.0);
+  EXPECT_NEAR(g.chi2_per_dof_seen, 1.0, 0.4);
+  EXPECT_FALSE(g.agrees());
+  EXPECT_EQ(agreement(synthetic(1, 1.0), synthetic(2, 1.0), 8).unseen, 0);
+}
+
 TEST(Agreement, RefusesDifferentSizesAndBadBlocks) {
   Reference small = synthetic(1, 1.0);
   small.image.width = 32;
