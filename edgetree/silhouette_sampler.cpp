@@ -38,6 +38,12 @@ double edge_defensive(const ForestEdge& e, const Vec3& p) {
 /// tests. QuadricBox keeps the bound alone (the paper's ablation). Measured in the issue note.
 constexpr int kExactTestEdges = 64;
 
+/// Inner nodes of the quadric method with at most this many edges choose among all their
+/// discontinuity edges at once (flat_candidates), each weighed as a leaf weighs its edges,
+/// instead of descending through their children by box importance (see the header; the same
+/// size as kExactTestEdges: below it the forest is handled edge by edge).
+constexpr int kFlatEdges = 64;
+
 /// A query with its per-query constants: the lights that face p, in the local frame.
 struct Prepared {
   const SilhouetteQuery& q;
@@ -111,6 +117,28 @@ int leaf_candidates(const EdgeForest& f, int n, const Prepared& pq, std::array<C
     if (is_discontinuity(e, pq.q.p)) out[k++] = {-1, &e, {}};
   if (k > 1)
     for (int i = 0; i < k; ++i) out[size_t(i)].w = leaf_edge_weight(*out[size_t(i)].edge, pq);
+  return k;
+}
+
+/// Whether the traversal chooses an edge of node `node` directly (flat_candidates).
+bool is_flat(const ForestNode& node, Method method) {
+  return method == Method::Quadric && !node.is_leaf() && node.edge_end - node.edge_begin <= kFlatEdges;
+}
+
+/// The discontinuity edges below node `n` (at most kFlatEdges), weighed as a leaf's when two or
+/// more, with their choice probabilities in `prob`. Returns their count (0: none, a false accept).
+int flat_candidates(const EdgeForest& f, int n, const Prepared& pq, std::vector<Candidate>& out,
+                    std::vector<double>& prob) {
+  out.clear();
+  for (const ForestEdge& e : f.node_edges(n))
+    if (is_discontinuity(e, pq.q.p)) out.push_back({-1, &e, {}});
+  const int k = int(out.size());
+  prob.resize(size_t(std::max(k, 1)));
+  if (k == 1) prob[0] = 1.0;
+  if (k > 1) {
+    for (Candidate& c : out) c.w = leaf_edge_weight(*c.edge, pq);
+    choice_probabilities(out, k, prob.data());
+  }
   return k;
 }
 
@@ -253,9 +281,24 @@ SilhouetteSample descend(const EdgeForest& forest, const Prepared& pq, const std
                          Method method, Candidate cur, double pmf, int tests) {
   std::array<Candidate, 4> cand;
   std::array<double, 4> p4;
-  // ---- Descend: inner nodes choose among accepted children, leaves among silhouette edges.
+  // ---- Descend: inner nodes choose among accepted children, leaves among silhouette edges,
+  // small nodes among all the discontinuity edges below them.
   while (!cur.edge) {
     const ForestNode& node = forest.node(cur.node);
+    if (is_flat(node, method)) {
+      thread_local std::vector<Candidate> flat;
+      thread_local std::vector<double> prob;
+      const int k = flat_candidates(forest, cur.node, pq, flat, prob);
+      const int i = k > 0 ? choose(prob.data(), k, next()) : -1;
+      if (i < 0) {  // a false accept: no discontinuity below
+        SilhouetteSample none;
+        none.rejection_tests = tests;
+        return none;
+      }
+      pmf *= prob[size_t(i)];
+      cur = flat[size_t(i)];
+      break;
+    }
     const int k = node.is_leaf() ? leaf_candidates(forest, cur.node, pq, cand)
                                  : child_candidates(forest, cur.node, pq, method, cand, tests);
     if (k == 0) {  // a false accept: no silhouette below (a zero-contribution traversal)
@@ -377,6 +420,14 @@ double silhouette_edge_probability(const EdgeForest& forest, const SilhouetteQue
   std::array<double, 4> p4;
   while (!cur.edge) {
     const ForestNode& node = forest.node(cur.node);
+    if (is_flat(node, method)) {
+      std::vector<Candidate> flat;
+      std::vector<double> prob;
+      const int k = flat_candidates(forest, cur.node, pq, flat, prob);
+      for (int i = 0; i < k; ++i)
+        if (flat[size_t(i)].edge == edge) return pmf * prob[size_t(i)];
+      return 0;
+    }
     const int k = node.is_leaf() ? leaf_candidates(forest, cur.node, pq, cand)
                                  : child_candidates(forest, cur.node, pq, method, cand, tests);
     if (k == 0) return 0;

@@ -170,5 +170,35 @@ TEST(SplitSampling, TraversalHistogramMatchesRenormalisedProbabilities) {
   }
 }
 
+// The traversal's edge probabilities (silhouette_edge_probability, which walks the same choices,
+// the flat choice of small subtrees included) are a sub-probability over the discontinuity edges
+// that misses none: for 60 queries of the world above, every discontinuity edge of an eligible
+// shape has probability > 0 (a zero would be bias: that edge's boundary integral is never
+// estimated), and they sum to at most 1 (the rest: traversals that find no edge). Both methods;
+// the histogram test above checks that the sampler draws with these probabilities.
+TEST(QuadricTraversal, EveryDiscontinuityEdgeHasProbabilityAndTheySumToAtMostOne) {
+  const auto w = make_world();
+  const auto qs = queries(*w, 60, 7);
+  for (Method m : {Method::Quadric, Method::QuadricBox}) {
+    int missing = 0, over = 0, edges = 0;
+    for (const SilhouetteQuery& q : qs) {
+      double sum = 0;
+      auto check = [&](const ForestEdge& e) {
+        const double pr = silhouette_edge_probability(w->forest, q, &e, m);
+        sum += pr;
+        if (!is_discontinuity(e, q.p)) return;
+        ++edges;
+        missing += !(pr > 0);
+      };
+      for (const ForestEdge& e : w->forest.edges()) check(e);
+      for (const ForestEdge& e : w->forest.always_edges()) check(e);
+      over += sum > 1 + 1e-9;
+    }
+    EXPECT_GT(edges, 1000) << method_name(m) << ": too few discontinuity edges for power";
+    EXPECT_EQ(missing, 0) << method_name(m) << ": discontinuity edges with probability 0";
+    EXPECT_EQ(over, 0) << method_name(m) << ": probabilities summing to more than 1";
+  }
+}
+
 }  // namespace
 }  // namespace qsil::edgetree

@@ -17,7 +17,18 @@
 /// LTC horizon), because the true integrand need not vanish there. A leaf chooses among its
 /// silhouette edges (exact per-edge test) the same way with I_e = the LTC line integral of the
 /// edge's [QSS Eq. 4] integrand and G_e = length / |midpoint - p|^2; the point on the edge comes
-/// from EdgePointSampler (itself defensive). Always-candidate edges (boundary edges: the outlines
+/// from EdgePointSampler (itself defensive).
+///
+/// Flat choice (Method::Quadric only; QuadricBox keeps the paper's traversal): a chosen inner
+/// node with at most 64 edges below it does not descend through its children but chooses among
+/// all the discontinuity edges below it at once, each weighed as a leaf weighs its edges (I_e
+/// with the normal-velocity factor, G_e). The box importance of its subtree's nodes spreads a
+/// narrow BSDF lobe's or a light's weight over every box that overlaps it, whether or not the
+/// box's silhouette edges cross it; the edges' own weights do not. Measured (256², 64 spp,
+/// 3 seeds, against the per-pixel FD references of docs/results.md): relative MSE spot-mirror
+/// 1.157 → 0.996, shadow-quad 0.538 → 0.442 (0.30 → 0.19 without the seed whose one outlier
+/// dominates both), at +8–10 % boundary time (128², 16 spp, one thread); with 16 edges
+/// 1.058 / 0.489 at +2 %, with 256 edges +50–70 % time. Always-candidate edges (boundary edges: the outlines
 /// of rectangles, area lights, open meshes; creases) compete with the forest roots at the top
 /// level: a shape's many always-candidates through the roots of its always-candidate tree, whose
 /// nodes are never rejected and are weighed like the forest's (L_w = always_edge_weight), a
