@@ -17,7 +17,11 @@
 /// LTC horizon), because the true integrand need not vanish there. A leaf chooses among its
 /// silhouette edges (exact per-edge test) the same way with I_e = the LTC line integral of the
 /// edge's [QSS Eq. 4] integrand and G_e = length / |midpoint - p|^2; the point on the edge comes
-/// from EdgePointSampler (itself defensive).
+/// from EdgePointSampler (itself defensive). Always-candidate edges (boundary edges: the outlines
+/// of rectangles, area lights, open meshes; creases) compete with the forest roots at the top
+/// level: a shape's many always-candidates through the roots of its always-candidate tree, whose
+/// nodes are never rejected and are weighed like the forest's (L_w = always_edge_weight), a
+/// shape's few (e.g. a rectangle's outline) one by one.
 ///
 /// Flat choice (Method::Quadric only; QuadricBox keeps the paper's traversal): a chosen inner
 /// node with at most 64 edges below it does not descend through its children but chooses among
@@ -28,11 +32,7 @@
 /// 3 seeds, against the per-pixel FD references of docs/results.md): relative MSE spot-mirror
 /// 1.157 → 0.996, shadow-quad 0.538 → 0.442 (0.30 → 0.19 without the seed whose one outlier
 /// dominates both), at +8–10 % boundary time (128², 16 spp, one thread); with 16 edges
-/// 1.058 / 0.489 at +2 %, with 256 edges +50–70 % time. Always-candidate edges (boundary edges: the outlines
-/// of rectangles, area lights, open meshes; creases) compete with the forest roots at the top
-/// level: a shape's many always-candidates through the roots of its always-candidate tree, whose
-/// nodes are never rejected and are weighed like the forest's (L_w = always_edge_weight), a
-/// shape's few (e.g. a rectangle's outline) one by one.
+/// 1.058 / 0.489 at +2–4 %, with 256 edges +50–80 % time.
 ///
 /// Splitting (sample_silhouette_set, what the renderer uses): a loose always-candidate edge whose
 /// top-level probability is at least kSplitShare (at most kMaxSplitEdges of them, the most
