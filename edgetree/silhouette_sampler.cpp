@@ -40,9 +40,9 @@ constexpr int kExactTestEdges = 64;
 
 /// Inner nodes of the quadric method with at most this many edges choose among all their
 /// discontinuity edges at once (flat_candidates), each weighed as a leaf weighs its edges,
-/// instead of descending through their children by box importance (see the header; the same
-/// size as kExactTestEdges: below it the forest is handled edge by edge).
-constexpr int kFlatEdges = 64;
+/// instead of descending through their children by box importance (see the header): the size
+/// below which the forest is handled edge by edge.
+constexpr int kFlatEdges = kExactTestEdges;
 
 /// A query with its per-query constants: the lights that face p, in the local frame.
 struct Prepared {

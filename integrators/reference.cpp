@@ -116,7 +116,9 @@ ErrorMetrics measure_error(const Film& film, const Reference& ref) {
   return m;
 }
 
-double Agreement::chi2_limit() const { return tests > 0 ? 1.0 + 5.0 * std::sqrt(2.0 / double(tests)) + 0.25 : 0.0; }
+double Agreement::chi2_limit_for(long long dof) {
+  return dof > 0 ? 1.0 + 5.0 * std::sqrt(2.0 / double(dof)) + 0.25 : 0.0;
+}
 
 bool Agreement::agrees() const {
   for (double z : sum_z)
@@ -153,7 +155,7 @@ Agreement agreement(const Reference& a, const Reference& b, int block) {
       const int vb = b.image.channel_index(name), sb = b.image.channel_index(name + ".se");
       for (int y0 = 0; y0 < H; y0 += block)
         for (int x0 = 0; x0 < W; x0 += block) {
-          double sum_a = 0, sum_b = 0, var = 0, var_a = 0, var_b = 0;
+          double sum_a = 0, sum_b = 0, var_a = 0, var_b = 0;
           bool blank_a = true, blank_b = true;  // every pixel 0 with s.e. 0: never sampled
           for (int y = y0; y < std::min(H, y0 + block); ++y)
             for (int x = x0; x < std::min(W, x0 + block); ++x) {
@@ -166,14 +168,13 @@ Agreement agreement(const Reference& a, const Reference& b, int block) {
               blank_a = blank_a && pa == 0 && ea == 0;
               blank_b = blank_b && pb == 0 && eb == 0;
               const double d2 = (pa - pb) * (pa - pb), n2 = ea * ea + eb * eb;
-              var += n2;
               diff2 += d2;
               noise2 += n2;
               excess2 += (d2 - n2) * (d2 - n2);
               ++pixels;
               mean2 += 0.25 * (pa + pb) * (pa + pb);
             }
-          const double d = sum_a - sum_b;
+          const double d = sum_a - sum_b, var = var_a + var_b;
           if (var == 0) {
             if (std::abs(d) > 1e-6 * (std::abs(sum_a) + std::abs(sum_b))) ++g.unequal_exact;
             continue;

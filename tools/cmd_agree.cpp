@@ -63,9 +63,9 @@ const CommandRegistrar registrar{
          std::printf(
              "  %dx%d blocks: %lld tests, chi2/dof %.3f (limit %.3f), max |z| %.2f, %.2f%% with |z| > 3, %lld "
              "zero-variance blocks unequal, %lld tests of blocks one reference never sampled (chi2/dof %.3f without "
-             "them)\n",
+             "them, limit %.3f)\n",
              g.block, g.block, g.tests, g.chi2_per_dof, g.chi2_limit(), g.max_abs_z, 100 * g.frac_above_3,
-             g.unequal_exact, g.unseen, g.chi2_per_dof_seen);
+             g.unequal_exact, g.unseen, g.chi2_per_dof_seen, g.chi2_limit_seen());
          std::printf(
              "  per-pixel squared difference beyond noise: %.4g +- %.2g x mean square (noise removed: %.4g)\n",
              g.excess_rel_mse, g.excess_se, g.noise_rel_mse);

@@ -164,14 +164,17 @@ def step_study(qsil, xml, params, res, spp, name, max_bias):
     # is bounded, not excess. Without such a step, the smallest.
     def to_smallest(f):
         return next(p for p in pairs if p["h_factor"] == f and p["smaller_factor"] == factors[-1])
+
+    def within_bound(f):
+        p = to_smallest(f)
+        return bias_upper_bound(p["excess_rel_mse"], p["excess_se"]) <= max_bias
     chosen = next((r["factor"] for r in runs[:-1]
-                   if all(p["agree"] for p in pairs if p["h_factor"] == r["factor"])
-                   and bias_upper_bound(to_smallest(r["factor"])["excess_rel_mse"], to_smallest(r["factor"])["excess_se"])
-                   <= max_bias),
+                   if all(p["agree"] for p in pairs if p["h_factor"] == r["factor"]) and within_bound(r["factor"])),
                   factors[-1])
     # The chosen step's bias against the smallest (the smallest's own: not measured).
-    bias = to_smallest(chosen)["excess_rel_mse"] if chosen != factors[-1] else None
-    bias_se = to_smallest(chosen)["excess_se"] if chosen != factors[-1] else None
+    last = to_smallest(chosen) if chosen != factors[-1] else None
+    bias = last["excess_rel_mse"] if last else None
+    bias_se = last["excess_se"] if last else None
     return {"h0": h0, "runs": runs, "pairs": pairs, "chosen_factor": chosen, "step_bias_rel": bias,
             "step_bias_se": bias_se, "steps": [h * chosen for h in h0],
             "seconds_per_spp": sum(r["seconds"] for r in runs) / len(runs) / spp}

@@ -103,7 +103,12 @@ struct Agreement {
   /// bound (tools/references.py takes |excess| + 2 se: a 97.7 % upper bound, and a guard against an
   /// s.e. that heavy-tailed noise made too small, which shows as an excess far below 0).
   double excess_se = 0;
-  double chi2_limit() const;    ///< the agrees() bound on chi2_per_dof
+  /// The agrees() bound on a mean z^2 over `dof` block tests: 1 + 5 sqrt(2 / dof) + 0.25 (0 for
+  /// dof <= 0).
+  static double chi2_limit_for(long long dof);
+  double chi2_limit() const { return chi2_limit_for(tests); }  ///< the agrees() bound on chi2_per_dof
+  /// The same bound for chi2_per_dof_seen (over tests - unseen block tests).
+  double chi2_limit_seen() const { return chi2_limit_for(tests - unseen); }
   bool agrees() const;          ///< see above
 };
 
