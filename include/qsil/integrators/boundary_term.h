@@ -64,6 +64,26 @@ inline edgetree::LTC bsdf_ltc(const BSDFDesc& b, Vec3 wo_local) {
   return ltc;
 }
 
+/// The shading point's own triangle, for an edge that bounds it (edge_jump_with).
+///
+/// p lies in the plane of its own triangle T (up to rounding), and so does every edge of T: the
+/// plane (p, edge) is T's plane, and the silhouette and crease predicates, which take the sign of
+/// p against T's plane, are rounding noise there. What the integrand does across T's plane in the
+/// directions toward the edge depends only on the other face T' of the edge:
+/// - T' on the viewer's side of T's plane (a concave edge seen from the front): the directions
+///   just on that side meet T' near the edge, those just beyond pass below T (the sliver rays of
+///   docs/design-notes.md "Smooth shading", item 1) and see what lies beyond: a silhouette of T'
+///   with foreground T' and that background;
+/// - T' on the other side, in the plane, or no T' (a convex, flat or boundary edge): neither side
+///   meets anything near the edge; the radiance is continuous there and the contribution is 0.
+/// With face normals f_s cos vanishes in T's plane and so does the contribution anyway; with
+/// smooth shading the shading normal tilts away from T's and it does not: treating these edges as
+/// silhouettes made grad 60 % high for a vertex of a smooth bunny (docs/gradient-checks.md).
+struct OwnFace {
+  int face = -1;             ///< p's triangle (of the edge's shape) when the edge bounds it, else -1
+  Vec3 up = Vec3::Zero();    ///< T's unit geometric normal turned toward p's viewer (world)
+};
+
 /// The radiance jump and the Jacobian at a point of a discontinuity edge seen from p (shared by
 /// the secondary and the primary boundary terms). On success (returns true):
 /// - jump = s (L_bg - L_fg): the occluder-side sign times background minus foreground radiance
@@ -79,14 +99,18 @@ inline edgetree::LTC bsdf_ltc(const BSDFDesc& b, Vec3 wo_local) {
 /// opposite to p's viewer (leaves_below), so that ray and its continuation beyond the edge pass
 /// through back faces, as every such ray of the path tracer does.
 ///
+/// `own`: p's own triangle when the edge bounds it (OwnFace; face -1 otherwise, and for the
+/// camera): then the plane (p, edge) is that triangle's plane and the edge is treated as
+/// OwnFace says, not by the silhouette or crease rule.
+///
 /// `accept(g)` receives g = (w0 x w1) / |w_t|^3, the Jacobian's linear form in the relative
 /// velocity (J = g . v_t), before any ray is traced or random number drawn; returning false ends
 /// the evaluation with a zero contribution (edge_jump: no relative velocity). Reverse mode
 /// (integrators/reverse.cpp) keeps g itself: the adjoint of v_t.
 template <class Accept>
 bool edge_jump_with(const PathContext& ctx, const edgetree::ForestEdge& e, double t, const Vec3& p,
-                    const Vec3& vis_origin, bool through_back_faces, int seg, Sampler& sampler, PathStats& stats,
-                    Color& jump, Accept&& accept) {
+                    const Vec3& vis_origin, bool through_back_faces, const OwnFace& own, int seg, Sampler& sampler,
+                    PathStats& stats, Color& jump, Accept&& accept) {
   const Scene& scene = *ctx.scene;
   const Vec3 w0 = e.p0 - p, w1 = e.p1 - p;
   const Vec3 wt = w0 + t * (w1 - w0);
@@ -134,6 +158,26 @@ bool edge_jump_with(const PathContext& ctx, const edgetree::ForestEdge& e, doubl
     h.exact = true;
     return Color(trace_path(ctx, pv, p, w, h, seg, 0.0, rng, stats));
   };
+  if (own.face >= 0) {
+    // ---- An edge of p's own triangle (OwnFace).
+    const int other = e.f0 == own.face ? e.f1 : e.f0;
+    if (other < 0) return false;
+    const Eigen::Vector3i& tri = mesh.triangles[other];
+    int opp = tri[0];
+    for (int k = 0; k < 3; ++k)
+      if (tri[k] != e.v0 && tri[k] != e.v1) opp = tri[k];
+    if (!((mesh.positions[opp] - p).dot(own.up) > 0)) return false;  // T' below T's plane or in it
+    const double side = side_of(other);
+    if (side == 0) return false;
+    const Color L_fg = face_radiance(other, sampler);
+    const Vec3 xe = p + wt;
+    ignore.through_back_faces = true;  // beyond the edge on the far side of T's plane: a sliver ray
+    ++stats.rays;
+    const Hit bg = ctx.tracer->intersect(xe, w, kInf, ignore);
+    const Color L_bg = trace_path(ctx, pv, xe, w, bg, seg, 0.0, sampler, stats);
+    jump = (side > 0 ? 1.0 : -1.0) * (L_bg - L_fg);
+    return true;
+  }
   if (e.crease && !edgetree::edge_is_silhouette(e, p)) {
     // ---- A crease (edgetree::CreaseSet), both faces facing p: the two faces lie on opposite
     // sides of the plane (p, edge); the radiance jumps from one face's to the other's.
@@ -179,7 +223,8 @@ template <int N>
 bool edge_jump(const PathContext& ctx, const SceneVelocities& vel, const edgetree::ForestEdge& e, double t,
                const Vec3& p, const Vec3& vis_origin, bool through_back_faces, const Eigen::Matrix<double, 3, N>& dp,
                int seg, Sampler& sampler, PathStats& stats, Color& jump, Eigen::Matrix<double, 1, N>& J) {
-  return edge_jump_with(ctx, e, t, p, vis_origin, through_back_faces, seg, sampler, stats, jump, [&](const Vec3& g) {
+  return edge_jump_with(ctx, e, t, p, vis_origin, through_back_faces, OwnFace{}, seg, sampler, stats, jump,
+                        [&](const Vec3& g) {
     J = edge_point_jacobian<N>(vel, e, t, g, dp);
     return !J.isZero(0.0);
   });
@@ -214,8 +259,13 @@ void for_each_boundary_sample(const PathContext& ctx, const BoundaryContext& bct
       if ((f == 0).all()) continue;
       Color jump;
       Vec3 g;
-      if (!edge_jump_with(ctx, e, s.t, q.p, spawn_origin(si, w), leaves_below(si, wo_world, w), seg, sampler, stats,
-                          jump,
+      OwnFace own;
+      if (e.shape == si.shape && (e.f0 == si.triangle || e.f1 == si.triangle)) {
+        own.face = si.triangle;
+        own.up = value(si.ng).dot(wo_world) < 0 ? Vec3(-value(si.ng)) : value(si.ng);
+      }
+      if (!edge_jump_with(ctx, e, s.t, q.p, spawn_origin(si, w), leaves_below(si, wo_world, w), own, seg, sampler,
+                          stats, jump,
                           [&](const Vec3& gv) {
                             g = gv;
                             return accept(e, s.t, gv);
