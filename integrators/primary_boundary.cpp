@@ -67,10 +67,11 @@ void sample_chunk(const PathContext& ctx, const std::vector<PrimaryEdge>& edges,
     const double W = fx * fy / (cos_theta * cos_theta * cos_theta);
     Color jump;
     Vec3 g;
-    const bool ok = edge_jump_with(ctx, *pe.edge, t, o, o, false, OwnFace{}, 0, sampler, stats, jump, [&](const Vec3& gv) {
-      g = gv;
-      return accept(*pe.edge, t, gv);
-    });
+    const bool ok =
+        edge_jump_with(ctx, *pe.edge, t, o, o, false, OwnFace{}, 0, sampler, stats, jump, [&](const Vec3& gv) {
+          g = gv;
+          return accept(*pe.edge, t, gv);
+        });
     if (!ok || (jump == 0).all()) {
       ++stats.boundary_zero;
       continue;

@@ -80,8 +80,8 @@ inline edgetree::LTC bsdf_ltc(const BSDFDesc& b, Vec3 wo_local) {
 /// smooth shading the shading normal tilts away from T's and it does not: treating these edges as
 /// silhouettes made grad 60 % high for a vertex of a smooth bunny (docs/gradient-checks.md).
 struct OwnFace {
-  int face = -1;             ///< p's triangle (of the edge's shape) when the edge bounds it, else -1
-  Vec3 up = Vec3::Zero();    ///< T's unit geometric normal turned toward p's viewer (world)
+  int face = -1;           ///< p's triangle (of the edge's shape) when the edge bounds it, else -1
+  Vec3 up = Vec3::Zero();  ///< T's unit geometric normal turned toward p's viewer (world)
 };
 
 /// The radiance jump and the Jacobian at a point of a discontinuity edge seen from p (shared by
@@ -225,9 +225,9 @@ bool edge_jump(const PathContext& ctx, const SceneVelocities& vel, const edgetre
                int seg, Sampler& sampler, PathStats& stats, Color& jump, Eigen::Matrix<double, 1, N>& J) {
   return edge_jump_with(ctx, e, t, p, vis_origin, through_back_faces, OwnFace{}, seg, sampler, stats, jump,
                         [&](const Vec3& g) {
-    J = edge_point_jacobian<N>(vel, e, t, g, dp);
-    return !J.isZero(0.0);
-  });
+                          J = edge_point_jacobian<N>(vel, e, t, g, dp);
+                          return !J.isZero(0.0);
+                        });
 }
 
 /// The secondary boundary term's samples at one path vertex (shared by forward mode, BoundaryHook,
