@@ -136,13 +136,14 @@ bool edge_jump_with(const PathContext& ctx, const edgetree::ForestEdge& e, doubl
   if (ctx.tracer->occluded(vis_origin, to_edge / vis_dist, vis_dist * (1.0 - 1.0 / 4096.0), ignore)) return false;
   // The side of the plane (p, edge) on which a face lies: the sign of (w0 x w1).(x_opp - p) for
   // the face's third vertex.
-  auto side_of = [&](int face) {
+  auto opposite = [&](int face) -> const Vec3& {  // the face's vertex off the edge
     const Eigen::Vector3i& tri = mesh.triangles[face];
     int opp = tri[0];
     for (int k = 0; k < 3; ++k)
       if (tri[k] != e.v0 && tri[k] != e.v1) opp = tri[k];
-    return n01.dot(mesh.positions[opp] - p);
+    return mesh.positions[opp];
   };
+  auto side_of = [&](int face) { return n01.dot(opposite(face) - p); };
   // Radiance leaving face `face` exactly at x_e toward p, continued with the remaining depth.
   // The point is known: barycentrics (1-t at v0, t at v1) in the face's vertex order (the face
   // may be seen edge-on from p, where a ray-plane intersection degenerates).
@@ -158,27 +159,16 @@ bool edge_jump_with(const PathContext& ctx, const edgetree::ForestEdge& e, doubl
     h.exact = true;
     return Color(trace_path(ctx, pv, p, w, h, seg, 0.0, rng, stats));
   };
+  int own_occluder = -1;  // for an edge of p's own triangle: the other face, when it occludes
   if (own.face >= 0) {
-    // ---- An edge of p's own triangle (OwnFace).
-    const int other = e.f0 == own.face ? e.f1 : e.f0;
-    if (other < 0) return false;
-    const Eigen::Vector3i& tri = mesh.triangles[other];
-    int opp = tri[0];
-    for (int k = 0; k < 3; ++k)
-      if (tri[k] != e.v0 && tri[k] != e.v1) opp = tri[k];
-    if (!((mesh.positions[opp] - p).dot(own.up) > 0)) return false;  // T' below T's plane or in it
-    const double side = side_of(other);
-    if (side == 0) return false;
-    const Color L_fg = face_radiance(other, sampler);
-    const Vec3 xe = p + wt;
-    ignore.through_back_faces = true;  // beyond the edge on the far side of T's plane: a sliver ray
-    ++stats.rays;
-    const Hit bg = ctx.tracer->intersect(xe, w, kInf, ignore);
-    const Color L_bg = trace_path(ctx, pv, xe, w, bg, seg, 0.0, sampler, stats);
-    jump = (side > 0 ? 1.0 : -1.0) * (L_bg - L_fg);
-    return true;
-  }
-  if (e.crease && !edgetree::edge_is_silhouette(e, p)) {
+    // ---- An edge of p's own triangle (OwnFace): a silhouette of the other face T' when T' lies
+    // on the viewer's side of p's plane; beyond the edge on the far side of that plane the
+    // background is a sliver ray.
+    own_occluder = e.f0 == own.face ? e.f1 : e.f0;
+    if (own_occluder < 0) return false;
+    if (!((opposite(own_occluder) - p).dot(own.up) > 0)) return false;  // T' below p's plane or in it
+    ignore.through_back_faces = true;
+  } else if (e.crease && !edgetree::edge_is_silhouette(e, p)) {
     // ---- A crease (edgetree::CreaseSet), both faces facing p: the two faces lie on opposite
     // sides of the plane (p, edge); the radiance jumps from one face's to the other's.
     // Reynolds transport: jump = L(side -) - L(side +), + the side (w0 x w1) points to.
@@ -192,13 +182,13 @@ bool edge_jump_with(const PathContext& ctx, const edgetree::ForestEdge& e, doubl
     return true;
   }
   // ---- A silhouette or boundary edge: both faces on the occluder's side s.
-  const double side = side_of(e.f0);
+  const double side = side_of(own_occluder >= 0 ? own_occluder : e.f0);
   if (side == 0) return false;
   const double s = side > 0 ? 1.0 : -1.0;
   // Foreground: the face that faces p. Background: beyond the edge along the same direction
   // (escaping rays see the environment).
   const Vec4 x(p.x(), p.y(), p.z(), 1.0);
-  const int face = (e.f1 < 0 || e.q0.dot(x) > 0) ? e.f0 : e.f1;
+  const int face = own_occluder >= 0 ? own_occluder : ((e.f1 < 0 || e.q0.dot(x) > 0) ? e.f0 : e.f1);
   const Color L_fg = face_radiance(face, sampler);
   const Vec3 xe = p + wt;
   ++stats.rays;
