@@ -33,6 +33,33 @@ void pyramid_interval(const LocalLight& light, const Vec3& w0, const Vec3& w1, d
   }
 }
 
+/// W_i of a component: its radiance times its LTC integral, 0 unless finite and positive.
+double component_weight(double radiance, double integral) {
+  const double w = radiance * integral;
+  return std::isfinite(w) && w > 0 ? w : 0.0;
+}
+
+/// Calls component(lo, hi, radiance) for each of the mixture's components of edge e (endpoints
+/// w0, w1 relative to p, local frame), in order: the whole edge with the environment's radiance
+/// (plus e's emission), then the part in front of each of the first kMaxLights lights that the
+/// edge crosses, with that light's.
+template <class Component>
+void for_each_component(const ForestEdge& e, const SilhouetteQuery& q, std::span<const LocalLight> lights,
+                        const Vec3& w0, const Vec3& w1, Component&& component) {
+  double base = q.env_weight;
+  if (q.emission && e.shape >= 0 && e.shape < int(q.emission->size())) base += (*q.emission)[size_t(e.shape)];
+  component(0.0, 1.0, base);  // also the angle-uniform part (comp_[0])
+  int used = 0;
+  for (const LocalLight& light : lights) {
+    if (used == EdgeMixture::kMaxLights) break;
+    double lo, hi;
+    pyramid_interval(light, w0, w1, lo, hi);
+    if (!(hi > lo)) continue;
+    component(lo, hi, light.weight);
+    ++used;
+  }
+}
+
 }  // namespace
 
 EdgeMixture::EdgeMixture(const ForestEdge& e, const SilhouetteQuery& q) : EdgeMixture(e, q, [&] {
@@ -44,27 +71,22 @@ EdgeMixture::EdgeMixture(const ForestEdge& e, const SilhouetteQuery& q) : EdgeMi
 EdgeMixture::EdgeMixture(const ForestEdge& e, const SilhouetteQuery& q, std::span<const LocalLight> lights)
     : comp_{kEmpty, kEmpty, kEmpty, kEmpty, kEmpty} {
   const Vec3 w0 = q.frame.to_local(e.p0 - q.p), w1 = q.frame.to_local(e.p1 - q.p);
-  double base = q.env_weight;
-  if (q.emission && e.shape >= 0 && e.shape < int(q.emission->size())) base += (*q.emission)[size_t(e.shape)];
-  add(EdgePointSampler(w0, w1, q.ltc), base);  // also the angle-uniform part (comp_[0])
-  int used = 0;
-  for (const LocalLight& light : lights) {
-    if (used == kMaxLights) break;
-    double lo, hi;
-    pyramid_interval(light, w0, w1, lo, hi);
-    if (!(hi > lo)) continue;
-    add(EdgePointSampler(w0, w1, q.ltc, kEdgeDefensiveShare, lo, hi), light.weight);
-    ++used;
-  }
+  for_each_component(e, q, lights, w0, w1, [&](double lo, double hi, double radiance) {
+    comp_[size_t(n_)] = EdgePointSampler(w0, w1, q.ltc, kEdgeDefensiveShare, lo, hi);
+    weight_[size_t(n_)] = component_weight(radiance, comp_[size_t(n_)].target_integral());
+    total_ += weight_[size_t(n_)];
+    ++n_;
+  });
   eps_ = total_ > 0 ? kEdgeDefensiveShare : 1.0;
 }
 
-void EdgeMixture::add(const EdgePointSampler& s, double radiance) {
-  const double w = radiance * s.target_integral();
-  comp_[size_t(n_)] = s;
-  weight_[size_t(n_)] = std::isfinite(w) && w > 0 ? w : 0.0;
-  total_ += weight_[size_t(n_)];
-  ++n_;
+double EdgeMixture::total(const ForestEdge& e, const SilhouetteQuery& q, std::span<const LocalLight> lights) {
+  const Vec3 w0 = q.frame.to_local(e.p0 - q.p), w1 = q.frame.to_local(e.p1 - q.p);
+  double total = 0;
+  for_each_component(e, q, lights, w0, w1, [&](double lo, double hi, double radiance) {
+    total += component_weight(radiance, EdgePointSampler::ltc_integral(w0, w1, q.ltc, lo, hi));
+  });
+  return total;
 }
 
 EdgePointSample EdgeMixture::sample(double u) const {

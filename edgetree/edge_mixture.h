@@ -37,14 +37,16 @@ class EdgeMixture {
 
   /// W: the radiance-weighted LTC integral over the edge (luminance × per scene unit, ≥ 0).
   double total() const { return total_; }
+  /// EdgeMixture(e, q, lights).total() without building the mixture (no component samplers, no
+  /// angle-uniform part): an edge's importance, computed for every candidate of a leaf or a flat
+  /// choice, of which one is sampled. Bit-identical to total().
+  static double total(const ForestEdge& e, const SilhouetteQuery& q, std::span<const LocalLight> lights);
   /// One sample from u in [0, 1): t in [0, 1] and its density pdf(t) > 0.
   EdgePointSample sample(double u) const;
   /// The density at t (per unit t): > 0 on [0, 1], 0 outside.
   double pdf(double t) const;
 
  private:
-  void add(const EdgePointSampler& s, double radiance);
-
   std::array<EdgePointSampler, 1 + kMaxLights> comp_;
   std::array<double, 1 + kMaxLights> weight_{};
   int n_ = 0;

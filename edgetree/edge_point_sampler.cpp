@@ -53,13 +53,28 @@ double segment_param(double la, double lb, double Psi, double psi) {
 EdgePointSampler::EdgePointSampler(const Vec3& w0, const Vec3& w1, const LTC& ltc, double defensive, double t_lo,
                                    double t_hi)
     : w0_(w0), w1_(w1), ltc_(ltc) {
-  const Vec3 c = w0.cross(w1);
-  cross01_ = c.norm();
+  cross01_ = w0.cross(w1).norm();
   phi_ = std::atan2(cross01_, w0.dot(w1));
   l0_ = w0.norm();
   l1_ = w1.norm();
   eps_ = 1.0;
-  if (!(ltc.norm > 0.0) || !(cross01_ > 0.0) || !std::isfinite(cross01_)) return;
+  setup_ltc(cross01_, t_lo, t_hi);
+  if (target_integral_ > 0.0) eps_ = std::clamp(defensive, 1e-3, 1.0);
+}
+
+double EdgePointSampler::ltc_integral(const Vec3& w0, const Vec3& w1, const LTC& ltc, double t_lo, double t_hi) {
+  EdgePointSampler s;
+  s.w0_ = w0;
+  s.w1_ = w1;
+  s.ltc_ = ltc;
+  s.setup_ltc(w0.cross(w1).norm(), t_lo, t_hi);
+  return s.target_integral_;
+}
+
+void EdgePointSampler::setup_ltc(double cross01, double t_lo, double t_hi) {
+  const Vec3 &w0 = w0_, &w1 = w1_;
+  const LTC& ltc = ltc_;
+  if (!(ltc.norm > 0.0) || !(cross01 > 0.0) || !std::isfinite(cross01)) return;
 
   u0_ = ltc.M_inv * w0;
   u1_ = ltc.M_inv * w1;
@@ -96,13 +111,11 @@ EdgePointSampler::EdgePointSampler(const Vec3& w0, const Vec3& w1, const LTC& lt
   if (!(cross_u01 > 0.0)) return;
   ltc_scale_ = cross_u01 * h / F_total_;
   // integral g dt = norm * |w0 x w1| det / pi / (|u0 x u1| h) * F_total.
-  target_integral_ = ltc.norm * cross01_ * std::abs(ltc.det_M_inv) * kInvPi / (cross_u01 * h) * F_total_;
+  target_integral_ = ltc.norm * cross01 * std::abs(ltc.det_M_inv) * kInvPi / (cross_u01 * h) * F_total_;
   if (!(target_integral_ > 0.0) || !std::isfinite(target_integral_) || !std::isfinite(ltc_scale_)) {
     target_integral_ = 0.0;
     ltc_scale_ = 0.0;
-    return;
   }
-  eps_ = std::clamp(defensive, 1e-3, 1.0);
 }
 
 double EdgePointSampler::ltc_pdf(double t) const {

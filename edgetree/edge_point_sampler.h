@@ -74,6 +74,11 @@ class EdgePointSampler {
   /// (mixed with a defensive term, docs/architecture.md §5).
   double target_integral() const { return target_integral_; }
 
+  /// target_integral() of EdgePointSampler(w0, w1, ltc, ·, t_lo, t_hi) without building the
+  /// sampler (no angle-uniform part, no copy): what an edge's importance needs. Bit-identical to
+  /// the member (the same code computes both).
+  static double ltc_integral(const Vec3& w0, const Vec3& w1, const LTC& ltc, double t_lo = 0.0, double t_hi = 1.0);
+
   /// The defensive share actually used (1 when the LTC part vanishes).
   double defensive_share() const { return eps_; }
 
@@ -87,6 +92,11 @@ class EdgePointSampler {
   double sample_angle(double u) const;
 
  private:
+  /// Fills the LTC part (ta_ .. target_integral_) for the interval [t_lo, t_hi]; cross01 = |w0 x w1|.
+  /// Leaves target_integral_ = 0 when the LTC part vanishes.
+  void setup_ltc(double cross01, double t_lo, double t_hi);
+  EdgePointSampler() = default;  // for ltc_integral
+
   Vec3 w0_, w1_;
   LTC ltc_;
   double eps_ = 1.0;

@@ -193,13 +193,11 @@ NodeWeight node_weight(const ForestNode& node, const SilhouetteQuery& q) { retur
 namespace {
 
 NodeWeight leaf_edge_weight(const ForestEdge& e, const Prepared& pq) {
-  const EdgeMixture m(e, pq.q, pq.lights);
-  return {m.total() * velocity_factor(e, pq.q), edge_defensive(e, pq.q.p)};
+  return {EdgeMixture::total(e, pq.q, pq.lights) * velocity_factor(e, pq.q), edge_defensive(e, pq.q.p)};
 }
 
 NodeWeight loose_edge_weight(const ForestEdge& e, const Prepared& pq) {
-  const EdgeMixture m(e, pq.q, pq.lights);
-  return {kPi * m.total(), kPi * edge_defensive(e, pq.q.p)};
+  return {kPi * EdgeMixture::total(e, pq.q, pq.lights), kPi * edge_defensive(e, pq.q.p)};
 }
 
 NodeWeight node_weight(const ForestNode& node, const Prepared& pq) {

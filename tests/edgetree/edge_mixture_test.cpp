@@ -112,6 +112,33 @@ TEST(EdgeMixtureTest, TotalIsTheRadianceWeightedIntegral) {
   }
 }
 
+// The importance the traversal computes for every candidate edge (EdgeMixture::total without a
+// mixture) is the sampled mixture's total exactly, or the probability the traversal chooses an
+// edge with would differ from the one silhouette_edge_probability reports for it: over shading
+// frames, roughnesses, lights crossed or missed, emission on and off.
+TEST(EdgeMixtureTest, ImportanceWithoutTheMixtureIsItsTotalExactly) {
+  TestRng rng(17);
+  int lit = 0;
+  for (int i = 0; i < 500; ++i) {
+    LitEdge s(rng.uniform(), 40.0 * rng.uniform());
+    const Vec3 n = Vec3(rng.uniform() - 0.5, rng.uniform() - 0.5, rng.uniform()).normalized();
+    s.q.frame = Frame(n);
+    const Vec3 wo = Vec3(rng.uniform() - 0.5, rng.uniform() - 0.5, 1.0).normalized();
+    s.q.ltc = i % 3 == 0 ? ltc_diffuse() : ltc_ggx(0.01 + rng.uniform(), wo);
+    s.emission[1] = i % 2 ? 2.0 : 0.0;
+    s.e.p1 += Vec3(rng.uniform() - 0.5, rng.uniform() - 0.5, rng.uniform() - 0.5);
+    std::vector<LocalLight> lights;
+    local_lights(s.q, lights);
+    const EdgeMixture m(s.e, s.q, lights);
+    ASSERT_EQ(EdgeMixture::total(s.e, s.q, lights), m.total()) << "case " << i;
+    const EdgePointSampler plain(s.w(0), s.w(1), s.q.ltc, kEdgeDefensiveShare, 0.2, 0.7);
+    ASSERT_EQ(EdgePointSampler::ltc_integral(s.w(0), s.w(1), s.q.ltc, 0.2, 0.7), plain.target_integral()) << i;
+    const double unlit = (s.q.env_weight + s.emission[1]) * EdgePointSampler(s.w(0), s.w(1), s.q.ltc).target_integral();
+    lit += m.total() > 1.001 * unlit;
+  }
+  EXPECT_GT(lit, 50);  // the light's component is exercised
+}
+
 TEST(EdgeMixtureTest, PdfIsNormalisedPositiveAndSampled) {
   const int n = 200000;
   TestRng rng(77);
