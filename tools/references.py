@@ -31,7 +31,9 @@ For each chart scene and parameter set, three steps, each logged and recorded:
    (--force recomputes).
 3. Independence check. At 64x64 the quadric method at high spp (`qsil reference --method
    quadric`) must agree with FD at the chosen step (`qsil agree`); a disagreement is a bug to find
-   and is recorded as such (the charts then say so).
+   and is recorded as such (the charts then say so). After a change to the estimator,
+   --recheck-quadric re-renders the quadric half of a cached reference's check and re-judges it
+   (the reference and the FD half do not depend on the estimator).
 
 Writes out/references/index.json: per reference its file, spp, step, seconds, relative noise
 floor (mean se^2 / mean ref^2), the step study and the agreement check. tools/results_report.py
@@ -197,6 +199,10 @@ def main():
     ap.add_argument("--recheck", action="store_true",
                     help="only re-judge the independence check of cached references with the current `qsil agree` "
                          "(never renders; an error when the options match no cached reference)")
+    ap.add_argument("--recheck-quadric", action="store_true",
+                    help="re-render the quadric half of the independence check of cached references with the "
+                         "current qsil, then re-judge it (after a change to the estimator: the FD reference and "
+                         "its check do not depend on it)")
     args = ap.parse_args()
     qsil = os.path.abspath(args.qsil)
     os.makedirs(os.path.join(ROOT, OUT), exist_ok=True)
@@ -215,14 +221,17 @@ def main():
         old = index.get(name)
         if old and not args.force and old.get("key") == key and os.path.exists(os.path.join(ROOT, old["file"])):
             print(f"references: {name}: cached ({old['file']}, {old['spp']} spp)")
-            if args.recheck:
+            if args.recheck_quadric:
+                reference(qsil, xml, params, 64, "quadric", args.check_spp, 11,
+                          os.path.join(OUT, f"{name}-check-quadric.exr"))
+            if args.recheck or args.recheck_quadric:
                 ok, stats, _, _ = agree(qsil, os.path.join(OUT, f"{name}-check-quadric.exr"),
                                         os.path.join(OUT, f"{name}-check-fd.exr"))
                 old["quadric_check"].update({"agree": ok, "stats": stats})
                 write_index(index, index_path)
                 print(f"references: {name}: quadric agrees at 64x64: {ok} ({stats})")
             continue
-        if args.recheck:
+        if args.recheck or args.recheck_quadric:
             raise SystemExit(f"references: {name}: no cached reference with these options to recheck")
         study = step_study(qsil, xml, params, args.res, args.study_spp, name, args.max_step_bias)
         spp = args.spp or max(args.study_spp, int(args.seconds / study["seconds_per_spp"]))
