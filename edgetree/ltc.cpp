@@ -151,7 +151,8 @@ double ltc_polygon_integral(const LTC& ltc, std::span<const Vec3> poly, bool fas
   const SmallPolygon up = clip_polygon_to_halfspace(poly, Vec3::UnitZ());
   if (up.count < 3) return 0.0;
   // The cosine lobe (a diffuse BSDF's, ltc_diffuse): M_inv = I maps the clipped polygon to itself,
-  // already inside z >= 0, so the transform and the second clip would change nothing.
+  // already inside z >= 0; the transform and the second clip would change it only by rounding
+  // (an intersection point's z = ±1e-17 re-clipped).
   if (ltc.M_inv == Mat3::Identity()) return fast ? form_factor<true>(up.span()) : form_factor<false>(up.span());
   SmallPolygon t;
   for (int i = 0; i < up.count; ++i) t.push(ltc.M_inv * up.v[size_t(i)]);
