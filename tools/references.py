@@ -114,6 +114,14 @@ def reference(qsil, xml, params, res, method, spp, seed, path, steps=None, threa
     return seconds, float(m.group(1)) if m else float("nan")
 
 
+def quadric_check(qsil, xml, params, spp, name):
+    """Renders the quadric half of a reference's 64x64 independence check (seed 11) to its cached path;
+    returns the path."""
+    path = os.path.join(OUT, f"{name}-check-quadric.exr")
+    reference(qsil, xml, params, 64, "quadric", spp, 11, path)
+    return path
+
+
 def agree(qsil, a, b, block=8):
     """`qsil agree A B --block N`: (agrees, the statistics line, excess relative MSE, its standard error)."""
     code, out, _ = run([qsil, "agree", a, b, "--block", str(block)], check=False)
@@ -222,8 +230,7 @@ def main():
         if old and not args.force and old.get("key") == key and os.path.exists(os.path.join(ROOT, old["file"])):
             print(f"references: {name}: cached ({old['file']}, {old['spp']} spp)")
             if args.recheck_quadric:
-                reference(qsil, xml, params, 64, "quadric", args.check_spp, 11,
-                          os.path.join(OUT, f"{name}-check-quadric.exr"))
+                quadric_check(qsil, xml, params, args.check_spp, name)
             if args.recheck or args.recheck_quadric:
                 ok, stats, _, _ = agree(qsil, os.path.join(OUT, f"{name}-check-quadric.exr"),
                                         os.path.join(OUT, f"{name}-check-fd.exr"))
@@ -237,9 +244,8 @@ def main():
         spp = args.spp or max(args.study_spp, int(args.seconds / study["seconds_per_spp"]))
         path = os.path.join(OUT, name + ".exr")
         seconds, floor = reference(qsil, xml, params, args.res, "fd", spp, 7, path, study["steps"])
-        qa = os.path.join(OUT, f"{name}-check-quadric.exr")
+        qa = quadric_check(qsil, xml, params, args.check_spp, name)
         fa = os.path.join(OUT, f"{name}-check-fd.exr")
-        reference(qsil, xml, params, 64, "quadric", args.check_spp, 11, qa)
         reference(qsil, xml, params, 64, "fd", args.check_spp, 12, fa, study["steps"])
         ok, stats, _, _ = agree(qsil, qa, fa)
         index[name] = {"key": key, "scene": xml, "params": params, "res": args.res, "file": path, "method": "fd",
