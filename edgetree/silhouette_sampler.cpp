@@ -7,6 +7,7 @@
 #include "edgetree/edge_mixture.h"
 
 #include <array>
+#include <cmath>
 #include <span>
 
 namespace qsil::edgetree {
@@ -48,13 +49,14 @@ constexpr int kFlatEdges = kExactTestEdges;
 struct Prepared {
   const SilhouetteQuery& q;
   std::span<const LocalLight> lights;
+  bool cosine_lobe;  ///< q.ltc is the clamped cosine (M_inv = I): boxes far from p use cone_fbar
 };
 
 /// Per-thread storage of the prepared lights (a traversal is single-threaded).
 Prepared prepare(const SilhouetteQuery& q) {
   thread_local std::vector<LocalLight> storage;
   local_lights(q, storage);
-  return {q, storage};
+  return {q, storage, q.ltc.M_inv == Mat3::Identity()};
 }
 
 NodeWeight node_weight(const ForestNode& node, const Prepared& pq);
@@ -178,6 +180,8 @@ void local_lights(const SilhouetteQuery& q, std::vector<LocalLight>& out) {
       Vec3 n = l.corners[size_t(i)].cross(l.corners[size_t((i + 1) % 4)]);
       if (n.dot(inside) < 0) n = -n;
       l.sides[size_t(i)] = n;
+      const double len = n.norm();
+      l.unit_sides[size_t(i)] = len > 0 ? Vec3(n / len) : Vec3::Zero();
     }
     l.weight = light.weight;
     out.push_back(l);
@@ -200,13 +204,55 @@ NodeWeight loose_edge_weight(const ForestEdge& e, const Prepared& pq) {
   return {kPi * EdgeMixture::total(e, pq.q, pq.lights), kPi * edge_defensive(e, pq.q.p)};
 }
 
+/// The range [lo, hi] of n . w over the cone of unit directions w at angle at most alpha from a
+/// unit axis, where x = n . axis (n unit) and s, co = sin alpha, cos alpha: the angle between n
+/// and w spans [theta - alpha, theta + alpha] clamped to [0, pi], theta = acos x.
+void dot_range(double x, double s, double co, double& lo, double& hi) {
+  const double t = std::sqrt(std::max(0.0, 1.0 - x * x));
+  hi = x >= co ? 1.0 : x * co + t * s;
+  lo = x <= -co ? -1.0 : x * co - t * s;
+}
+
+/// fbar of node_weight for a box far from p and the cosine lobe, from the box's bounding cone
+/// (axis d = box centre - p, local frame after to_local; sin alpha = s = half diagonal /
+/// |d| < 1) instead of its outline: with X = n . w taken as uniform on its range over the cone,
+/// the mean of max(0, cos theta)/pi over the cone (E[max(0, X)]/pi for n = z) times the
+/// environment's radiance plus each light's times the fraction of the cone on the inner side of
+/// each of its 4 side planes (P(X > 0), multiplied). Positive wherever the box's outline can
+/// reach above the horizon into the light (the ranges are exact bounds), so it is zero only
+/// where the exact fbar is; otherwise an approximation, as an importance may be.
+double cone_fbar(const Prepared& pq, const Vec3& axis, double s) {
+  const SilhouetteQuery& q = pq.q;
+  const double co = std::sqrt(1.0 - s * s);
+  double lo, hi;
+  dot_range(axis.z(), s, co, lo, hi);
+  if (!(hi > 0)) return 0.0;
+  const double mean_cos = lo >= 0 ? 0.5 * (lo + hi) : hi * hi / (2.0 * (hi - lo));
+  double radiance = q.env_weight;
+  for (const LocalLight& light : pq.lights) {
+    double fraction = 1.0;
+    for (int i = 0; i < 4 && fraction > 0; ++i) {
+      dot_range(light.unit_sides[size_t(i)].dot(axis), s, co, lo, hi);
+      fraction *= lo >= 0 ? 1.0 : hi <= 0 ? 0.0 : hi / (hi - lo);
+    }
+    radiance += light.weight * fraction;
+  }
+  return q.ltc.norm * mean_cos / kPi * radiance;
+}
+
 NodeWeight node_weight(const ForestNode& node, const Prepared& pq) {
   const SilhouetteQuery& q = pq.q;
   const Vec3 c = node.bp.center();
   const double half_diag = 0.5 * node.bp.diagonal();
-  const double h2 = std::max((c - q.p).squaredNorm(), half_diag * half_diag);
+  const double d2 = (c - q.p).squaredNorm();
+  const double h2 = std::max(d2, half_diag * half_diag);
   NodeWeight w;
   w.defensive = h2 > 0 ? node.lw / h2 : node.lw;
+  if (pq.cosine_lobe && half_diag * half_diag < kConeImportanceSin * kConeImportanceSin * d2) {
+    const double d = std::sqrt(d2);
+    w.importance = w.defensive * cone_fbar(pq, q.frame.to_local((c - q.p) / d), half_diag / d);
+    return w;
+  }
   const BoxSilhouette sil = box_silhouette_polygon(node.bp, q.p);
   double fbar = 0;
   if (sil.inside) {

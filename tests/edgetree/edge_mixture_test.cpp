@@ -14,6 +14,7 @@
 
 #include "bin_quadrature.h"
 #include "chi2.h"
+#include "ray_hits.h"
 
 #include <gtest/gtest.h>
 
@@ -23,28 +24,12 @@
 namespace qsil::edgetree {
 namespace {
 
+using test::ray_hits_quad;
 using test::TestRng;
 
 using test::bin_integrals;
 using test::kBins;
 using test::sum;
-
-/// Ray from the origin along d hits the quad c (two triangles; Möller-Trumbore without culling).
-bool ray_hits_quad(const Vec3& d, const std::array<Vec3, 4>& c) {
-  auto tri = [&](const Vec3& a, const Vec3& b, const Vec3& e) {
-    const Vec3 e1 = b - a, e2 = e - a, pv = d.cross(e2);
-    const double det = e1.dot(pv);
-    if (std::abs(det) < 1e-300) return false;
-    const Vec3 tv = -a;
-    const double u = tv.dot(pv) / det;
-    if (u < 0 || u > 1) return false;
-    const Vec3 qv = tv.cross(e1);
-    const double v = d.dot(qv) / det;
-    if (v < 0 || u + v > 1) return false;
-    return e2.dot(qv) / det > 0;
-  };
-  return tri(c[0], c[1], c[2]) || tri(c[0], c[2], c[3]);
-}
 
 /// p at the origin, shading normal +z, GGX alpha 0.3 seen from 35 degrees; an edge crossing the
 /// lobe at height 2; a quad light at height 3 facing down that covers the middle of the edge.
