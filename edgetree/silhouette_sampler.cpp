@@ -122,12 +122,22 @@ int leaf_candidates(const EdgeForest& f, int n, const Prepared& pq, std::array<C
   return k;
 }
 
-/// Whether the traversal chooses an edge of node `node` directly (flat_candidates).
-bool is_flat(const ForestNode& node, Method method) {
-  return method == Method::Quadric && !node.is_leaf() && node.edge_end - node.edge_begin <= kFlatEdges;
+/// Inner nodes of the quadric method with at most this many edges whose box's bounding sphere
+/// contains the query point choose flat too (see the header, "Near field").
+constexpr int kNearFlatEdges = 512;
+
+/// Whether the traversal chooses an edge of node `node` directly (flat_candidates) for a query
+/// at p.
+bool is_flat(const ForestNode& node, Method method, const Vec3& p) {
+  if (method != Method::Quadric || node.is_leaf()) return false;
+  const int edges = node.edge_end - node.edge_begin;
+  if (edges <= kFlatEdges) return true;
+  if (edges > kNearFlatEdges) return false;
+  const double r = 0.5 * node.bp.diagonal();
+  return (node.bp.center() - p).squaredNorm() < r * r;
 }
 
-/// The discontinuity edges below node `n` (at most kFlatEdges), weighed as a leaf's when two or
+/// The discontinuity edges below node `n` (at most kNearFlatEdges), weighed as a leaf's when two or
 /// more, with their choice probabilities in `prob`. Returns their count (0: none, a false accept).
 int flat_candidates(const EdgeForest& f, int n, const Prepared& pq, std::vector<Candidate>& out,
                     std::vector<double>& prob) {
@@ -329,7 +339,7 @@ SilhouetteSample descend(const EdgeForest& forest, const Prepared& pq, const std
   // small nodes among all the discontinuity edges below them.
   while (!cur.edge) {
     const ForestNode& node = forest.node(cur.node);
-    if (is_flat(node, method)) {
+    if (is_flat(node, method, pq.q.p)) {
       thread_local std::vector<Candidate> flat;
       thread_local std::vector<double> prob;
       const int k = flat_candidates(forest, cur.node, pq, flat, prob);
@@ -464,7 +474,7 @@ double silhouette_edge_probability(const EdgeForest& forest, const SilhouetteQue
   std::array<double, 4> p4;
   while (!cur.edge) {
     const ForestNode& node = forest.node(cur.node);
-    if (is_flat(node, method)) {
+    if (is_flat(node, method, pq.q.p)) {
       std::vector<Candidate> flat;
       std::vector<double> prob;
       const int k = flat_candidates(forest, cur.node, pq, flat, prob);
