@@ -186,8 +186,8 @@ SilhouetteSample sample_on_edge(const ForestEdge& e, double pmf, const Silhouett
                                 int rejection_tests = 0);
 
 /// Boxes seen under a bounding cone of sin(half-angle) = half diagonal / distance below this are
-/// weighed by the cone (see node_weight) when the query's LTC is the cosine lobe. Measured on the
-/// diffuse scenes in the issue note of this change.
+/// weighed by the cone (see NodeWeight) when the query's LTC is the cosine lobe. The value and its
+/// measurement (0.7 and 0.9 cost error for little time): docs/architecture.md §5 "Importance".
 inline constexpr double kConeImportanceSin = 0.5;
 
 /// Importance I and defensive weight G of a node for the query (see the file comment).
