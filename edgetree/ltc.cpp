@@ -153,7 +153,7 @@ double ltc_polygon_integral(const LTC& ltc, std::span<const Vec3> poly, bool fas
   // The cosine lobe (a diffuse BSDF's, ltc_diffuse): M_inv = I maps the clipped polygon to itself,
   // already inside z >= 0; the transform and the second clip would change it only by rounding
   // (an intersection point's z = ±1e-17 re-clipped).
-  if (ltc.M_inv == Mat3::Identity()) return fast ? form_factor<true>(up.span()) : form_factor<false>(up.span());
+  if (is_cosine_lobe(ltc)) return fast ? form_factor<true>(up.span()) : form_factor<false>(up.span());
   SmallPolygon t;
   for (int i = 0; i < up.count; ++i) t.push(ltc.M_inv * up.v[size_t(i)]);
   const SmallPolygon c = clip_polygon_to_halfspace(t.span(), Vec3::UnitZ());

@@ -56,7 +56,7 @@ struct Prepared {
 Prepared prepare(const SilhouetteQuery& q) {
   thread_local std::vector<LocalLight> storage;
   local_lights(q, storage);
-  return {q, storage, q.ltc.M_inv == Mat3::Identity()};
+  return {q, storage, is_cosine_lobe(q.ltc)};
 }
 
 NodeWeight node_weight(const ForestNode& node, const Prepared& pq);

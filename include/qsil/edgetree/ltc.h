@@ -53,6 +53,10 @@ struct LTC {
 /// BSDF of reflectance 1 (multiply by the reflectance). Exact.
 LTC ltc_diffuse();
 
+/// Whether `ltc` is the clamped cosine itself (M_inv = I, as ltc_diffuse gives): its polygon
+/// integral needs no transform and its density is max(0, w.z)/pi.
+inline bool is_cosine_lobe(const LTC& ltc) { return ltc.M_inv == Mat3::Identity(); }
+
 /// LTC of qsil's GGX (ggx_eval_cos in qsil/bsdf.h: Smith separable G, Fresnel 1) for roughness
 /// `alpha` and view direction `wo_local` (local shading frame, need not be unit; z > 0 for a
 /// reflection; wo.z <= 0 gives norm = 0 — mirror z first for a twosided BSDF).
