@@ -207,7 +207,9 @@ TEST(LTCTest, FastAnglesAgreeWithExactOnes) {
     const LTC l = i % 2 ? ltc_diffuse() : ltc_ggx(0.02 + rng.uniform(), dir_from_angles(1.4 * rng.uniform(), 0.3));
     const double exact = ltc_polygon_integral(l, q, false), fast = ltc_polygon_integral(l, q, true);
     ASSERT_NEAR(fast, exact, 2e-5) << "case " << i;
-    if (i % 2) ASSERT_NEAR(exact, cosine_polygon_integral(q), 1e-12 * exact + 1e-15) << "case " << i;
+    if (i % 2) {
+      ASSERT_NEAR(exact, cosine_polygon_integral(q), 1e-12 * exact + 1e-15) << "case " << i;
+    }
     const double omega = polygon_solid_angle(q, false), omega_fast = polygon_solid_angle(q, true);
     ASSERT_NEAR(omega_fast, omega, 5e-5) << "case " << i;
     worst_ff = std::max(worst_ff, std::abs(fast - exact));
