@@ -89,6 +89,35 @@ double EdgeMixture::total(const ForestEdge& e, const SilhouetteQuery& q, std::sp
   return total;
 }
 
+namespace {
+
+/// The integral over t in [lo, hi] of max(0, a + t (b - a)).
+double positive_part_integral(double a, double b, double lo, double hi) {
+  lo = std::max(lo, 0.0);
+  hi = std::min(hi, 1.0);
+  if (!(hi > lo)) return 0.0;
+  const double fa = a + lo * (b - a), fb = a + hi * (b - a);
+  if (fa >= 0 && fb >= 0) return 0.5 * (fa + fb) * (hi - lo);
+  if (fa <= 0 && fb <= 0) return 0.0;
+  const double peak = std::max(fa, fb);  // one end positive: the triangle up to the zero crossing
+  return 0.5 * peak * peak / std::abs(fb - fa) * (hi - lo);
+}
+
+}  // namespace
+
+double EdgeMixture::far_total(const ForestEdge& e, const SilhouetteQuery& q, std::span<const LocalLight> lights) {
+  const Vec3 w0 = q.frame.to_local(e.p0 - q.p), w1 = q.frame.to_local(e.p1 - q.p);
+  const double d2 = (0.5 * (w0 + w1)).squaredNorm();
+  if (!(d2 > 0)) return 0.0;
+  // g(t) = |w0 x w1| / |w_t|^4 * norm * max(0, w_t.z) / pi with |w_t| = d.
+  const double scale = w0.cross(w1).norm() / (d2 * d2) * q.ltc.norm / kPi;
+  double total = 0;
+  for_each_component(e, q, lights, w0, w1, [&](double lo, double hi, double radiance) {
+    total += component_weight(radiance, scale * positive_part_integral(w0.z(), w1.z(), lo, hi));
+  });
+  return total;
+}
+
 EdgePointSample EdgeMixture::sample(double u) const {
   u = std::clamp(u, 0.0, 1.0);
   double t;

@@ -41,6 +41,12 @@ class EdgeMixture {
   /// angle-uniform part): an edge's importance, computed for every candidate of a leaf or a flat
   /// choice, of which one is sampled. Bit-identical to total().
   static double total(const ForestEdge& e, const SilhouetteQuery& q, std::span<const LocalLight> lights);
+  /// total() for the cosine lobe (q.ltc's M_inv = I) with |w_t| taken as the distance d of the
+  /// edge's midpoint from p: per component, radiance × |w0 × w1| / d⁴ × norm/π × ∫ max(0, w_t.z) dt
+  /// over its interval of t (closed form, no angles). The traversal's importance for edges far
+  /// from p (leaf_edge_weight); the relative error is O((half length / d)²). Zero exactly where
+  /// total() is (the same components and horizon), up to rounding at the ends of an interval.
+  static double far_total(const ForestEdge& e, const SilhouetteQuery& q, std::span<const LocalLight> lights);
   /// One sample from u in [0, 1): t in [0, 1] and its density pdf(t) > 0.
   EdgePointSample sample(double u) const;
   /// The density at t (per unit t): > 0 on [0, 1], 0 outside.

@@ -207,7 +207,12 @@ NodeWeight node_weight(const ForestNode& node, const SilhouetteQuery& q) { retur
 namespace {
 
 NodeWeight leaf_edge_weight(const ForestEdge& e, const Prepared& pq) {
-  return {EdgeMixture::total(e, pq.q, pq.lights) * velocity_factor(e, pq.q), edge_defensive(e, pq.q.p)};
+  const SilhouetteQuery& q = pq.q;
+  const double half = 0.5 * e.length;
+  const bool far = pq.cosine_lobe &&
+                   half * half < kConeImportanceSin * kConeImportanceSin * (0.5 * (e.p0 + e.p1) - q.p).squaredNorm();
+  const double total = far ? EdgeMixture::far_total(e, q, pq.lights) : EdgeMixture::total(e, q, pq.lights);
+  return {total * velocity_factor(e, q), edge_defensive(e, q.p)};
 }
 
 NodeWeight loose_edge_weight(const ForestEdge& e, const Prepared& pq) {

@@ -186,8 +186,10 @@ SilhouetteSample sample_on_edge(const ForestEdge& e, double pmf, const Silhouett
                                 int rejection_tests = 0);
 
 /// Boxes seen under a bounding cone of sin(half-angle) = half diagonal / distance below this are
-/// weighed by the cone (see NodeWeight) when the query's LTC is the cosine lobe. The value and its
-/// measurement (0.7 and 0.9 cost error for little time): docs/architecture.md §5 "Importance".
+/// weighed by the cone (see NodeWeight) when the query's LTC is the cosine lobe, and edges whose
+/// half length / distance is below it by EdgeMixture::far_total (see leaf_edge_weight). The value
+/// and its measurement (0.7 and 0.9 cost error for little time): docs/architecture.md §5
+/// "Importance".
 inline constexpr double kConeImportanceSin = 0.5;
 
 /// Importance I and defensive weight G of a node for the query (see the file comment).
@@ -207,10 +209,14 @@ struct NodeWeight {
 };
 NodeWeight node_weight(const ForestNode& node, const SilhouetteQuery& query);
 
-/// Importance of an edge in a leaf (docs/architecture.md §5 "Importance"): the radiance-weighted
-/// LTC integral of EdgeMixture (the [QSS Eq. 4] term with f_s cos, weighted by the environment, by
-/// each light over the part of the edge in front of it, and for an emitter's outline by its own
-/// radiance) times velocity_factor; defensive weight: length / distance² of its midpoint.
+/// Importance of an edge in a leaf or a flat choice (docs/architecture.md §5 "Importance"): the
+/// radiance-weighted LTC integral of EdgeMixture (the [QSS Eq. 4] term with f_s cos, weighted by
+/// the environment, by each light over the part of the edge in front of it, and for an emitter's
+/// outline by its own radiance) times velocity_factor; defensive weight: length / distance² of its
+/// midpoint. Under the cosine lobe an edge far from p (half length < kConeImportanceSin × the
+/// distance of its midpoint) takes EdgeMixture::far_total instead (the same components with the
+/// edge's distance taken as its midpoint's: no LTC set-up, no angles), within 3 % of the
+/// integral for edges shorter than 0.1 × their distance (tests/edgetree/edge_importance_test.cpp).
 NodeWeight leaf_edge_weight(const ForestEdge& e, const SilhouetteQuery& q);
 
 /// Importance of a loose always-candidate edge, which competes with the forest roots: on the
