@@ -124,7 +124,7 @@ int leaf_candidates(const EdgeForest& f, int n, const Prepared& pq, std::array<C
 
 /// Inner nodes of the quadric method with at most this many edges whose box's bounding sphere
 /// contains the query point choose flat too (see the header, "Near field").
-constexpr int kNearFlatEdges = 512;
+constexpr int kNearFlatEdges = 1024;
 
 /// Whether the traversal chooses an edge of node `node` directly (flat_candidates) for a query
 /// at p.

@@ -35,17 +35,18 @@
 /// dominates both), at +8–10 % boundary time (128², 16 spp, one thread); with 16 edges
 /// 1.058 / 0.489 at +2–4 %, with 256 edges +50–80 % time.
 ///
-/// Near field: a chosen inner node with at most 512 edges whose box's bounding sphere contains p
+/// Near field: a chosen inner node with at most 1024 edges whose box's bounding sphere contains p
 /// chooses flat as well. A box near p weighs L_w / H² with H clamped below by half its
 /// diagonal, so it cannot follow the 1/distance² of an edge a few millimetres from p (a point on
 /// a moving mesh seeing its own nearby silhouette in front of a light), while the edges' own
-/// weights do. Measured on shadow-quad (256², 16 seeds of 16 spp, relative MSE against the FD
-/// reference of docs/results.md, same seeds): mean 1.74 → 0.87 (the mean over seeds was 2.3× the
-/// median, from single samples: one pixel held 96 % of a seed's squared error, an edge 5 mm
-/// from p chosen with probability 0.012), median 0.75 → 0.65, time +6 %; spot-mirror and
-/// direct (3 seeds of 32 spp) unchanged in time and error. With 1024 edges shadow-quad's mean
-/// fell to 0.55 (one more forest root goes flat) but spot-mirror and direct took 18–20 % longer
-/// (the exact edge weights of the larger flat sets).
+/// weights do. Measured on shadow-quad (256², 16 seeds of 16 spp, relative MSE against an
+/// independent FD reference, same seeds): 512 edges cut the mean from 1.74 to 0.87 (the mean
+/// over seeds was 2.3× the median, from single samples: one pixel held 96 % of a seed's squared
+/// error, an edge 5 mm from p chosen with probability 0.012) at +6 % time; 1024 edges (one more
+/// of the bunny's forest roots goes flat) to 0.58 (worst seed 3.3 → 0.91) at +5 % more, once the
+/// far edges' weights were made cheap (leaf_edge_weight); direct +9–15 % time at the same error,
+/// spot-mirror unchanged. A sphere 0.7× as large lost shadow-quad's gain. Numbers:
+/// docs/architecture.md §5 "Flat choice in the near field".
 ///
 /// Splitting (sample_silhouette_set, what the renderer uses): a loose always-candidate edge whose
 /// top-level probability is at least kSplitShare (at most kMaxSplitEdges of them, the most
