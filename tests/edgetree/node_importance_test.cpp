@@ -1,5 +1,5 @@
 /// @file node_importance_test.cpp
-/// Tests of node_weight's importance for boxes far from p under the cosine lobe: the bounding-cone
+/// Tests of node_weight's importance for boxes far from p. Under the cosine lobe: the bounding-cone
 /// form (silhouette_sampler.h, kConeImportanceSin), judged by a Monte Carlo oracle of the quantity
 /// it stands for, fbar = the mean over the box's solid angle of max(0, cos θ)/π × the radiance
 /// (the environment's, plus each light whose quad the direction meets and whose emitting side
@@ -18,7 +18,15 @@
 ///   below 20. The ratio's tail is over-estimation, where only a sliver of the box's cone sees
 ///   the light or the upper hemisphere: the cone covers more than the box, and X = n . w is taken
 ///   as uniform on its range where a cap's is concentrated near the middle.
-/// Fixed seed; 3000 random boxes, 4000 cone directions each.
+/// Glossy lobes (qsil's GGX LTC, alpha log-uniform in [0.01, 0.5], random view directions) keep
+/// the exact form (outline polygon, clipping, LTC integrals), judged by the same oracle with the
+/// LTC's density (ltc_eval) as f_s cos: support as above; within 3 % (measured 1.0 %) for small
+/// boxes wholly above the horizon, wholly inside the LTC's support ((M⁻¹w).z > 0.05 |M⁻¹w|) and
+/// whose bounding cone is wholly in or out of each light, where the oracle's standard error is
+/// below 1 %; the ratio's quantiles (measured 1 % 0.73, 5 % 0.91, median 1.00, 95 % 1.11, 99 %
+/// 2.06; the tails are the oracle's own noise on narrow lobes) within [0.5, 4] at 1 % and 99 %,
+/// [0.8, 1.3] at 5 % and 95 %, median in [0.95, 1.05].
+/// Fixed seeds; 3000 random boxes per test, 4000 cone directions each.
 
 #include "chi2.h"
 #include "qsil/edgetree/ltc.h"
@@ -54,11 +62,19 @@ struct Case {
   double s = 0;         ///< sin α of the box's bounding cone
   bool straddle = false;  ///< placed across a light's outline or the horizon
 
-  explicit Case(TestRng& rng) {
+  /// glossy: q.ltc is qsil's GGX for alpha log-uniform in [0.01, 0.5] and a random view
+  /// direction above the horizon (else the clamped cosine).
+  Case(TestRng& rng, bool glossy) {
     const Vec3 n = random_unit(rng);
     q.p = Vec3::Zero();
     q.frame = Frame(n);
     q.ltc = ltc_diffuse();
+    if (glossy) {
+      const double alpha = 0.01 * std::pow(50.0, rng.uniform());
+      Vec3 wo = random_unit(rng);
+      wo.z() = 0.05 + 0.95 * std::abs(wo.z());
+      q.ltc = ltc_ggx(alpha, wo);
+    }
     q.ltc.norm = 0.3 + 0.7 * rng.uniform();
     q.env_weight = rng.uniform() < 0.5 ? 0.0 : 0.1 + rng.uniform();
     const int n_lights = int(rng.uniform() * 3.0);
@@ -113,21 +129,29 @@ struct Oracle {
   bool any_positive = false;
   int hits = 0;
   bool light_partial = false;  ///< some light was met by some but not all kept directions
+  bool cone_light_partial = false;  ///< the same over all directions of the bounding cone
+  double min_support = 1;  ///< lowest (M_inv w).z / |M_inv w| over the kept directions
 };
 
 Oracle oracle(const Case& c, TestRng& rng, int n) {
   const Vec3 centre = c.node.bp.center();
   const Frame cone(centre.normalized());
   const double cos_alpha = std::sqrt(1.0 - c.s * c.s);
-  std::vector<int> light_hits(c.lights.size(), 0);
+  std::vector<int> light_hits(c.lights.size(), 0), cone_hits(c.lights.size(), 0);
   double sum = 0, sum2 = 0;
   Oracle o;
   for (int i = 0; i < n; ++i) {
     const double z = cos_alpha + (1.0 - cos_alpha) * rng.uniform(), phi = 2.0 * kPi * rng.uniform();
     const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
     const Vec3 w = cone.to_world(Vec3(r * std::cos(phi), r * std::sin(phi), z));
+    for (size_t k = 0; k < c.lights.size(); ++k) {
+      const LightPolygon& l = c.lights[k];
+      if (l.normal.dot(-l.corners[0]) > 0 && ray_hits_quad(w, l.corners)) ++cone_hits[k];
+    }
     if (!ray_hits_box(w, c.node.bp.lo, c.node.bp.hi)) continue;
     ++o.hits;
+    const Vec3 u = c.q.ltc.M_inv * c.q.frame.to_local(w);
+    o.min_support = std::min(o.min_support, u.z() / u.norm());
     double radiance = c.q.env_weight;
     for (size_t k = 0; k < c.lights.size(); ++k) {
       const LightPolygon& l = c.lights[k];
@@ -136,7 +160,7 @@ Oracle oracle(const Case& c, TestRng& rng, int n) {
         ++light_hits[k];
       }
     }
-    const double f = c.q.ltc.norm * std::max(0.0, c.q.frame.to_local(w).z()) / kPi * radiance;
+    const double f = c.q.ltc.norm * ltc_eval(c.q.ltc, c.q.frame.to_local(w)) * radiance;
     if (f > 0) o.any_positive = true;
     sum += f;
     sum2 += f * f;
@@ -146,6 +170,7 @@ Oracle oracle(const Case& c, TestRng& rng, int n) {
     o.se = std::sqrt(std::max(0.0, sum2 / o.hits - o.mean * o.mean) / o.hits);
   }
   for (int h : light_hits) o.light_partial |= h > 0 && h < o.hits;
+  for (int h : cone_hits) o.cone_light_partial |= h > 0 && h < n;
   return o;
 }
 
@@ -155,7 +180,7 @@ TEST(NodeImportanceTest, FarBoxesUnderTheCosineLobeFollowTheirIntegrand) {
   std::vector<double> ratios, straddle_ratios;  // fbar / oracle: boxes placed at random, across outlines
   double worst_small = 0;
   for (int i = 0; i < 3000; ++i) {
-    const Case c(rng);
+    const Case c(rng, false);
     const Oracle o = oracle(c, rng, 4000);
     ASSERT_GT(o.hits, 100) << "case " << i;
     const double fbar = c.fbar();
@@ -196,6 +221,47 @@ TEST(NodeImportanceTest, FarBoxesUnderTheCosineLobeFollowTheirIntegrand) {
   EXPECT_LT(squantile(0.5), 1.25);
   EXPECT_GT(squantile(0.05), 0.5);
   EXPECT_LT(squantile(0.95), 20.0);
+}
+
+TEST(NodeImportanceTest, FarBoxesUnderGlossyLobesFollowTheirIntegrand) {
+  TestRng rng(20261124);
+  int positive = 0, accurate_cases = 0;
+  std::vector<double> ratios;
+  double worst_small = 0;
+  for (int i = 0; i < 3000; ++i) {
+    const Case c(rng, true);
+    const Oracle o = oracle(c, rng, 4000);
+    ASSERT_GT(o.hits, 100) << "case " << i;
+    const double fbar = c.fbar();
+    ASSERT_TRUE(std::isfinite(fbar) && fbar >= 0) << "case " << i << ": fbar " << fbar;
+    if (o.any_positive) {
+      ++positive;
+      EXPECT_GT(fbar, 0) << "case " << i << ": the oracle saw a positive integrand (mean " << o.mean << ")";
+      if (o.mean > 0) ratios.push_back(fbar / o.mean);
+    }
+    const Vec3 axis = c.q.frame.to_local(c.node.bp.center().normalized());
+    const double lowest_z = axis.z() * std::sqrt(1 - c.s * c.s) - std::sqrt(1 - axis.z() * axis.z()) * c.s;
+    if (c.s <= 0.05 && lowest_z > 0.2 && !o.cone_light_partial && o.min_support > 0.05 && o.mean > 0 &&
+        o.se < 0.01 * o.mean) {
+      ++accurate_cases;
+      const double rel = std::abs(fbar / o.mean - 1.0);
+      worst_small = std::max(worst_small, rel);
+      EXPECT_LT(rel, 0.03) << "case " << i << ": fbar " << fbar << " vs oracle " << o.mean << " +- " << o.se;
+    }
+  }
+  EXPECT_GT(positive, 1200);
+  EXPECT_GT(accurate_cases, 30);
+  std::sort(ratios.begin(), ratios.end());
+  const auto quantile = [&](double u) { return ratios[size_t(u * double(ratios.size() - 1))]; };
+  std::printf("glossy fbar / oracle (%zu): 1 %% %.3f, 5 %% %.3f, median %.3f, 95 %% %.3f, 99 %% %.3f; worst small-box error %.4f over %d cases\n",
+              ratios.size(), quantile(0.01), quantile(0.05), quantile(0.5), quantile(0.95), quantile(0.99), worst_small,
+              accurate_cases);
+  EXPECT_GT(quantile(0.01), 0.5);
+  EXPECT_GT(quantile(0.05), 0.8);
+  EXPECT_GT(quantile(0.5), 0.95);
+  EXPECT_LT(quantile(0.5), 1.05);
+  EXPECT_LT(quantile(0.95), 1.3);
+  EXPECT_LT(quantile(0.99), 4.0);
 }
 
 }  // namespace
