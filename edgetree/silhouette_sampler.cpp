@@ -189,9 +189,8 @@ void local_lights(const SilhouetteQuery& q, std::vector<LocalLight>& out) {
     for (int i = 0; i < 4; ++i) {
       Vec3 n = l.corners[size_t(i)].cross(l.corners[size_t((i + 1) % 4)]);
       if (n.dot(inside) < 0) n = -n;
-      l.sides[size_t(i)] = n;
       const double len = n.norm();
-      l.unit_sides[size_t(i)] = len > 0 ? Vec3(n / len) : Vec3::Zero();
+      l.sides[size_t(i)] = len > 0 ? Vec3(n / len) : Vec3::Zero();
     }
     l.weight = light.weight;
     out.push_back(l);
@@ -247,7 +246,7 @@ double cone_fbar(const Prepared& pq, const Vec3& axis, double s) {
   for (const LocalLight& light : pq.lights) {
     double fraction = 1.0;
     for (int i = 0; i < 4 && fraction > 0; ++i) {
-      dot_range(light.unit_sides[size_t(i)].dot(axis), s, co, lo, hi);
+      dot_range(light.sides[size_t(i)].dot(axis), s, co, lo, hi);
       fraction *= lo >= 0 ? 1.0 : hi <= 0 ? 0.0 : hi / (hi - lo);
     }
     radiance += light.weight * fraction;

@@ -125,8 +125,7 @@ inline bool light_toward(const LightPolygon& light, const SilhouetteQuery& q, st
 /// [QSS 3.6], computed once per traversal (local_lights) instead of at every node.
 struct LocalLight {
   std::array<Vec3, 4> corners;  ///< local frame, relative to p (scene units)
-  std::array<Vec3, 4> sides;    ///< inward side normals of the pyramid (local frame, not unit)
-  std::array<Vec3, 4> unit_sides;  ///< sides normalised (zero for a degenerate side)
+  std::array<Vec3, 4> sides;    ///< inward unit side normals (local frame; zero for a degenerate side)
   double weight = 0;            ///< the light's radiance (luminance)
 };
 
