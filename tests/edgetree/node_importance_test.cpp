@@ -29,6 +29,7 @@
 /// Fixed seeds; 3000 random boxes per test, 4000 cone directions each.
 
 #include "chi2.h"
+#include "importance_cases.h"
 #include "qsil/edgetree/ltc.h"
 #include "qsil/edgetree/silhouette_sampler.h"
 #include "ray_hits.h"
@@ -42,19 +43,15 @@
 namespace qsil::edgetree {
 namespace {
 
+using test::random_placement;
+using test::random_query;
 using test::ray_hits_box;
 using test::ray_hits_quad;
 using test::TestRng;
 
-Vec3 random_unit(TestRng& rng) {
-  const double z = 2.0 * rng.uniform() - 1.0, phi = 2.0 * kPi * rng.uniform();
-  const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
-  return {r * std::cos(phi), r * std::sin(phi), z};
-}
-
-/// A shading point at the origin (random normal, diffuse), 0-2 quad lights around it, a
-/// constant environment or none, and a box with sin α = half diagonal / distance below
-/// kConeImportanceSin, placed at random, across a light's outline or across the horizon.
+/// A shading point at the origin with 0-2 quad lights and a constant environment or none
+/// (random_query), and a box with sin α = half diagonal / distance below kConeImportanceSin,
+/// placed at random, across a light's outline or across the horizon (random_placement).
 struct Case {
   SilhouetteQuery q;
   std::vector<LightPolygon> lights;
@@ -62,52 +59,12 @@ struct Case {
   double s = 0;         ///< sin α of the box's bounding cone
   bool straddle = false;  ///< placed across a light's outline or the horizon
 
-  /// glossy: q.ltc is qsil's GGX for alpha log-uniform in [0.01, 0.5] and a random view
-  /// direction above the horizon (else the clamped cosine).
+  /// glossy: q.ltc is qsil's GGX (else the clamped cosine), see random_query.
   Case(TestRng& rng, bool glossy) {
-    const Vec3 n = random_unit(rng);
-    q.p = Vec3::Zero();
-    q.frame = Frame(n);
-    q.ltc = ltc_diffuse();
-    if (glossy) {
-      const double alpha = 0.01 * std::pow(50.0, rng.uniform());
-      Vec3 wo = random_unit(rng);
-      wo.z() = 0.05 + 0.95 * std::abs(wo.z());
-      q.ltc = ltc_ggx(alpha, wo);
-    }
-    q.ltc.norm = 0.3 + 0.7 * rng.uniform();
-    q.env_weight = rng.uniform() < 0.5 ? 0.0 : 0.1 + rng.uniform();
-    const int n_lights = int(rng.uniform() * 3.0);
-    for (int i = 0; i < n_lights; ++i) {
-      Vec3 dir = random_unit(rng);
-      if (dir.dot(n) < -0.2) dir = -dir;
-      const Vec3 c = (2.0 + 4.0 * rng.uniform()) * dir;
-      const Vec3 normal = (-dir + 0.6 * random_unit(rng)).normalized();
-      const Frame lf(normal);
-      const double a = 0.2 + 1.3 * rng.uniform(), b = 0.2 + 1.3 * rng.uniform();
-      LightPolygon l;
-      l.corners = {c - a * lf.s - b * lf.t, c + a * lf.s - b * lf.t, c + a * lf.s + b * lf.t, c - a * lf.s + b * lf.t};
-      l.normal = normal;
-      l.weight = 1.0 + 49.0 * rng.uniform();
-      lights.push_back(l);
-    }
-    q.lights = &lights;
+    random_query(rng, glossy, q, lights);
     s = 0.01 * std::pow(kConeImportanceSin / 0.0101, rng.uniform());  // log-uniform in [0.01, kConeImportanceSin)
     const double dist = 1.5 + 6.5 * rng.uniform();
-    Vec3 dir;
-    const double placement = rng.uniform();
-    straddle = placement < 0.7;
-    if (placement < 0.35 && !lights.empty()) {  // across a light's outline
-      const LightPolygon& l = lights[size_t(rng.uniform() * double(lights.size()))];
-      const int i = int(rng.uniform() * 4.0);
-      const double t = rng.uniform();
-      dir = ((1 - t) * l.corners[size_t(i)] + t * l.corners[size_t((i + 1) % 4)]).normalized();
-    } else if (placement < 0.7) {  // across the horizon
-      const double phi = 2.0 * kPi * rng.uniform(), z = s * (2.0 * rng.uniform() - 1.0);
-      dir = q.frame.to_world(Vec3(std::sqrt(1 - z * z) * std::cos(phi), std::sqrt(1 - z * z) * std::sin(phi), z));
-    } else {
-      dir = random_unit(rng);
-    }
+    const Vec3 dir = random_placement(rng, q, lights, s, straddle);
     const Vec3 centre = dist * dir;
     const Vec3 e = Vec3(0.1 + rng.uniform(), 0.1 + rng.uniform(), 0.1 + rng.uniform()).normalized() * (s * dist);
     node.bp = Box3{centre - e, centre + e};
@@ -174,94 +131,92 @@ Oracle oracle(const Case& c, TestRng& rng, int n) {
   return o;
 }
 
-TEST(NodeImportanceTest, FarBoxesUnderTheCosineLobeFollowTheirIntegrand) {
-  TestRng rng(20261122);
+/// What judge_boxes found: counts, the worst relative error over the accuracy subset, and
+/// fbar / oracle where the oracle saw a positive integrand (sorted), for boxes placed at random,
+/// across outlines or the horizon, and all of them.
+struct Tally {
   int positive = 0, accurate_cases = 0, horizon_cases = 0;
-  std::vector<double> ratios, straddle_ratios;  // fbar / oracle: boxes placed at random, across outlines
   double worst_small = 0;
+  std::vector<double> ratios, straddle_ratios, all_ratios;
+};
+
+/// The u-quantile of sorted values.
+double quantile(const std::vector<double>& sorted, double u) { return sorted[size_t(u * double(sorted.size() - 1))]; }
+
+/// 3000 random boxes (Case(rng, glossy)) judged by the oracle: fbar finite and >= 0 always, > 0
+/// wherever the oracle saw a positive integrand, and within 3 % of the oracle for small boxes
+/// (sin α <= 0.05) wholly above the horizon and wholly in or out of each light (for glossy
+/// lobes: the whole bounding cone in or out of each light, the box inside the LTC's support and
+/// the oracle's standard error below 1 %).
+Tally judge_boxes(uint64_t seed, bool glossy) {
+  TestRng rng(seed);
+  Tally t;
   for (int i = 0; i < 3000; ++i) {
-    const Case c(rng, false);
+    const Case c(rng, glossy);
     const Oracle o = oracle(c, rng, 4000);
-    ASSERT_GT(o.hits, 100) << "case " << i;
+    EXPECT_GT(o.hits, 100) << "case " << i;
     const double fbar = c.fbar();
-    ASSERT_TRUE(std::isfinite(fbar) && fbar >= 0) << "case " << i << ": fbar " << fbar;
+    EXPECT_TRUE(std::isfinite(fbar) && fbar >= 0) << "case " << i << ": fbar " << fbar;
     if (o.any_positive) {
-      ++positive;
+      ++t.positive;
       EXPECT_GT(fbar, 0) << "case " << i << ": the oracle saw a positive integrand (mean " << o.mean << ")";
-      (c.straddle ? straddle_ratios : ratios).push_back(fbar / o.mean);
+      if (o.mean > 0) {
+        (c.straddle ? t.straddle_ratios : t.ratios).push_back(fbar / o.mean);
+        t.all_ratios.push_back(fbar / o.mean);
+      }
     }
-    // Wholly above the horizon, each light wholly met or missed, a small cone.
     const Vec3 axis = c.q.frame.to_local(c.node.bp.center().normalized());
     const double lowest_z = axis.z() * std::sqrt(1 - c.s * c.s) - std::sqrt(1 - axis.z() * axis.z()) * c.s;
-    if (c.s <= 0.05 && lowest_z > 0.2 && !o.light_partial && o.mean > 0) {
-      ++accurate_cases;
+    const bool lights_whole = glossy ? !o.cone_light_partial && o.min_support > 0.05 && o.se < 0.01 * o.mean
+                                     : !o.light_partial;
+    if (c.s <= 0.05 && lowest_z > 0.2 && lights_whole && o.mean > 0) {
+      ++t.accurate_cases;
       const double rel = std::abs(fbar / o.mean - 1.0);
-      worst_small = std::max(worst_small, rel);
+      t.worst_small = std::max(t.worst_small, rel);
       EXPECT_LT(rel, 0.03) << "case " << i << ": fbar " << fbar << " vs oracle " << o.mean << " +- " << o.se;
     }
-    if (std::abs(axis.z()) < c.s) ++horizon_cases;
+    if (std::abs(axis.z()) < c.s) ++t.horizon_cases;
   }
+  for (auto* v : {&t.ratios, &t.straddle_ratios, &t.all_ratios}) std::sort(v->begin(), v->end());
+  return t;
+}
+
+TEST(NodeImportanceTest, FarBoxesUnderTheCosineLobeFollowTheirIntegrand) {
+  const Tally t = judge_boxes(20261122, false);
   // Power: enough cases of each kind.
-  EXPECT_GT(positive, 1200);
-  EXPECT_GT(accurate_cases, 30);
-  EXPECT_GT(horizon_cases, 500);
-  std::sort(ratios.begin(), ratios.end());
-  std::sort(straddle_ratios.begin(), straddle_ratios.end());
-  const auto quantile = [&](double u) { return ratios[size_t(u * double(ratios.size() - 1))]; };
-  const auto squantile = [&](double u) { return straddle_ratios[size_t(u * double(straddle_ratios.size() - 1))]; };
-  std::printf("fbar / oracle, random boxes (%zu): 5 %% %.3f, median %.3f, 95 %% %.3f; across outlines (%zu): 5 %% %.3f, "
-              "median %.3f, 95 %% %.3f; worst small-box error %.4f over %d cases\n",
-              ratios.size(), quantile(0.05), quantile(0.5), quantile(0.95), straddle_ratios.size(), squantile(0.05),
-              squantile(0.5), squantile(0.95), worst_small, accurate_cases);
-  EXPECT_GT(quantile(0.5), 0.9);
-  EXPECT_LT(quantile(0.5), 1.1);
-  EXPECT_GT(quantile(0.05), 0.8);
-  EXPECT_LT(quantile(0.95), 10.0);
-  EXPECT_GT(squantile(0.5), 0.8);
-  EXPECT_LT(squantile(0.5), 1.25);
-  EXPECT_GT(squantile(0.05), 0.5);
-  EXPECT_LT(squantile(0.95), 20.0);
+  EXPECT_GT(t.positive, 1200);
+  EXPECT_GT(t.accurate_cases, 30);
+  EXPECT_GT(t.horizon_cases, 500);
+  const auto q = [&](double u) { return quantile(t.ratios, u); };
+  const auto sq = [&](double u) { return quantile(t.straddle_ratios, u); };
+  std::printf("fbar / oracle, random boxes (%zu): 5 %% %.3f, median %.3f, 95 %% %.3f; across outlines (%zu): "
+              "5 %% %.3f, median %.3f, 95 %% %.3f; worst small-box error %.4f over %d cases\n",
+              t.ratios.size(), q(0.05), q(0.5), q(0.95), t.straddle_ratios.size(), sq(0.05), sq(0.5), sq(0.95),
+              t.worst_small, t.accurate_cases);
+  EXPECT_GT(q(0.5), 0.9);
+  EXPECT_LT(q(0.5), 1.1);
+  EXPECT_GT(q(0.05), 0.8);
+  EXPECT_LT(q(0.95), 10.0);
+  EXPECT_GT(sq(0.5), 0.8);
+  EXPECT_LT(sq(0.5), 1.25);
+  EXPECT_GT(sq(0.05), 0.5);
+  EXPECT_LT(sq(0.95), 20.0);
 }
 
 TEST(NodeImportanceTest, FarBoxesUnderGlossyLobesFollowTheirIntegrand) {
-  TestRng rng(20261124);
-  int positive = 0, accurate_cases = 0;
-  std::vector<double> ratios;
-  double worst_small = 0;
-  for (int i = 0; i < 3000; ++i) {
-    const Case c(rng, true);
-    const Oracle o = oracle(c, rng, 4000);
-    ASSERT_GT(o.hits, 100) << "case " << i;
-    const double fbar = c.fbar();
-    ASSERT_TRUE(std::isfinite(fbar) && fbar >= 0) << "case " << i << ": fbar " << fbar;
-    if (o.any_positive) {
-      ++positive;
-      EXPECT_GT(fbar, 0) << "case " << i << ": the oracle saw a positive integrand (mean " << o.mean << ")";
-      if (o.mean > 0) ratios.push_back(fbar / o.mean);
-    }
-    const Vec3 axis = c.q.frame.to_local(c.node.bp.center().normalized());
-    const double lowest_z = axis.z() * std::sqrt(1 - c.s * c.s) - std::sqrt(1 - axis.z() * axis.z()) * c.s;
-    if (c.s <= 0.05 && lowest_z > 0.2 && !o.cone_light_partial && o.min_support > 0.05 && o.mean > 0 &&
-        o.se < 0.01 * o.mean) {
-      ++accurate_cases;
-      const double rel = std::abs(fbar / o.mean - 1.0);
-      worst_small = std::max(worst_small, rel);
-      EXPECT_LT(rel, 0.03) << "case " << i << ": fbar " << fbar << " vs oracle " << o.mean << " +- " << o.se;
-    }
-  }
-  EXPECT_GT(positive, 1200);
-  EXPECT_GT(accurate_cases, 30);
-  std::sort(ratios.begin(), ratios.end());
-  const auto quantile = [&](double u) { return ratios[size_t(u * double(ratios.size() - 1))]; };
-  std::printf("glossy fbar / oracle (%zu): 1 %% %.3f, 5 %% %.3f, median %.3f, 95 %% %.3f, 99 %% %.3f; worst small-box error %.4f over %d cases\n",
-              ratios.size(), quantile(0.01), quantile(0.05), quantile(0.5), quantile(0.95), quantile(0.99), worst_small,
-              accurate_cases);
-  EXPECT_GT(quantile(0.01), 0.5);
-  EXPECT_GT(quantile(0.05), 0.8);
-  EXPECT_GT(quantile(0.5), 0.95);
-  EXPECT_LT(quantile(0.5), 1.05);
-  EXPECT_LT(quantile(0.95), 1.3);
-  EXPECT_LT(quantile(0.99), 4.0);
+  const Tally t = judge_boxes(20261124, true);
+  EXPECT_GT(t.positive, 1200);
+  EXPECT_GT(t.accurate_cases, 30);
+  const auto q = [&](double u) { return quantile(t.all_ratios, u); };
+  std::printf("glossy fbar / oracle (%zu): 1 %% %.3f, 5 %% %.3f, median %.3f, 95 %% %.3f, 99 %% %.3f; worst small-box "
+              "error %.4f over %d cases\n",
+              t.all_ratios.size(), q(0.01), q(0.05), q(0.5), q(0.95), q(0.99), t.worst_small, t.accurate_cases);
+  EXPECT_GT(q(0.01), 0.5);
+  EXPECT_GT(q(0.05), 0.8);
+  EXPECT_GT(q(0.5), 0.95);
+  EXPECT_LT(q(0.5), 1.05);
+  EXPECT_LT(q(0.95), 1.3);
+  EXPECT_LT(q(0.99), 4.0);
 }
 
 }  // namespace
