@@ -216,7 +216,8 @@ NodeWeight node_weight(const ForestNode& node, const SilhouetteQuery& query);
 /// midpoint. Under the cosine lobe an edge far from p (half length < kConeImportanceSin × the
 /// distance of its midpoint) takes EdgeMixture::far_total instead (the same components with the
 /// edge's distance taken as its midpoint's: no LTC set-up, no angles), within 3 % of the
-/// integral for edges shorter than 0.1 × their distance (tests/edgetree/edge_importance_test.cpp).
+/// integral for edges shorter than 0.1 × their distance wholly above the horizon and wholly in
+/// or out of each light (tests/edgetree/edge_importance_test.cpp).
 NodeWeight leaf_edge_weight(const ForestEdge& e, const SilhouetteQuery& q);
 
 /// Importance of a loose always-candidate edge, which competes with the forest roots: on the
