@@ -211,7 +211,8 @@ NodeWeight leaf_edge_weight(const ForestEdge& e, const Prepared& pq) {
   const bool far = pq.cosine_lobe &&
                    half * half < kConeImportanceSin * kConeImportanceSin * (0.5 * (e.p0 + e.p1) - q.p).squaredNorm();
   const double total = far ? EdgeMixture::far_total(e, q, pq.lights) : EdgeMixture::total(e, q, pq.lights);
-  return {total * velocity_factor(e, q), edge_defensive(e, q.p)};
+  // velocity_factor is finite, so a zero total needs no factor (below the horizon, outside every light).
+  return {total > 0 ? total * velocity_factor(e, q) : 0.0, edge_defensive(e, q.p)};
 }
 
 NodeWeight loose_edge_weight(const ForestEdge& e, const Prepared& pq) {
