@@ -9,6 +9,7 @@
 #include "chi2.h"
 #include "qsil/edgetree/ltc.h"
 #include "qsil/edgetree/silhouette_sampler.h"
+#include "ray_hits.h"
 
 #include <algorithm>
 #include <cmath>
@@ -56,6 +57,13 @@ inline void random_query(TestRng& rng, bool glossy, edgetree::SilhouetteQuery& q
     lights.push_back(l);
   }
   q.lights = &lights;
+}
+
+/// Whether the direction w from p (at the origin) meets light l's quad from its emitting side:
+/// where the oracles add the light's radiance (the library's light_toward keeps only lights
+/// that face p).
+inline bool sees_emitting_side(const edgetree::LightPolygon& l, const Vec3& w) {
+  return l.normal.dot(-l.corners[0]) > 0 && ray_hits_quad(w, l.corners);
 }
 
 /// A unit direction from p for a primitive of angular radius about asin(s): with probability

@@ -25,7 +25,6 @@
 #include "qsil/edgetree/silhouette_sampler.h"
 #include "chi2.h"
 #include "importance_cases.h"
-#include "ray_hits.h"
 
 #include <gtest/gtest.h>
 
@@ -39,7 +38,7 @@ namespace {
 using test::random_placement;
 using test::random_query;
 using test::random_unit;
-using test::ray_hits_quad;
+using test::sees_emitting_side;
 using test::TestRng;
 
 /// A shading point at the origin (diffuse) with 0-2 quad lights and a constant environment or
@@ -94,7 +93,7 @@ Oracle oracle(const Case& c, int n) {
     double radiance = c.q.env_weight + c.emission[0];
     for (size_t k = 0; k < c.lights.size(); ++k) {
       const LightPolygon& l = c.lights[k];
-      if (l.normal.dot(-l.corners[0]) > 0 && ray_hits_quad(w, l.corners)) {
+      if (sees_emitting_side(l, w)) {
         radiance += l.weight;
         ++light_hits[k];
       }

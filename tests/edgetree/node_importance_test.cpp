@@ -46,7 +46,7 @@ namespace {
 using test::random_placement;
 using test::random_query;
 using test::ray_hits_box;
-using test::ray_hits_quad;
+using test::sees_emitting_side;
 using test::TestRng;
 
 /// A shading point at the origin with 0-2 quad lights and a constant environment or none
@@ -103,7 +103,7 @@ Oracle oracle(const Case& c, TestRng& rng, int n) {
     const Vec3 w = cone.to_world(Vec3(r * std::cos(phi), r * std::sin(phi), z));
     for (size_t k = 0; k < c.lights.size(); ++k) {
       const LightPolygon& l = c.lights[k];
-      if (l.normal.dot(-l.corners[0]) > 0 && ray_hits_quad(w, l.corners)) ++cone_hits[k];
+      if (sees_emitting_side(l, w)) ++cone_hits[k];
     }
     if (!ray_hits_box(w, c.node.bp.lo, c.node.bp.hi)) continue;
     ++o.hits;
@@ -112,7 +112,7 @@ Oracle oracle(const Case& c, TestRng& rng, int n) {
     double radiance = c.q.env_weight;
     for (size_t k = 0; k < c.lights.size(); ++k) {
       const LightPolygon& l = c.lights[k];
-      if (l.normal.dot(-l.corners[0]) > 0 && ray_hits_quad(w, l.corners)) {
+      if (sees_emitting_side(l, w)) {
         radiance += l.weight;
         ++light_hits[k];
       }
