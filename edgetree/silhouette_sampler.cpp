@@ -49,7 +49,7 @@ constexpr int kFlatEdges = kExactTestEdges;
 struct Prepared {
   const SilhouetteQuery& q;
   std::span<const LocalLight> lights;
-  bool cosine_lobe;  ///< q.ltc is the clamped cosine (M_inv = I): boxes far from p use cone_fbar
+  bool cosine_lobe;  ///< q.ltc is the clamped cosine (M_inv = I): far boxes use cone_fbar, far edges far_total
 };
 
 /// Per-thread storage of the prepared lights (a traversal is single-threaded).
