@@ -3,6 +3,7 @@
 
 #include "qsil/bsdf.h"
 
+#include "qsil/check.h"
 #include "qsil/sampling.h"
 
 #include <cmath>
@@ -49,9 +50,16 @@ double ggx_reflection_pdf(double alpha, const Vec3& wi, const Vec3& wo) {
 namespace {
 /// Mirrors a local direction to the other side of the surface (z -> -z).
 Vec3 flip_z(const Vec3& v) { return {v.x(), v.y(), -v.z()}; }
+
+/// Density of the diffuse proposal: `share` uniform over the hemisphere, the rest cosine-weighted.
+double diffuse_pdf(double cos_theta, double share) {
+  return cos_theta > 0 ? share * uniform_hemisphere_pdf(cos_theta) + (1.0 - share) * cosine_hemisphere_pdf(cos_theta)
+                       : 0.0;
+}
 }  // namespace
 
-BSDFSample bsdf_sample(const BSDFDesc& b, const Vec3& wo_in, const Vec2& u) {
+BSDFSample bsdf_sample(const BSDFDesc& b, const Vec3& wo_in, const Vec2& u, double uniform_share) {
+  QSIL_DCHECK_MSG(uniform_share >= 0 && uniform_share < 1, "uniform share " << uniform_share);
   BSDFSample s;
   Vec3 wo = wo_in;
   const bool flipped = wo.z() < 0;
@@ -63,8 +71,11 @@ BSDFSample bsdf_sample(const BSDFDesc& b, const Vec3& wo_in, const Vec2& u) {
 
   switch (b.type) {
     case BSDFDesc::Type::Diffuse: {
-      s.wi = square_to_cosine_hemisphere(u);
-      s.pdf = cosine_hemisphere_pdf(s.wi.z());
+      // u.x chooses the component and is then rescaled to [0,1) for it.
+      s.wi = u.x() < uniform_share
+                 ? square_to_uniform_hemisphere(Vec2(u.x() / uniform_share, u.y()))
+                 : square_to_cosine_hemisphere(Vec2((u.x() - uniform_share) / (1.0 - uniform_share), u.y()));
+      s.pdf = diffuse_pdf(s.wi.z(), uniform_share);
       break;
     }
     case BSDFDesc::Type::RoughConductor: {
@@ -81,7 +92,7 @@ BSDFSample bsdf_sample(const BSDFDesc& b, const Vec3& wo_in, const Vec2& u) {
   return s;
 }
 
-double bsdf_pdf(const BSDFDesc& b, const Vec3& wi_in, const Vec3& wo_in) {
+double bsdf_pdf(const BSDFDesc& b, const Vec3& wi_in, const Vec3& wo_in, double uniform_share) {
   Vec3 wi = wi_in, wo = wo_in;
   if (wo.z() < 0) {
     if (!b.twosided) return 0.0;
@@ -90,7 +101,7 @@ double bsdf_pdf(const BSDFDesc& b, const Vec3& wi_in, const Vec3& wo_in) {
   }
   if (!(wo.z() > 0)) return 0.0;
   switch (b.type) {
-    case BSDFDesc::Type::Diffuse: return cosine_hemisphere_pdf(wi.z());
+    case BSDFDesc::Type::Diffuse: return diffuse_pdf(wi.z(), uniform_share);
     case BSDFDesc::Type::RoughConductor: return ggx_reflection_pdf(ggx_alpha(b), wi, wo);
   }
   return 0.0;

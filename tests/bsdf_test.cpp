@@ -2,14 +2,15 @@
 /// Tests of BSDF evaluation and sampling (include/qsil/bsdf.h), in the style of pbrt-v4's
 /// bsdfs_test.cpp and Mitsuba 3's chi2 tests.
 ///
-/// Configurations: diffuse, and GGX at alpha {0.01, 0.1, 0.3, 0.7}, each at incident (viewing)
-/// angles {0, 30, 60, 85} degrees (azimuth 0.3 rad, so nothing aligns with the bins by accident).
+/// Configurations: diffuse (cosine density, and the defensive mixture of derivative-carrying paths,
+/// kDerivativeDiffuseUniformShare), and GGX at alpha {0.01, 0.1, 0.3, 0.7}, each at incident
+/// (viewing) angles {0, 30, 60, 85} degrees (azimuth 0.3 rad, so nothing aligns with the bins by accident).
 /// Integrals over the sphere use test::sphere_quadrature centred on the lobe (the mirror
 /// direction), whose cells shrink toward the centre (2500 x 1280 cells): it resolves the
 /// alpha = 0.01 lobe (width ~0.02 rad) with thousands of points; its error is < 1e-4 on the
 /// integrals checked here (tolerances below state the margin taken).
 /// Chi-square: 41 x 80 (cos theta, phi) bins of the local frame, 10^6 samples per configuration,
-/// family-wise significance 1% over the 20 configurations (Šidák), pooling expected < 5.
+/// family-wise significance 1% over the 24 configurations (Šidák), pooling expected < 5.
 
 #include "qsil/bsdf.h"
 #include "qsil/dual.h"
@@ -37,6 +38,7 @@ struct Config {
   BSDFDesc bsdf;
   double theta_deg = 0;
   std::string name;
+  double uniform_share = 0;  ///< bsdf_sample's and bsdf_pdf's uniform_share
 };
 
 BSDFDesc diffuse(const Color& r = Color(0.7, 0.5, 0.2)) {
@@ -58,6 +60,8 @@ std::vector<Config> all_configs() {
   std::vector<Config> out;
   const double thetas[] = {0, 30, 60, 85};
   for (double t : thetas) out.push_back({diffuse(), t, "Diffuse_theta" + std::to_string(int(t))});
+  for (double t : thetas)
+    out.push_back({diffuse(), t, "DiffuseDefensive_theta" + std::to_string(int(t)), kDerivativeDiffuseUniformShare});
   const std::pair<double, const char*> alphas[] = {{0.01, "0p01"}, {0.1, "0p1"}, {0.3, "0p3"}, {0.7, "0p7"}};
   for (auto [a, an] : alphas)
     for (double t : thetas)
@@ -79,6 +83,11 @@ Vec3 lobe_center(const BSDFDesc& b, const Vec3& wo) {
   return b.type == BSDFDesc::Type::Diffuse ? Vec3(0, 0, 1) : Vec3(-wo.x(), -wo.y(), wo.z());
 }
 
+/// The quadrature's cap around lobe_center: the upper hemisphere for diffuse, whose pdf vanishes
+/// below the horizon and (with a uniform share) jumps there, so no cell straddles the jump; the
+/// whole sphere for GGX, whose proposal density is continuous.
+double quadrature_cap(const BSDFDesc& b) { return b.type == BSDFDesc::Type::Diffuse ? 0.5 * kPi : kPi; }
+
 constexpr int kQuadS = 2500, kQuadPhi = 1280;  // kQuadPhi is a multiple of the 80 phi bins
 const test::SphereBins kBins{41, 80};
 constexpr int kSamples = 1000000;
@@ -96,7 +105,8 @@ TEST_P(BSDFSampling, PdfIntegratesToOne) {
   const Config& c = GetParam();
   const Vec3 wo = view_dir(c.theta_deg);
   const double integral = test::integrate_sphere(lobe_center(c.bsdf, wo), kQuadS, kQuadPhi,
-                                                 [&](const Vec3& wi) { return bsdf_pdf(c.bsdf, wi, wo); });
+                                                 [&](const Vec3& wi) { return bsdf_pdf(c.bsdf, wi, wo, c.uniform_share); },
+                                                 quadrature_cap(c.bsdf));
   // Quadrature error < 1e-4 (see file comment); a 5% error in the pdf is 500x the tolerance.
   EXPECT_NEAR(integral, 1.0, 5e-4);
   RecordProperty("pdf_integral", std::to_string(integral));
@@ -108,7 +118,8 @@ TEST_P(BSDFSampling, PdfIntegratesToOne) {
 
 /// Chi-square of `sample` (returning a BSDFSample) against the density `pdf`.
 template <class SampleFn, class PdfFn>
-test::Chi2Result chi2_bsdf(const Vec3& center, SampleFn sample, PdfFn pdf, uint64_t seed, std::string* note) {
+test::Chi2Result chi2_bsdf(const Vec3& center, SampleFn sample, PdfFn pdf, uint64_t seed, std::string* note,
+                           double cap = kPi) {
   std::vector<double> obs(size_t(kBins.count()), 0.0);
   TestRng rng(seed);
   int no_direction = 0;
@@ -121,7 +132,7 @@ test::Chi2Result chi2_bsdf(const Vec3& center, SampleFn sample, PdfFn pdf, uint6
     obs[size_t(kBins.index(s.wi))] += 1;
   }
   double total = 0;
-  const std::vector<double> exp = test::expected_counts(kBins, center, kQuadS, kQuadPhi, kSamples, pdf, &total);
+  const std::vector<double> exp = test::expected_counts(kBins, center, kQuadS, kQuadPhi, kSamples, pdf, &total, cap);
   std::ostringstream os;
   os << "pdf integral " << total << ", samples without a direction " << no_direction;
   *note = os.str();
@@ -133,8 +144,9 @@ TEST_P(BSDFSampling, Chi2SampleMatchesPdf) {
   const Vec3 wo = view_dir(c.theta_deg);
   std::string note;
   const auto r = chi2_bsdf(
-      lobe_center(c.bsdf, wo), [&](const Vec2& u) { return bsdf_sample(c.bsdf, wo, u); },
-      [&](const Vec3& wi) { return bsdf_pdf(c.bsdf, wi, wo); }, 1000 + uint64_t(c.theta_deg), &note);
+      lobe_center(c.bsdf, wo), [&](const Vec2& u) { return bsdf_sample(c.bsdf, wo, u, c.uniform_share); },
+      [&](const Vec3& wi) { return bsdf_pdf(c.bsdf, wi, wo, c.uniform_share); }, 1000 + uint64_t(c.theta_deg), &note,
+      quadrature_cap(c.bsdf));
   EXPECT_TRUE(r.passed) << r.message << "; " << note;
   RecordProperty("chi2", r.message + "; " + note);
 }
@@ -158,7 +170,19 @@ TEST(BSDFSamplingPower, Chi2RejectsFivePercentPdfTilt) {
   // (1 + 0.05 wi.x) integrates to the same total under the cosine density (odd in x).
   const auto r = chi2_bsdf(
       lobe_center(b, wo), [&](const Vec2& u) { return bsdf_sample(b, wo, u); },
-      [&](const Vec3& wi) { return bsdf_pdf(b, wi, wo) * (1.0 + 0.05 * wi.x()); }, 78, &note);
+      [&](const Vec3& wi) { return bsdf_pdf(b, wi, wo) * (1.0 + 0.05 * wi.x()); }, 78, &note, quadrature_cap(b));
+  EXPECT_FALSE(r.passed) << r.message;
+}
+
+// The mixture's pdf must describe its own samples: the cosine density (share 0) against samples
+// drawn with kDerivativeDiffuseUniformShare is rejected, near the horizon where they differ most.
+TEST(BSDFSamplingPower, Chi2RejectsTheCosineDensityForTheMixture) {
+  const Vec3 wo = view_dir(30);
+  const BSDFDesc b = diffuse();
+  std::string note;
+  const auto r = chi2_bsdf(
+      lobe_center(b, wo), [&](const Vec2& u) { return bsdf_sample(b, wo, u, kDerivativeDiffuseUniformShare); },
+      [&](const Vec3& wi) { return bsdf_pdf(b, wi, wo); }, 79, &note, quadrature_cap(b));
   EXPECT_FALSE(r.passed) << r.message;
 }
 
@@ -175,11 +199,11 @@ TEST_P(BSDFSampling, AlbedoBySamplingMatchesQuadratureAndConservesEnergy) {
   const int n = 200000;
   Eigen::Array3d sum = Eigen::Array3d::Zero(), sum2 = Eigen::Array3d::Zero();
   for (int i = 0; i < n; ++i) {
-    const BSDFSample s = bsdf_sample(c.bsdf, wo, rng.uniform2());
+    const BSDFSample s = bsdf_sample(c.bsdf, wo, rng.uniform2(), c.uniform_share);
     if (!s.valid) continue;
     const Color w = bsdf_eval<double>(c.bsdf, s.wi, wo) / s.pdf;
     // The sample's pdf is the one bsdf_pdf reports for the same pair.
-    ASSERT_NEAR(s.pdf, bsdf_pdf(c.bsdf, s.wi, wo), 1e-9 * s.pdf);
+    ASSERT_NEAR(s.pdf, bsdf_pdf(c.bsdf, s.wi, wo, c.uniform_share), 1e-9 * s.pdf);
     sum += w;
     sum2 += w * w;
   }
@@ -196,8 +220,9 @@ TEST_P(BSDFSampling, AlbedoBySamplingMatchesQuadratureAndConservesEnergy) {
     // 4.5 sigma (two-sided 7e-6 per comparison) plus 1e-4 quadrature error.
     EXPECT_NEAR(mc[k], quad[k], 4.5 * sigma[k] + 1e-4) << "channel " << k;
     if (c.bsdf.type == BSDFDesc::Type::Diffuse) {
-      // eval/pdf = reflectance exactly for every sample: the albedo is the reflectance.
-      EXPECT_NEAR(mc[k], c.bsdf.reflectance[k], 1e-9);  // summation rounding of 2e5 terms
+      // Cosine density: eval/pdf = reflectance exactly for every sample, the albedo is the
+      // reflectance. The mixture's weights vary; its mean is checked against quadrature above.
+      if (c.uniform_share == 0) EXPECT_NEAR(mc[k], c.bsdf.reflectance[k], 1e-9);  // summation rounding of 2e5 terms
       EXPECT_NEAR(quad[k], c.bsdf.reflectance[k], 1e-4);
     } else {
       EXPECT_LE(quad[k], 1.0 + 1e-4);

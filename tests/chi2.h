@@ -218,16 +218,18 @@ struct SphereBins {
 /// the quadrature points of sphere_quadrature(center, ...) scattered into their bins (a cell is
 /// assigned whole to the bin of its midpoint; with cells much finer than bins this errs by well
 /// under 1e-3 of a bin's content). Also returns the total integral of the pdf in *total.
+/// theta_max: as for sphere_quadrature (a pdf that vanishes beyond the cap and jumps at its rim,
+/// e.g. a hemisphere's, is integrated exactly up to the rim instead of by cells straddling it).
 inline std::vector<double> expected_counts(const SphereBins& bins, const Vec3& center, int n_s, int n_phi,
                                            double n_samples, const std::function<double(const Vec3&)>& pdf,
-                                           double* total = nullptr) {
+                                           double* total = nullptr, double theta_max = kPi) {
   std::vector<double> e(size_t(bins.count()), 0.0);
   double sum = 0;
   sphere_quadrature(center, n_s, n_phi, [&](const Vec3& d, double w) {
     const double p = pdf(d) * w;
     e[size_t(bins.index(d))] += p;
     sum += p;
-  });
+  }, theta_max);
   for (double& x : e) x *= n_samples;
   if (total) *total = sum;
   return e;

@@ -147,18 +147,35 @@ struct BSDFSample {
   bool valid = false;
 };
 
+/// Share of a diffuse BSDF's directions that paths carrying derivatives (the interior term's
+/// dual paths in forward and reverse mode, integrators/path_tracer.h) draw uniformly over the
+/// hemisphere instead of cosine-weighted: a defensive mixture (Hesterberg 1995, "Weighted average
+/// importance sampling and defensive mixture distributions", Technometrics 37(2)). With
+/// directions fixed and the pdf detached (docs/architecture.md §4), the throughput
+/// (albedo/pi) cos_i / pdf of a sampled direction has the derivative (albedo/pi) (dn_s . wi) / pdf
+/// where the shading normal n_s moves; under the cosine density that is albedo (dn_s . wi) / cos_i,
+/// unbounded at grazing wi, with a variance that diverges logarithmically (∫ cos_i^-2 cos_i dω).
+/// The mixture bounds (dn_s . wi) / pdf by 2 pi |dn_s| / share, and the primal throughput by
+/// albedo / (1 - share). Measured (256², relative MSE of the whole gradient against independent
+/// FD references, same seeds and times): docs/design-notes.md "Sampling for derivatives,
+/// measured". Primal paths (`render`, and so FD, and the boundary term's radiance sub-paths) keep
+/// share 0: their weight is exactly the albedo.
+inline constexpr double kDerivativeDiffuseUniformShare = 0.25;
+
 /// Samples wi given wo (local frame, unit), u in [0,1)^2.
-/// - Diffuse: cosine-weighted hemisphere on wo's side, pdf = |cos_i|/pi.
+/// - Diffuse: on wo's side, uniform over the hemisphere with probability `uniform_share` (in
+///   [0, 1); u.x chooses), else cosine-weighted: pdf = share/(2 pi) + (1 - share) |cos_i|/pi.
 /// - RoughConductor: visible-normal sampling of m (Heitz 2018) and wi = reflect(wo, m),
 ///   pdf = D_wo(m) / (4 |wo.m|) (ggx_reflection_pdf). A wi that lands on the other side of the
 ///   surface than wo is returned with valid = false.
 /// twosided: mirrored when wo.z < 0; one-sided with wo.z <= 0: invalid, pdf = 0.
-BSDFSample bsdf_sample(const BSDFDesc& b, const Vec3& wo, const Vec2& u);
+BSDFSample bsdf_sample(const BSDFDesc& b, const Vec3& wo, const Vec2& u, double uniform_share = 0.0);
 
 /// Solid-angle density with which bsdf_sample(b, wo, .) proposes wi, over the whole sphere
 /// (including directions that bsdf_sample flags invalid, so it integrates to 1 for any wo the
 /// BSDF can be seen from, and to 0 for a one-sided BSDF seen from behind). Wherever bsdf_eval is
-/// non-zero this equals the density of valid samples, which is what MIS needs.
-double bsdf_pdf(const BSDFDesc& b, const Vec3& wi, const Vec3& wo);
+/// non-zero this equals the density of valid samples, which is what MIS needs. `uniform_share`
+/// as for bsdf_sample (diffuse only).
+double bsdf_pdf(const BSDFDesc& b, const Vec3& wi, const Vec3& wo, double uniform_share = 0.0);
 
 }  // namespace qsil

@@ -143,7 +143,12 @@ TEST(InteriorTerm, SampledDirectionsPdfsAndMisWeightsAreDetachedTypes) {
   static_assert(std::is_same_v<decltype(ShadingPoint<Dual<2>>::frame_value), Frame>);
   // ...and the value of a dual computation equals the double computation to rounding (1e-9
   // relative), so the sampling decisions taken from detached values are the primal's decisions.
-  const Scene scene = test::furnace_scene(0.8, 1.0, 8, 4);
+  // A rough conductor: diffuse directions of derivative-carrying paths come from another density
+  // (kDerivativeDiffuseUniformShare, bsdf.h), so there the decisions differ by design.
+  Scene scene = test::furnace_scene(0.8, 1.0, 8, 4);
+  scene.bsdfs[0].type = BSDFDesc::Type::RoughConductor;
+  scene.bsdfs[0].alpha = 0.3;
+  scene.bsdfs[0].specular_reflectance = Color::Constant(0.8);
   const auto params = std::vector<ParameterSpec>{parse_parameter("sphere:translate:0,1,0", scene)};
   RenderOptions o;
   o.progress = false;

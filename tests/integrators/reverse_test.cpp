@@ -129,7 +129,9 @@ TEST(ReverseMode, InteriorTermEqualsForwardModeOnTheOtherBundledScenes) {
   const std::vector<Case> cases = {
       {"scenes/shadow-quad.xml", {"object:rotate:0,1,0", "object:scale", "floor:translate:0,1,0"},
        {"object", "floor"}},
-      {"scenes/direct.xml", {"spot:rotate:1,0,0", "spot:vertex:2000:1,1,0", "backdrop:translate:0,0,1"},
+      // Vertex 2088 faces the camera near the image centre (the primary rays reach it; a vertex on
+      // Spot's far side is reached by few secondary paths at 16² and 4 spp, or by none).
+      {"scenes/direct.xml", {"spot:rotate:1,0,0", "spot:vertex:2088:1,1,0", "backdrop:translate:0,0,1"},
        {"spot", "backdrop"}}};
   for (const Case& c : cases) {
     const Scene scene = load_scene(test::repo_path(c.file), {{"res", "16"}, {"spp", "4"}, {"max_depth", "4"}});

@@ -11,6 +11,9 @@
 /// density of a detached sample would bias the estimate. NEE samples a light point but keeps only
 /// its direction; the emitted radiance along it is constant, so it carries no derivative, and
 /// there is no geometry term. Env-map radiance depends on direction only: zero derivative.
+/// Paths that carry derivatives (T a dual) draw diffuse directions from a defensive mixture
+/// (kDerivativeDiffuseUniformShare, bsdf.h), whose pdf their MIS weights use too; primal paths
+/// draw them from the cosine density.
 ///
 /// Depth follows Mitsuba 3: max_depth counts path segments (1 = directly seen emitters,
 /// 2 = direct illumination); -1 means unbounded, capped at kUnboundedDepthCap segments.
@@ -142,6 +145,9 @@ ColorT<typename View::Real> trace_path(const PathContext& ctx, const View& view,
                                        int segments, double prev_bsdf_pdf, Sampler& sampler, PathStats& stats,
                                        const Hook& hook = {}) {
   using T = typename View::Real;
+  // Paths that carry derivatives draw diffuse directions from the defensive mixture
+  // (kDerivativeDiffuseUniformShare, bsdf.h); primal paths from the cosine density.
+  constexpr double uniform_share = std::is_same_v<T, double> ? 0.0 : kDerivativeDiffuseUniformShare;
   ColorT<T> L = lift<T>(Color::Zero().eval());
   ColorT<T> beta = lift<T>(Color::Ones().eval());
   Vec3T<T> o = origin;
@@ -227,7 +233,7 @@ ColorT<typename View::Real> trace_path(const PathContext& ctx, const View& view,
           IgnoreSet ignore;
           ignore.through_back_faces = leaves_below(si, wo_world, wi);
           if (!ctx.tracer->occluded(origin, wi, tmax, ignore)) {
-            const double w = power_heuristic(pdf_light, bsdf_pdf(*sp.bsdf, value(wi_local), wo_value));
+            const double w = power_heuristic(pdf_light, bsdf_pdf(*sp.bsdf, value(wi_local), wo_value, uniform_share));
             L += beta * f * lift<T>(Color(Le * (w / pdf_light)));
           }
         }
@@ -235,7 +241,7 @@ ColorT<typename View::Real> trace_path(const PathContext& ctx, const View& view,
     }
 
     // ---- BSDF sampling: a detached direction, then the throughput re-evaluated over T.
-    const BSDFSample bs = bsdf_sample(*sp.bsdf, wo_value, sampler.next2());
+    const BSDFSample bs = bsdf_sample(*sp.bsdf, wo_value, sampler.next2(), uniform_share);
     if (!bs.valid || !(bs.pdf > 0)) break;
     const Vec3 wi = sp.frame_value.to_world(bs.wi).normalized();
     const ColorT<T> f = bsdf_eval<T>(*sp.bsdf, sp.frame.to_local(lift<T>(wi)), wo);
