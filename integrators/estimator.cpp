@@ -115,7 +115,7 @@ class GradientEstimator final : public Estimator::Impl {
           const Hit hit = tracer.intersect(origin, d);
           ColorT<Dual<N>> L;
           if (with_boundary) {
-            // The boundary term draws from a stream of its own, so the path itself is the primal's.
+            // The boundary term draws from a stream of its own, so it leaves the path's decisions unchanged.
             Sampler bsampler(options.seed, uint64_t(y) * cam.width + x, uint64_t(s), 1);
             const BoundaryHook<N> hook{&ctx, &bctx, &bsampler};
             L = trace_path(ctx, view, lift<Dual<N>>(origin), d, hit, 0, 0.0, sampler, st, hook);

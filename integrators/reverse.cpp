@@ -121,7 +121,7 @@ struct Accumulator {
 struct ReverseBoundaryHook {
   const PathContext* ctx;
   const BoundaryContext* bctx;
-  Sampler* sampler;  ///< a stream of its own, so the path's own decisions equal the primal's
+  Sampler* sampler;  ///< a stream of its own, so the hook leaves the path's own decisions unchanged
   const Tape* tape;
   const std::vector<int>* chosen_index;  ///< per shape: its index in the chosen list, or -1
   Color adjoint;                         ///< the pixel's adjoint / spp

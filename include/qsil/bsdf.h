@@ -155,11 +155,12 @@ struct BSDFSample {
 /// (albedo/pi) cos_i / pdf of a sampled direction has the derivative (albedo/pi) (dn_s . wi) / pdf
 /// where the shading normal n_s moves; under the cosine density that is albedo (dn_s . wi) / cos_i,
 /// unbounded at grazing wi, with a variance that diverges logarithmically (∫ cos_i^-2 cos_i dω).
-/// The mixture bounds (dn_s . wi) / pdf by 2 pi |dn_s| / share, and the primal throughput by
-/// albedo / (1 - share). Measured (256², relative MSE of the whole gradient against independent
-/// FD references, same seeds and times): docs/design-notes.md "Sampling for derivatives,
-/// measured". Primal paths (`render`, and so FD, and the boundary term's radiance sub-paths) keep
-/// share 0: their weight is exactly the albedo.
+/// The mixture bounds (dn_s . wi) / pdf by 2 pi |dn_s| / share, and the primal throughput
+/// albedo cos_i / (share/2 + (1 - share) cos_i) by albedo / (1 - share/2). Measured (256²,
+/// relative MSE of the whole gradient against independent FD references, same seeds and times):
+/// docs/design-notes.md "Sampling for derivatives, measured". Primal paths (`render`, and so FD,
+/// and the boundary term's radiance sub-paths) keep share 0: their weight is exactly the albedo.
+/// So `grad`'s primal channels are unbiased but not equal to `render`'s for the same seed.
 inline constexpr double kDerivativeDiffuseUniformShare = 0.25;
 
 /// Samples wi given wo (local frame, unit), u in [0,1)^2.

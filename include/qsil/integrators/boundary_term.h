@@ -290,7 +290,7 @@ template <int N>
 struct BoundaryHook {
   const PathContext* ctx;
   const BoundaryContext* bctx;
-  Sampler* sampler;  ///< a stream of its own, so the path's own decisions equal the primal's
+  Sampler* sampler;  ///< a stream of its own, so the hook leaves the path's own decisions unchanged
 
   void operator()(const SurfaceInteraction<Dual<N>>& si, const ShadingPoint<Dual<N>>& sp, const Vec3& wo_local,
                   const ColorT<Dual<N>>& beta, int seg, Sampler&, PathStats& stats, ColorT<Dual<N>>& L) const {
