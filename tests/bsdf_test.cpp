@@ -302,6 +302,27 @@ TEST(BSDFEval, SupportOneSidedAndTwosided) {
     }
 }
 
+// The diffuse proposal density (cosine, and the mixture of derivative-carrying paths) is zero
+// below the horizon, which the quadratures above no longer visit (they stop at it), and a
+// twosided BSDF's mixture is mirrored like its cosine density.
+TEST(BSDFEval, DiffusePdfVanishesBelowTheHorizonAndMirrorsWhenTwosided) {
+  TestRng rng(33);
+  BSDFDesc two = diffuse();
+  two.twosided = true;
+  for (double share : {0.0, kDerivativeDiffuseUniformShare})
+    for (int i = 0; i < 500; ++i) {
+      const Vec3 wi = random_upper(rng), wo = random_upper(rng);
+      const Vec3 wi_b(wi.x(), wi.y(), -wi.z()), wo_b(wo.x(), wo.y(), -wo.z());
+      EXPECT_EQ(bsdf_pdf(diffuse(), wi_b, wo, share), 0.0);
+      EXPECT_GT(bsdf_pdf(diffuse(), wi, wo, share), 0.0);
+      EXPECT_EQ(bsdf_pdf(two, wi_b, wo_b, share), bsdf_pdf(two, wi, wo, share));
+      const Vec2 u = rng.uniform2();
+      const BSDFSample s = bsdf_sample(two, wo, u, share), sb = bsdf_sample(two, wo_b, u, share);
+      EXPECT_EQ(sb.wi, Vec3(s.wi.x(), s.wi.y(), -s.wi.z()));
+      EXPECT_EQ(sb.pdf, s.pdf);
+    }
+}
+
 TEST(BSDFEval, KnownValues) {
   // Diffuse: R cos_i / pi.
   const Vec3 wi = Vec3(0.6, 0.0, 0.8), wo = Vec3(0, 0, 1);

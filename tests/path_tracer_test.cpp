@@ -36,14 +36,6 @@ TEST(PathTracer, WhiteFurnaceRendersTheEnvironmentRadianceEverywhere) {
   EXPECT_LT(furnace_worst_error(scene, 7, L), 0.005);
 }
 
-// White furnace with smooth shading on a coarse mesh: an icosphere with 80 faces and area-weighted
-// vertex normals, which tilt up to ~20 deg from the faces' normals. The BSDF then sends some
-// directions below a face's plane ("slivers"); those rays pass through back faces
-// (IgnoreSet::through_back_faces) and see the environment, so an albedo-1 sphere still renders L
-// everywhere. Were the slivers blocked by the sphere's inside (as in Mitsuba 3 and pbrt-v4), the
-// sphere would be darker by the slivers' cosine-weighted share (measured: up to 2.3 % at 4096 spp
-// before the change), and that share jumps at every edge (the smooth-mesh bias of the gradient).
-// Same criterion as above: 0.5 % is > 3.5 standard errors per pixel-channel at 65536 spp.
 /// The albedo-1 furnace of 4 x 4 pixels at 65536 spp, its sphere an 80-face icosphere with
 /// smooth shading, every pixel on the sphere (fov 20 deg).
 Scene coarse_smooth_furnace(double L) {
@@ -54,6 +46,14 @@ Scene coarse_smooth_furnace(double L) {
   return scene;
 }
 
+// White furnace with smooth shading on a coarse mesh: an icosphere with 80 faces and area-weighted
+// vertex normals, which tilt up to ~20 deg from the faces' normals. The BSDF then sends some
+// directions below a face's plane ("slivers"); those rays pass through back faces
+// (IgnoreSet::through_back_faces) and see the environment, so an albedo-1 sphere still renders L
+// everywhere. Were the slivers blocked by the sphere's inside (as in Mitsuba 3 and pbrt-v4), the
+// sphere would be darker by the slivers' cosine-weighted share (measured: up to 2.3 % at 4096 spp
+// before the change), and that share jumps at every edge (the smooth-mesh bias of the gradient).
+// Same criterion as above: 0.5 % is > 3.5 standard errors per pixel-channel at 65536 spp.
 TEST(PathTracer, WhiteFurnaceWithCoarseSmoothShadedSphereRendersTheEnvironmentRadiance) {
   const double L = 1.5;
   EXPECT_LT(furnace_worst_error(coarse_smooth_furnace(L), 9, L), 0.005);

@@ -15,7 +15,8 @@
 // The first two made boundary samples of the backdrop's shading points look occluded. The powered
 // check is the fraction of boundary samples that contribute nothing, which both biases raised. Here (32x32,
 // 64 spp, seed 7, 134.6k samples per scene) it was 59.07 % on far vs 49.58 % on tiny before and
-// is 47.20 % vs 47.30 % now; its binomial standard error is 0.14 % per scene and 0.19 % for the
+// was 47.20 % vs 47.30 % after the fix (47.18 % vs 47.14 % since the defensive mixture of the
+// derivative paths, bsdf.h); its binomial standard error is 0.14 % per scene and 0.19 % for the
 // difference, which must stay within 1 percentage point (1/9 of the old difference, 5 standard
 // errors; the old code fails by 50). The image sums are also compared (3 combined standard
 // errors), a sanity check only: at this size their standard error (~17) is close to the old bias
@@ -23,7 +24,7 @@
 // same random numbers in the same order, so only floating-point precision separates their paths
 // and the difference of their image sums must be within 1/10 of one run's standard error (no
 // statistical model: a deterministic check). With world-relative offsets it was +6.17 (far -20.55,
-// tiny -26.72; 0.52 s.e.), now -0.11. Runs in about 4 s.
+// tiny -26.72; 0.52 s.e.), then -0.11, now +0.27 (0.025 s.e.). Runs in about 4 s.
 #include "qsil/integrators/estimator.h"
 #include "qsil/parameters.h"
 #include "qsil/scene.h"

@@ -158,6 +158,16 @@ TEST(InteriorTerm, SampledDirectionsPdfsAndMisWeightsAreDetachedTypes) {
   for (int y = 0; y < 8; ++y)
     for (int x = 0; x < 8; ++x)
       for (int c = 0; c < 3; ++c) EXPECT_NEAR(g.film.mean(c, x, y), p.film.mean(c, x, y), 1e-9 * p.film.mean(c, x, y));
+  // With a diffuse BSDF the dual paths draw from the mixture and the primal paths from the cosine
+  // density: the same seed gives different images (were both on one density, every pixel would
+  // agree to rounding as above).
+  const Scene diffuse_scene = test::furnace_scene(0.8, 1.0, 8, 4);
+  const RenderResult gd = Estimator(diffuse_scene, EstimatorConfig::gradient(params)).run(o);
+  const RenderResult pd = Estimator(diffuse_scene, EstimatorConfig::primal()).run(o);
+  int differ = 0;
+  for (int y = 0; y < 8; ++y)
+    for (int x = 0; x < 8; ++x) differ += std::abs(gd.film.mean(1, x, y) - pd.film.mean(1, x, y)) > 1e-6;
+  EXPECT_GT(differ, 0);
 }
 
 // An unmoving scene has exactly zero interior term: a shape that moves but is never hit by any

@@ -204,7 +204,8 @@ TEST(SmoothShading, EdgePointRadianceIsTheLimitFromTheFaceInterior) {
 // around it are in view), max depth 2 and 3. The boundary term's only candidates here are the
 // edges of the shading point's own triangle, seen edge-on (OwnFace in boundary_term.h): convex,
 // so they contribute 0. Treating them as silhouettes (before the change) gave image sums of
-// -2.09 +- 0.11 (depth 2) and -0.62 +- 0.11 (depth 3); now 0.03 +- 0.11 at both. The assertion
+// -2.09 +- 0.11 (depth 2) and -0.62 +- 0.11 (depth 3); after it 0.03 +- 0.11 at both (0.16 +- 0.11
+// since the defensive mixture of the derivative paths, bsdf.h). The assertion
 // is |sum| <= 4 standard errors (a correct estimator fails it with probability 6e-5; fixed
 // seeds). About 4 s.
 TEST(SmoothShading, VertexOfASphereInAWhiteFurnaceHasZeroDerivative) {
