@@ -3,7 +3,7 @@
 methods are known or expected to fail; writes docs/stability.md and docs/images/stability/.
 
 Usage: python3 tools/stability_study.py [--qsil PATH] [--budget 2] [--res 48]
-       [--ref-spp 4096] [--ref-step-factor 0.25] [--threads 2] [--only NAME,...]
+       [--ref-spp 32768] [--ref-step-factor 0.25] [--threads 2] [--only NAME,...]
 
 Per scene (scenes/stability/params.txt lists name, parameter, question): an FD reference
 (`qsil reference --method fd`, per-pixel standard errors) at --ref-step-factor times qsil's
@@ -134,7 +134,7 @@ def main():
     ap.add_argument("--qsil", default=os.path.join(ROOT, "build", "qsil"))
     ap.add_argument("--budget", type=float, default=2.0)
     ap.add_argument("--res", type=int, default=48)
-    ap.add_argument("--ref-spp", type=int, default=4096)
+    ap.add_argument("--ref-spp", type=int, default=32768)
     ap.add_argument("--ref-step-factor", type=float, default=0.25,
                     help="the reference's FD step over qsil's default step h0 (FD in the table uses h0)")
     ap.add_argument("--threads", type=int, default=2)
