@@ -86,4 +86,10 @@ inline Vec3 random_placement(TestRng& rng, const edgetree::SilhouetteQuery& q,
   return random_unit(rng);
 }
 
+/// The u-quantile (u in [0, 1]) of values sorted ascending (non-empty): the element at rank
+/// floor(u (n - 1)).
+inline double quantile(const std::vector<double>& sorted, double u) {
+  return sorted[size_t(u * double(sorted.size() - 1))];
+}
+
 }  // namespace qsil::test

@@ -144,8 +144,8 @@ TEST(EdgeImportanceTest, LeafEdgeWeightsFollowTheirIntegrand) {
   EXPECT_GT(horizon_cases, 300);
   std::sort(ratios.begin(), ratios.end());
   std::sort(straddle_ratios.begin(), straddle_ratios.end());
-  const auto quantile = [&](double u) { return ratios[size_t(u * double(ratios.size() - 1))]; };
-  const auto squantile = [&](double u) { return straddle_ratios[size_t(u * double(straddle_ratios.size() - 1))]; };
+  const auto quantile = [&](double u) { return test::quantile(ratios, u); };
+  const auto squantile = [&](double u) { return test::quantile(straddle_ratios, u); };
   std::printf("far form / oracle, random edges (%zu): 5 %% %.3f, median %.3f, 95 %% %.3f; across outlines or the "
               "horizon (%zu): 5 %% %.3f, median %.3f, 95 %% %.3f; worst error: exact form %.4f (%d cases), far "
               "form %.4f (%d short edges)\n",

@@ -140,9 +140,6 @@ struct Tally {
   std::vector<double> ratios, straddle_ratios, all_ratios;
 };
 
-/// The u-quantile of sorted values.
-double quantile(const std::vector<double>& sorted, double u) { return sorted[size_t(u * double(sorted.size() - 1))]; }
-
 /// 3000 random boxes (Case(rng, glossy)) judged by the oracle: fbar finite and >= 0 always, > 0
 /// wherever the oracle saw a positive integrand, and within 3 % of the oracle for small boxes
 /// (sin α <= 0.05) wholly above the horizon and wholly in or out of each light (for glossy
@@ -187,8 +184,8 @@ TEST(NodeImportanceTest, FarBoxesUnderTheCosineLobeFollowTheirIntegrand) {
   EXPECT_GT(t.positive, 1200);
   EXPECT_GT(t.accurate_cases, 30);
   EXPECT_GT(t.horizon_cases, 500);
-  const auto q = [&](double u) { return quantile(t.ratios, u); };
-  const auto sq = [&](double u) { return quantile(t.straddle_ratios, u); };
+  const auto q = [&](double u) { return test::quantile(t.ratios, u); };
+  const auto sq = [&](double u) { return test::quantile(t.straddle_ratios, u); };
   std::printf("fbar / oracle, random boxes (%zu): 5 %% %.3f, median %.3f, 95 %% %.3f; across outlines (%zu): "
               "5 %% %.3f, median %.3f, 95 %% %.3f; worst small-box error %.4f over %d cases\n",
               t.ratios.size(), q(0.05), q(0.5), q(0.95), t.straddle_ratios.size(), sq(0.05), sq(0.5), sq(0.95),
@@ -207,7 +204,7 @@ TEST(NodeImportanceTest, FarBoxesUnderGlossyLobesFollowTheirIntegrand) {
   const Tally t = judge_boxes(20261124, true);
   EXPECT_GT(t.positive, 1200);
   EXPECT_GT(t.accurate_cases, 30);
-  const auto q = [&](double u) { return quantile(t.all_ratios, u); };
+  const auto q = [&](double u) { return test::quantile(t.all_ratios, u); };
   std::printf("glossy fbar / oracle (%zu): 1 %% %.3f, 5 %% %.3f, median %.3f, 95 %% %.3f, 99 %% %.3f; worst small-box "
               "error %.4f over %d cases\n",
               t.all_ratios.size(), q(0.01), q(0.05), q(0.5), q(0.95), q(0.99), t.worst_small, t.accurate_cases);
