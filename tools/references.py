@@ -196,7 +196,8 @@ def main():
     ap.add_argument("--qsil", default=os.path.join(ROOT, "build", "qsil"))
     ap.add_argument("--res", type=int, default=256)
     ap.add_argument("--seconds", type=float, default=600, help="time of each reference render")
-    ap.add_argument("--study-spp", type=int, default=32, help="spp of each step-study render")
+    ap.add_argument("--study-spp", type=int, default=128,
+                    help="spp of each step-study render (128: the setting docs/results.md is made with)")
     ap.add_argument("--spp", type=int, default=0, help="spp of the reference (instead of filling --seconds)")
     ap.add_argument("--check-spp", type=int, default=4096, help="spp of the 64x64 independence check (each method)")
     ap.add_argument("--max-step-bias", type=float, default=0.01,

@@ -30,6 +30,17 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SCENES = [("spot-mirror", "spot:translate:0,1,0"), ("shadow-quad", "object:translate:0,1,0"),
           ("direct", "spot:translate:1,0,0")]
 METHODS = ["quadric", "vsphere", "uniform", "fd"]
+# Why FD wins where it does: measured by hand (commands named), not by this script; update it with them.
+WHY_FD_WINS = (
+    "Why FD at a good step still wins, measured: `grad` costs 8.6–14.3× `render` per sample on these scenes "
+    "(`python3 tools/bench/grad_cost.py --perf`, 256², 16 spp), most of it the boundary term's node importance "
+    "(LTC polygon integrals, clipping, the box's outline, the rejection tests; Embree takes about a fifth of the "
+    "samples), and its per-pixel samples are heavy-tailed: on `shadow-quad` the secondary boundary term (edges in "
+    "front of the area light seen from the moving bunny) and the interior term along the bunny's outline, on "
+    "`direct` mostly the interior term (grazing hits on the smooth moving mesh), on `spot-mirror` the boundary term "
+    "(`docs/design-notes.md`, \"Sampling for derivatives, measured\"), while FD with common random numbers "
+    "subtracts two almost equal renders of a scene that is smooth in θ. FD's weaknesses are elsewhere: 2k renders "
+    "for k parameters, and a step per scene (`docs/gradient-checks.md`, \"The FD step at pixel scale\").")
 FD_REF = "fd (ref. step)"  # FD at the reference's step, where the step study chose one below h0
 
 
@@ -198,26 +209,21 @@ def targets_text(results):
         goal = "FD / quadric ≥ 1 (≥ 0.5 on shadow-quad)" if k == 1 else "FD / quadric ≥ 5"
         lines.append(f"| {scene} | {k} | {f('fd')} | {f('vsphere')} | {f('uniform')} | {goal}; vsphere ≥ 10 with secondary silhouettes; uniform ≥ 1 |")
     old_refs = any(not per_pixel_study(entry) for entry, _ in results.values())
+    steps = []
+    for (scene, kset), (entry, res) in results.items():
+        last = max(res["targets"])
+        rel = {r["method"]: r["rel_mse"] for r in res["rows"] if r["target"] == last and r["rel_mse"] is not None}
+        if "fd" in rel and FD_REF in rel:
+            steps.append(f"{scene}{' (k = 8)' if len(entry['params']) > 1 else ''} {rel['fd']:.3g} at h0, "
+                         f"{rel[FD_REF]:.3g} at h0·{entry['step_study']['chosen_factor']:g}")
     lines += ["", "Where best FD / quadric is below its target, finite differences at a well-chosen step are the "
               "more efficient estimator today. The step matters: at qsil's default step h0 the silhouettes move "
               "about two pixels over 2h at 256², which blurs the derivative image; a smaller step avoids the blur "
-              "at the price of variance ∝ 1/h where silhouettes cross pixels (compare the `fd` and "
-              "`fd (ref. step)` columns: on `direct` and `shadow-quad` the reference's h0/4 wins, where the "
-              "study had to fall to h0/8 its noise costs more than h0's blur), so the best step must be found "
-              "per scene, as the reference's step study does. "
+              "at the price of variance ∝ 1/h where silhouettes cross pixels, so the best step depends on the "
+              "scene and the budget (FD's relative MSE at the largest budget: " + "; ".join(steps) + "). "
               + ("References made before the per-pixel study (flagged below) share FD's h0 blur, so there FD's "
                  "error is understated and the quadric method's overstated. " if old_refs else "")
-              + "Against the earlier h0 references `direct` showed quadric 0.88 and `shadow-quad` 1.56 at 60 s; 93 % "
-              "of the former was the reference's blur. "
-              "Why FD at a good step still wins, measured: the boundary term takes 80–90 % of `grad`'s time "
-              "(node importance: the box's silhouette polygon, its LTC integral and clipping, and the rejection "
-              "tests; Embree takes 7–11 %), `grad` costs 11–26× `render` per sample (tools/bench/grad_cost.py), "
-              "and its per-pixel samples are heavy-tailed: on `shadow-quad` the secondary boundary term (edges "
-              "in front of the area light seen from the moving bunny), on `direct` the interior term (grazing "
-              "hits on the smooth moving mesh, `docs/design-notes.md`: 0.26 of its 0.36 per-pixel variance at "
-              "8 spp), while FD with common random numbers subtracts two almost equal renders of a scene that is "
-              "smooth in θ. FD's weaknesses are elsewhere: 2k renders for k parameters, and a step per scene "
-              "(`docs/gradient-checks.md`, \"The FD step at pixel scale\").", ""]
+              + WHY_FD_WINS, ""]
     return lines
 
 
