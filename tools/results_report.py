@@ -32,15 +32,21 @@ SCENES = [("spot-mirror", "spot:translate:0,1,0"), ("shadow-quad", "object:trans
 METHODS = ["quadric", "vsphere", "uniform", "fd"]
 # Why FD wins where it does: measured by hand (commands named), not by this script; update it with them.
 WHY_FD_WINS = (
-    "Why FD at a good step still wins, measured: `grad` costs 8.6–14.3× `render` per sample on these scenes "
-    "(`python3 tools/bench/grad_cost.py --perf`, 256², 16 spp), most of it the boundary term's node importance "
-    "(LTC polygon integrals, clipping, the box's outline, the rejection tests; Embree takes about a fifth of the "
-    "samples), and its per-pixel samples are heavy-tailed: on `shadow-quad` the secondary boundary term (edges in "
-    "front of the area light seen from the moving bunny) and the interior term along the bunny's outline, on "
-    "`direct` mostly the interior term (grazing hits on the smooth moving mesh), on `spot-mirror` the boundary term "
-    "(`docs/design-notes.md`, \"Sampling for derivatives, measured\"), while FD with common random numbers "
-    "subtracts two almost equal renders of a scene that is smooth in θ. FD's weaknesses are elsewhere: 2k renders "
-    "for k parameters, and a step per scene (`docs/gradient-checks.md`, \"The FD step at pixel scale\").")
+    "FD at the reference's own step (column `fd (ref. step)`) shares the reference's step bias, which no other "
+    "method does, so its error is understated by up to that bias. Why FD at a good step still wins on "
+    "`spot-mirror` and `shadow-quad`, measured on 2026-11-23 (`python3 tools/bench/grad_cost.py --perf`, 256², "
+    "16 spp, 2 threads): `grad` costs 11.9× (spot-mirror), 15.0× (shadow-quad) and 7.9× (direct) `render` per "
+    "sample, the boundary term 81–87 % of it, mostly node importance (LTC polygon integrals, clipping, the box's "
+    "outline, the rejection tests), 40–48 % of its traversals contributing nothing; Embree takes 6 %, 19 % and 13 % "
+    "of the samples. And its per-pixel samples are heavy-tailed: on `shadow-quad` the secondary boundary term "
+    "(edges in front of the area light seen from the moving bunny) and the interior term along the bunny's "
+    "outline, on `spot-mirror` the boundary term (`docs/design-notes.md`, \"Sampling for derivatives, "
+    "measured\"), while FD with common random numbers subtracts two almost equal renders of a scene that is "
+    "smooth in θ. Where the quadric method wins: `direct`, where FD at a step small enough not to blur Spot's "
+    "outline is noisy (the quadric method's interior tails there were cut by the defensive mixture for "
+    "derivative paths, `docs/design-notes.md`), and with several parameters (`shadow-quad` with eight, where FD "
+    "pays 16 renders per sample). FD's weaknesses: 2k renders for k "
+    "parameters, and a step per scene (`docs/gradient-checks.md`, \"The FD step at pixel scale\").")
 FD_REF = "fd (ref. step)"  # FD at the reference's step, where the step study chose one below h0
 
 
