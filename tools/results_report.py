@@ -118,6 +118,12 @@ def compare_fd_at_reference_step(args, scene, kset, res, budgets, entry):
     return rows
 
 
+def largest_budget_rows(res_json):
+    """A comparison's rows at its largest budget that have a relative MSE, by method."""
+    last = max(res_json["targets"])
+    return {r["method"]: r for r in res_json["rows"] if r["target"] == last and r["rel_mse"] is not None}
+
+
 def copy_charts(d, name):
     """Copies a comparison's charts and data into docs/images/compare/NAME/."""
     dst = os.path.join(ROOT, "docs", "images", "compare", name)
@@ -163,7 +169,7 @@ def reference_text(entry, res_json):
                      "and `shadow-quad` the excess of h0 over h0/8 was 0.51 and 0.80 × the mean square at 256 spp); its step bias is not "
                      "known, and FD at the same step shares it, so FD's error here is understated. ")
     last = max(res_json["targets"])
-    best = min((r["rel_mse"] for r in res_json["rows"] if r["target"] == last and r["rel_mse"]), default=float("nan"))
+    best = min((r["rel_mse"] for r in largest_budget_rows(res_json).values() if r["rel_mse"]), default=float("nan"))
     floor = entry["rel_noise_floor"]
     ok = floor <= 0.1 * best
     qc = entry["quadric_check"]
@@ -201,10 +207,8 @@ def targets_text(results):
              "methods' own error); equal time, so a ratio is an efficiency ratio.", "",
              "| scene | k | best FD / quadric | vsphere / quadric | uniform / quadric | target |", "|---|---|---|---|---|---|"]
     for (scene, kset), (entry, res) in results.items():
-        last = max(res["targets"])
         floor = entry["rel_noise_floor"]
-        own = {r["method"]: max(r["rel_mse"] - floor, 1e-12) for r in res["rows"]
-               if r["target"] == last and r["rel_mse"] is not None}
+        own = {m: max(r["rel_mse"] - floor, 1e-12) for m, r in largest_budget_rows(res).items()}
         q = own.get("quadric")
         if not q:
             continue
@@ -217,8 +221,7 @@ def targets_text(results):
     old_refs = any(not per_pixel_study(entry) for entry, _ in results.values())
     steps = []
     for (scene, kset), (entry, res) in results.items():
-        last = max(res["targets"])
-        rel = {r["method"]: r["rel_mse"] for r in res["rows"] if r["target"] == last and r["rel_mse"] is not None}
+        rel = {m: r["rel_mse"] for m, r in largest_budget_rows(res).items()}
         if "fd" in rel and FD_REF in rel:
             steps.append(f"{scene}{' (k = 8)' if len(entry['params']) > 1 else ''} {rel['fd']:.3g} at h0, "
                          f"{rel[FD_REF]:.3g} at h0·{entry['step_study']['chosen_factor']:g}")
@@ -287,12 +290,10 @@ def main():
               "| scene | k | " + " | ".join(METHODS + [FD_REF]) + " | best fd / quadric | vsphere / quadric | uniform / quadric "
               "| ref. floor |", "|---" * (len(METHODS) + 7) + "|"]
     for (scene, kset), (entry, res) in results.items():
-        last = max(res["targets"])
-        rel = {r["method"]: r for r in res["rows"] if r["target"] == last}
-        cells = [f"{rel[m]['rel_mse']:.3g} ({rel[m]['spp']} spp)" if m in rel and rel[m]["rel_mse"] is not None
-                 else "–" for m in METHODS + [FD_REF]]
+        rel = largest_budget_rows(res)
+        cells = [f"{rel[m]['rel_mse']:.3g} ({rel[m]['spp']} spp)" if m in rel else "–" for m in METHODS + [FD_REF]]
         q = rel.get("quadric", {}).get("rel_mse")
-        ratio = lambda m: f"{rel[m]['rel_mse'] / q:.3g}" if q and m in rel and rel[m]["rel_mse"] is not None else "–"
+        ratio = lambda m: f"{rel[m]['rel_mse'] / q:.3g}" if q and m in rel else "–"
         best_fd = min(("fd", FD_REF), key=lambda m: rel[m]["rel_mse"] if m in rel and rel[m]["rel_mse"] else 1e300)
         lines.append(f"| {scene} | {len(entry['params'])} | " + " | ".join(cells) +
                      f" | {ratio(best_fd)} | {ratio('vsphere')} | {ratio('uniform')} | {entry['rel_noise_floor']:.3g} |")
