@@ -139,6 +139,17 @@ def write_index(index, path):
     os.replace(path + ".tmp", path)
 
 
+# A reference can judge an error when its relative noise floor is at most this share of it (the issue's
+# "noise floor <= 1/10 of the errors compared"); results_report and stability_study flag the rest.
+JUDGE_FLOOR_SHARE = 0.1
+
+
+def floor_can_judge(floor, rel_mse):
+    """Whether a reference with relative noise floor `floor` can judge a relative MSE `rel_mse` (both
+    relative to the reference's mean square): floor <= JUDGE_FLOOR_SHARE * rel_mse."""
+    return floor <= JUDGE_FLOOR_SHARE * rel_mse
+
+
 def bias_upper_bound(excess, se):
     """What the step study holds against --max-step-bias: |excess| + 2 s.e. (97.7 % upper bound of a
     quantity >= 0; an estimate far below 0 means an s.e. made too small by heavy tails, see step_study)."""

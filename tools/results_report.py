@@ -24,7 +24,7 @@ import subprocess
 import sys
 import time
 
-from references import bias_upper_bound
+from references import bias_upper_bound, floor_can_judge
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SCENES = [("spot-mirror", "spot:translate:0,1,0"), ("shadow-quad", "object:translate:0,1,0"),
@@ -172,7 +172,7 @@ def reference_text(entry, res_json):
     last = max(res_json["targets"])
     best = min((r["rel_mse"] for r in largest_budget_rows(res_json).values() if r["rel_mse"]), default=float("nan"))
     floor = entry["rel_noise_floor"]
-    ok = floor <= 0.1 * best
+    ok = floor_can_judge(floor, best)
     qc = entry["quadric_check"]
     return (f"Reference: FD with common random numbers, {entry['spp']} spp, step h = "
             f"{', '.join(f'{h:.4g}' for h in entry['steps'])} (h0·{study['chosen_factor']:g}), "
@@ -210,7 +210,7 @@ def ratio_cell(a, b, floor):
     a >= b and <= a / b when a < b; the floor-subtracted estimate follows in parentheses.
     Returns the cell's text, e.g. "3.15", "≥ 5.5 (est. 391)", "≤ 0.8 (est. 0.4)"."""
     own = max(a - floor, 1e-12) / max(b - floor, 1e-12)
-    if floor <= 0.1 * min(a, b):
+    if floor_can_judge(floor, min(a, b)):
         return f"{own:.3g}"
     raw = a / b
     return f"{'≥' if raw >= 1 else '≤'} {raw:.3g} (est. {own:.3g})"

@@ -24,7 +24,7 @@ import subprocess
 import sys
 import time
 
-from references import default_steps
+from references import JUDGE_FLOOR_SHARE, default_steps
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 METHODS = ["quadric", "quadric-box", "vsphere", "uniform", "fd"]
@@ -90,12 +90,12 @@ def cell(row):
 
 
 def floor_cell(per):
-    """The reference's relative noise floor over the best relative MSE, flagged when above 0.1."""
+    """The reference's relative noise floor over the best relative MSE, flagged when above JUDGE_FLOOR_SHARE."""
     rows = [r for r in per.values() if "error" not in r and r.get("rel_mse")]
     if not rows or rows[0].get("rel_noise_floor") is None:
         return "–"
     ratio = rows[0]["rel_noise_floor"] / min(r["rel_mse"] for r in rows)
-    return f"{ratio:.2f}" + ("" if ratio <= 0.1 else " **high**")
+    return f"{ratio:.2f}" + ("" if ratio <= JUDGE_FLOOR_SHARE else " **high**")
 
 
 def write_report(args, table, elapsed, img_root):
