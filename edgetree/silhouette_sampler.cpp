@@ -228,6 +228,23 @@ void dot_range(double x, double s, double co, double& lo, double& hi) {
   lo = x <= -co ? -1.0 : x * co - t * s;
 }
 
+/// The radiance seen over the bounding cone (unit axis, sin and cos of its half-angle s, co): the
+/// environment's plus each light's times the fraction of the cone on the inner side of each of
+/// its 4 side planes (P(X > 0) with X = side normal . w uniform on its range, multiplied).
+double cone_radiance(const Prepared& pq, const Vec3& axis, double s, double co) {
+  double radiance = pq.q.env_weight;
+  for (const LocalLight& light : pq.lights) {
+    double fraction = 1.0;
+    for (int i = 0; i < 4 && fraction > 0; ++i) {
+      double lo, hi;
+      dot_range(light.sides[size_t(i)].dot(axis), s, co, lo, hi);
+      fraction *= lo >= 0 ? 1.0 : hi <= 0 ? 0.0 : hi / (hi - lo);
+    }
+    radiance += light.weight * fraction;
+  }
+  return radiance;
+}
+
 /// fbar of node_weight for a box far from p and the cosine lobe, from the box's bounding cone
 /// (axis d = box centre - p, local frame after to_local; sin alpha = s = half diagonal /
 /// |d| < 1) instead of its outline: with X = n . w taken as uniform on its range over the cone,
@@ -243,16 +260,50 @@ double cone_fbar(const Prepared& pq, const Vec3& axis, double s) {
   dot_range(axis.z(), s, co, lo, hi);
   if (!(hi > 0)) return 0.0;
   const double mean_cos = lo >= 0 ? 0.5 * (lo + hi) : hi * hi / (2.0 * (hi - lo));
-  double radiance = q.env_weight;
-  for (const LocalLight& light : pq.lights) {
-    double fraction = 1.0;
-    for (int i = 0; i < 4 && fraction > 0; ++i) {
-      dot_range(light.sides[size_t(i)].dot(axis), s, co, lo, hi);
-      fraction *= lo >= 0 ? 1.0 : hi <= 0 ? 0.0 : hi / (hi - lo);
-    }
-    radiance += light.weight * fraction;
-  }
-  return q.ltc.norm * mean_cos / kPi * radiance;
+  return q.ltc.norm * mean_cos / kPi * cone_radiance(pq, axis, s, co);
+}
+
+/// Largest |dt|^2 + |db|^2 (see glossy_cone_fbar) for which a cone's image in the LTC's cosine
+/// domain is taken as an ellipse: images whose largest radius may reach 90 degrees take the exact
+/// integral. Measured (spot-mirror, 128², 8 seeds of 32 spp, the same seeds both ways, against
+/// the exact form): 0.5: time -12 %, variance +3 %; 1: -14 %, -6 %; always the cone: -28 %, +33 %.
+constexpr double kGlossyConeImage = 1.0;
+
+/// fbar of node_weight for a box far from p and a glossy lobe, from the box's bounding cone
+/// (unit axis in the local frame, s = sin of its half-angle, as for cone_fbar), or -1 where the
+/// cone's image in the LTC's cosine domain is too wide for the estimate (kGlossyConeImage): then
+/// the caller takes the exact integral over the box's outline.
+/// The LTC integral over the cone is the Lambert form factor of its image under M_inv ([LTC]
+/// Eq. 11); the image of the cone's rim is nearly the spherical ellipse c + cos(phi) dt +
+/// sin(phi) db, with dt, db the half chords between the images of two pairs of opposite rim
+/// directions (conjugate semi-diameters, exact for a linear map) and c their normalised mean.
+/// Its form factor is taken as its area / pi, |dt x db|, times the mean of max(0, z) over it,
+/// with z uniform on its range c.z -+ sqrt(dt.z^2 + db.z^2) where the range crosses the horizon
+/// (exact for a cap above the horizon), capped at 1; times the fraction of the cone above the
+/// shading horizon (as cone_fbar takes it), norm and cone_radiance, divided by the cone's solid
+/// angle 2 pi (1 - cos alpha). No outline, clipping or angles. Zero only where the image lies
+/// wholly below z = 0 or the cone below the shading horizon, i.e. where the exact fbar is.
+double glossy_cone_fbar(const Prepared& pq, const Vec3& axis, double s) {
+  const SilhouetteQuery& q = pq.q;
+  const double co = std::sqrt(1.0 - s * s);
+  double lo, hi;
+  dot_range(axis.z(), s, co, lo, hi);  // the shading normal over the cone
+  if (!(hi > 0)) return 0.0;
+  const double above = lo >= 0 ? 1.0 : hi / (hi - lo);
+  const Vec3 t = axis.unitOrthogonal(), b = axis.cross(t);
+  const Mat3& M = q.ltc.M_inv;
+  const Vec3 ma = M * (co * axis), mt = M * (s * t), mb = M * (s * b);
+  const Vec3 r0 = (ma + mt).normalized(), r1 = (ma - mt).normalized(), r2 = (ma + mb).normalized(),
+             r3 = (ma - mb).normalized();
+  const Vec3 dt = 0.5 * (r0 - r1), db = 0.5 * (r2 - r3);
+  if (!(dt.squaredNorm() + db.squaredNorm() < kGlossyConeImage)) return -1.0;
+  const double cz = (r0 + r1 + r2 + r3).normalized().z();
+  const double h = std::sqrt(dt.z() * dt.z() + db.z() * db.z());
+  if (!(cz + h > 0)) return 0.0;
+  const double mean_pos = cz - h >= 0 ? cz : (cz + h) * (cz + h) / (4.0 * h);
+  const double mass = std::min(1.0, dt.cross(db).norm() * mean_pos);
+  const double omega = 2.0 * kPi * s * s / (1.0 + co);  // 2 pi (1 - co) without cancellation
+  return q.ltc.norm * above * mass / omega * cone_radiance(pq, axis, s, co);
 }
 
 NodeWeight node_weight(const ForestNode& node, const Prepared& pq) {
@@ -263,10 +314,14 @@ NodeWeight node_weight(const ForestNode& node, const Prepared& pq) {
   const double h2 = std::max(d2, half_diag * half_diag);
   NodeWeight w;
   w.defensive = h2 > 0 ? node.lw / h2 : node.lw;
-  if (pq.cosine_lobe && half_diag * half_diag < kConeImportanceSin * kConeImportanceSin * d2) {
+  if (half_diag * half_diag < kConeImportanceSin * kConeImportanceSin * d2) {
     const double d = std::sqrt(d2);
-    w.importance = w.defensive * cone_fbar(pq, q.frame.to_local((c - q.p) / d), half_diag / d);
-    return w;
+    const Vec3 axis = q.frame.to_local((c - q.p) / d);
+    const double fbar = pq.cosine_lobe ? cone_fbar(pq, axis, half_diag / d) : glossy_cone_fbar(pq, axis, half_diag / d);
+    if (fbar >= 0) {
+      w.importance = w.defensive * fbar;
+      return w;
+    }
   }
   const BoxSilhouette sil = box_silhouette_polygon(node.bp, q.p);
   double fbar = 0;

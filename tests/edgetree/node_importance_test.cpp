@@ -18,14 +18,20 @@
 ///   below 20. The ratio's tail is over-estimation, where only a sliver of the box's cone sees
 ///   the light or the upper hemisphere: the cone covers more than the box, and X = n . w is taken
 ///   as uniform on its range where a cap's is concentrated near the middle.
-/// Glossy lobes (qsil's GGX LTC, alpha log-uniform in [0.01, 0.5], random view directions) keep
-/// the exact form (outline polygon, clipping, LTC integrals), judged by the same oracle with the
-/// LTC's density (ltc_eval) as f_s cos: support as above; within 3 % (measured 1.0 %) for small
-/// boxes wholly above the horizon, wholly inside the LTC's support ((M⁻¹w).z > 0.05 |M⁻¹w|) and
-/// whose bounding cone is wholly in or out of each light, where the oracle's standard error is
-/// below 1 %; the ratio's quantiles (measured 1 % 0.73, 5 % 0.91, median 1.00, 95 % 1.11, 99 %
-/// 2.06; the tails are the oracle's own noise on narrow lobes) within [0.5, 4] at 1 % and 99 %,
-/// [0.8, 1.3] at 5 % and 95 %, median in [0.95, 1.05].
+/// Glossy lobes (qsil's GGX LTC, alpha log-uniform in [0.01, 0.5], random view directions) take
+/// the bounding-cone form too where the cone's image in the LTC's cosine domain is narrow
+/// (glossy_cone_fbar: the image taken as an ellipse from 4 rim directions; else the exact form:
+/// outline polygon, clipping, LTC integrals), judged by the same oracle with the LTC's density
+/// (ltc_eval) as f_s cos: support as above; within 3 % (measured 2.4 %; the exact form alone
+/// 1.0 %) for small boxes wholly above the horizon, wholly inside the LTC's support ((M⁻¹w).z >
+/// 0.05 |M⁻¹w|) and whose bounding cone is wholly in or out of each light, where the oracle's
+/// standard error is below 1 %; the ratio's quantiles (measured 1 % 0.36, 5 % 0.63, median 1.00,
+/// 95 % 4.2, 99 % 27; the exact form alone 0.73, 0.91, 1.00, 1.11, 2.06) within bounds with
+/// margin: above 0.2 at 1 %, above 0.45 at 5 %, median in [0.9, 1.1], below 8 at 95 %, below 60
+/// at 99 %. The tails are the cone's, not the lobe's: the cone covers more than the box (up to
+/// 11:1 here), so a box beside a lobe's peak or the LTC's support boundary that its cone reaches
+/// is over-estimated, and a box crossing the support is taken as uniform in z where its mass
+/// lies near one end.
 /// Fixed seeds; 3000 random boxes per test, 4000 cone directions each.
 
 #include "chi2.h"
@@ -208,12 +214,12 @@ TEST(NodeImportanceTest, FarBoxesUnderGlossyLobesFollowTheirIntegrand) {
   std::printf("glossy fbar / oracle (%zu): 1 %% %.3f, 5 %% %.3f, median %.3f, 95 %% %.3f, 99 %% %.3f; worst small-box "
               "error %.4f over %d cases\n",
               t.all_ratios.size(), q(0.01), q(0.05), q(0.5), q(0.95), q(0.99), t.worst_small, t.accurate_cases);
-  EXPECT_GT(q(0.01), 0.5);
-  EXPECT_GT(q(0.05), 0.8);
-  EXPECT_GT(q(0.5), 0.95);
-  EXPECT_LT(q(0.5), 1.05);
-  EXPECT_LT(q(0.95), 1.3);
-  EXPECT_LT(q(0.99), 4.0);
+  EXPECT_GT(q(0.01), 0.2);
+  EXPECT_GT(q(0.05), 0.45);
+  EXPECT_GT(q(0.5), 0.9);
+  EXPECT_LT(q(0.5), 1.1);
+  EXPECT_LT(q(0.95), 8.0);
+  EXPECT_LT(q(0.99), 60.0);
 }
 
 }  // namespace

@@ -186,7 +186,8 @@ SilhouetteSample sample_on_edge(const ForestEdge& e, double pmf, const Silhouett
                                 int rejection_tests = 0);
 
 /// Boxes seen under a bounding cone of sin(half-angle) = half diagonal / distance below this are
-/// weighed by the cone (see NodeWeight) when the query's LTC is the cosine lobe, and edges whose
+/// weighed by the cone (see NodeWeight; under a glossy lobe where the cone's image is narrow),
+/// and, when the query's LTC is the cosine lobe, edges whose
 /// half length / distance is below it by EdgeMixture::far_total (see leaf_edge_weight). The value
 /// and its measurement (0.7 and 0.9 cost error for little time): docs/architecture.md §5
 /// "Importance".
@@ -194,15 +195,19 @@ inline constexpr double kConeImportanceSin = 0.5;
 
 /// Importance I and defensive weight G of a node for the query (see the file comment).
 /// fbar is the mean of f_s cos times the radiance over the box's solid angle: exactly (LTC
-/// integrals over the box's outline, clipped by each light's pyramid) for near boxes and glossy
-/// lobes; for a box far from p (half diagonal < kConeImportanceSin × distance of its centre)
-/// under the cosine lobe, from its bounding cone instead (no outline, clipping or angles): with
-/// X = n . w taken as uniform on its exact range over the cone, E[max(0, X)]/π for n = the
-/// shading normal, times the environment's radiance plus each light's times the product over
-/// its 4 side planes of P(X > 0). Zero only where the cone misses the upper hemisphere or (for a
-/// light's term) a side plane, hence only where the exact fbar is zero; within 3 % of it for
-/// boxes under sin α ≤ 0.05 wholly above the horizon and wholly in or out of each light
-/// (tests/edgetree/node_importance_test.cpp).
+/// integrals over the box's outline, clipped by each light's pyramid) for near boxes; for a box
+/// far from p (half diagonal < kConeImportanceSin × distance of its centre), from its bounding
+/// cone instead (no outline, clipping or angles). Under the cosine lobe: with X = n . w taken as
+/// uniform on its exact range over the cone, E[max(0, X)]/π for n = the shading normal, times
+/// the environment's radiance plus each light's times the product over its 4 side planes of
+/// P(X > 0). Under a glossy lobe: the LTC integral over the cone is the form factor of its image
+/// under M⁻¹ ([LTC] Eq. 11), taken as a spherical ellipse from the images of 4 rim directions
+/// (area / π times the mean of max(0, z) over its z range), times the fraction of the cone above
+/// the horizon and the same radiance; where that image may reach 90° from its centre (a lobe
+/// narrow against the cone) the exact form is taken. Zero only where the cone misses the upper
+/// hemisphere, the image the LTC's support or (for a light's term) a side plane, hence only where
+/// the exact fbar is zero; within 3 % of it for boxes under sin α ≤ 0.05 wholly above the
+/// horizon and wholly in or out of each light (tests/edgetree/node_importance_test.cpp).
 struct NodeWeight {
   double importance = 0;
   double defensive = 0;
