@@ -3,6 +3,8 @@
 
 #include "edgetree/edge_mixture.h"
 
+#include "edgetree/positive_part.h"
+
 #include <algorithm>
 #include <cmath>
 
@@ -97,10 +99,7 @@ double positive_part_integral(double a, double b, double lo, double hi) {
   hi = std::min(hi, 1.0);
   if (!(hi > lo)) return 0.0;
   const double fa = a + lo * (b - a), fb = a + hi * (b - a);
-  if (fa >= 0 && fb >= 0) return 0.5 * (fa + fb) * (hi - lo);
-  if (fa <= 0 && fb <= 0) return 0.0;
-  const double peak = std::max(fa, fb);  // one end positive: the triangle up to the zero crossing
-  return 0.5 * peak * peak / std::abs(fb - fa) * (hi - lo);
+  return mean_positive_part(std::min(fa, fb), std::max(fa, fb)) * (hi - lo);
 }
 
 }  // namespace

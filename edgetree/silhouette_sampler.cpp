@@ -5,6 +5,7 @@
 
 #include "edgetree/discrete_choice.h"
 #include "edgetree/edge_mixture.h"
+#include "edgetree/positive_part.h"
 
 #include <array>
 #include <cmath>
@@ -238,7 +239,7 @@ double cone_radiance(const Prepared& pq, const Vec3& axis, double s, double co) 
     for (int i = 0; i < 4 && fraction > 0; ++i) {
       double lo, hi;
       dot_range(light.sides[size_t(i)].dot(axis), s, co, lo, hi);
-      fraction *= lo >= 0 ? 1.0 : hi <= 0 ? 0.0 : hi / (hi - lo);
+      fraction *= positive_fraction(lo, hi);
     }
     radiance += light.weight * fraction;
   }
@@ -259,8 +260,7 @@ double cone_fbar(const Prepared& pq, const Vec3& axis, double s) {
   double lo, hi;
   dot_range(axis.z(), s, co, lo, hi);
   if (!(hi > 0)) return 0.0;
-  const double mean_cos = lo >= 0 ? 0.5 * (lo + hi) : hi * hi / (2.0 * (hi - lo));
-  return q.ltc.norm * mean_cos / kPi * cone_radiance(pq, axis, s, co);
+  return q.ltc.norm * mean_positive_part(lo, hi) / kPi * cone_radiance(pq, axis, s, co);
 }
 
 /// Largest |dt|^2 + |db|^2 (see glossy_cone_fbar) for which a cone's image in the LTC's cosine
@@ -289,7 +289,7 @@ double glossy_cone_fbar(const Prepared& pq, const Vec3& axis, double s) {
   double lo, hi;
   dot_range(axis.z(), s, co, lo, hi);  // the shading normal over the cone
   if (!(hi > 0)) return 0.0;
-  const double above = lo >= 0 ? 1.0 : hi / (hi - lo);
+  const double above = positive_fraction(lo, hi);
   const Vec3 t = axis.unitOrthogonal(), b = axis.cross(t);
   const Mat3& M = q.ltc.M_inv;
   const Vec3 ma = M * (co * axis), mt = M * (s * t), mb = M * (s * b);
@@ -300,8 +300,7 @@ double glossy_cone_fbar(const Prepared& pq, const Vec3& axis, double s) {
   const double cz = (r0 + r1 + r2 + r3).normalized().z();
   const double h = std::sqrt(dt.z() * dt.z() + db.z() * db.z());
   if (!(cz + h > 0)) return 0.0;
-  const double mean_pos = cz - h >= 0 ? cz : (cz + h) * (cz + h) / (4.0 * h);
-  const double mass = std::min(1.0, dt.cross(db).norm() * mean_pos);
+  const double mass = std::min(1.0, dt.cross(db).norm() * mean_positive_part(cz - h, cz + h));
   const double omega = 2.0 * kPi * s * s / (1.0 + co);  // 2 pi (1 - co) without cancellation
   return q.ltc.norm * above * mass / omega * cone_radiance(pq, axis, s, co);
 }
