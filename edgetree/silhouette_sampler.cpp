@@ -281,8 +281,10 @@ constexpr double kGlossyConeImage = 1.0;
 /// with z uniform on its range c.z -+ sqrt(dt.z^2 + db.z^2) where the range crosses the horizon
 /// (exact for a cap above the horizon), capped at 1; times the fraction of the cone above the
 /// shading horizon (as cone_fbar takes it), norm and cone_radiance, divided by the cone's solid
-/// angle 2 pi (1 - cos alpha). No outline, clipping or angles. Zero only where the image lies
-/// wholly below z = 0 or the cone below the shading horizon, i.e. where the exact fbar is.
+/// angle 2 pi (1 - cos alpha). No outline, clipping or angles. Zero where the cone lies below
+/// the shading horizon (exactly, as for cone_fbar) or the ellipse's z range below 0, which is
+/// the image's up to the ellipse approximation (node_importance_test found no box with a
+/// positive integrand and zero importance; the defensive share of every choice covers any).
 double glossy_cone_fbar(const Prepared& pq, const Vec3& axis, double s) {
   const SilhouetteQuery& q = pq.q;
   const double co = std::sqrt(1.0 - s * s);

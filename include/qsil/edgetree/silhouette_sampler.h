@@ -205,9 +205,11 @@ inline constexpr double kConeImportanceSin = 0.5;
 /// (area / π times the mean of max(0, z) over its z range), times the fraction of the cone above
 /// the horizon and the same radiance; where that image may reach 90° from its centre (a lobe
 /// narrow against the cone) the exact form is taken. Zero only where the cone misses the upper
-/// hemisphere, the image the LTC's support or (for a light's term) a side plane, hence only where
-/// the exact fbar is zero; within 3 % of it for boxes under sin α ≤ 0.05 wholly above the
-/// horizon and wholly in or out of each light (tests/edgetree/node_importance_test.cpp).
+/// hemisphere or (for a light's term) a side plane, or (glossy) the ellipse's z range misses the
+/// LTC's support: only where the exact fbar is zero, up to the ellipse approximation (the test
+/// below finds no exception; the defensive share covers any); within 3 % of it for boxes under
+/// sin α ≤ 0.05 wholly above the horizon and wholly in or out of each light
+/// (tests/edgetree/node_importance_test.cpp).
 struct NodeWeight {
   double importance = 0;
   double defensive = 0;
