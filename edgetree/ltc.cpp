@@ -113,6 +113,30 @@ LTC ltc_ggx(double alpha, const Vec3& wo_local) {
   return ltc;
 }
 
+LTCCone ltc_core_cone(const LTC& ltc, double mass) {
+  LTCCone cone;
+  const Mat3 M = ltc.M_inv.inverse();
+  const Vec3 axis = M.col(2);
+  if (!(axis.squaredNorm() > 0) || !axis.allFinite()) return cone;
+  cone.axis = axis.normalized();
+  const double s = std::sqrt(std::clamp(mass, 0.0, 1.0)), c = std::sqrt(std::max(0.0, 1.0 - mass));
+  // Rim directions at multiples of 2 pi / 16: (cos, sin) of 0, pi/8, .., 7 pi/8; the other eight
+  // are their negatives.
+  static constexpr double kCos[8] = {1.0, 0.92387953251128674,  0.70710678118654757,  0.38268343236508984,
+                                     0.0, -0.38268343236508984, -0.70710678118654757, -0.92387953251128674};
+  static constexpr double kSin[8] = {0.0, 0.38268343236508978, 0.70710678118654746, 0.92387953251128674,
+                                     1.0, 0.92387953251128674, 0.70710678118654757, 0.38268343236508984};
+  const Vec3 centre = c * axis;  // M (0, 0, c)
+  double lowest = 1.0;
+  for (int i = 0; i < 8; ++i) {
+    const Vec3 side = s * (kCos[i] * M.col(0) + kSin[i] * M.col(1));
+    lowest =
+        std::min({lowest, (centre + side).normalized().dot(cone.axis), (centre - side).normalized().dot(cone.axis)});
+  }
+  cone.cos_half_angle = lowest;
+  return cone;
+}
+
 double ltc_eval(const LTC& ltc, const Vec3& w) {
   if (!(w.z() > 0.0)) return 0.0;
   const Vec3 wc = ltc.M_inv * w;

@@ -7,6 +7,7 @@
 #include "edgetree/edge_mixture.h"
 #include "edgetree/positive_part.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <span>
@@ -446,11 +447,48 @@ SilhouetteSample sample_silhouette(const EdgeForest& forest, const SilhouetteQue
   return descend(forest, pq, next, method, top.cand[size_t(i)], top.prob[size_t(i)], top.tests);
 }
 
+namespace {
+
+/// The contour set's point (see sample_silhouette_set): an edge of `contour` chosen as a leaf
+/// chooses among its edges, and t on it; no edge when the set is empty.
+SilhouetteSample sample_contour(std::span<const ForestEdge* const> contour, const Prepared& pq, double u_edge,
+                                double u_t) {
+  const int k = int(contour.size());
+  if (k == 0) return {};
+  thread_local std::vector<Candidate> cand;
+  thread_local std::vector<double> prob;
+  cand.clear();
+  for (const ForestEdge* e : contour) cand.push_back({-1, e, {}});
+  prob.resize(size_t(k));
+  if (k == 1) {
+    prob[0] = 1.0;
+  } else {
+    for (Candidate& c : cand) c.w = leaf_edge_weight(*c.edge, pq);
+    choice_probabilities(cand, k, prob.data());
+  }
+  const int i = choose(prob.data(), k, u_edge);
+  if (i < 0) return {};
+  return sample_on_edge(*cand[size_t(i)].edge, prob[size_t(i)], pq, u_t, 0);
+}
+
+}  // namespace
+
 void sample_silhouette_set(const EdgeForest& forest, const SilhouetteQuery& query, const std::function<double()>& next,
-                           Method method, SilhouetteSampleSet& out) {
+                           Method method, SilhouetteSampleSet& out, std::span<const ForestEdge* const> contour) {
   QSIL_DCHECK(uses_edge_forest(method));
   out.count = 0;
   const Prepared pq = prepare(query);
+  // Edges of the contour set are the contour strategy's: the others' points on them are dropped.
+  auto push = [&](const SilhouetteSample& s) {
+    if (s.edge && std::find(contour.begin(), contour.end(), s.edge) == contour.end()) out.push(s);
+  };
+  // ---- The contour set's point (its random numbers first: the traversal's stay as without it
+  // when the set is empty).
+  if (!contour.empty()) {
+    const double u_edge = next(), u_t = next();
+    const SilhouetteSample s = sample_contour(contour, pq, u_edge, u_t);
+    if (s.edge) out.push(s);
+  }
   thread_local TopLevel top;
   top_level(forest, pq, method, top);
   if (top.n == 0) return;
@@ -458,8 +496,7 @@ void sample_silhouette_set(const EdgeForest& forest, const SilhouetteQuery& quer
   const int n_split = split_indices(top, idx);
   for (int j = 0; j < n_split; ++j) {
     const int i = idx[size_t(j)];
-    const SilhouetteSample s = sample_on_edge(*top.cand[size_t(i)].edge, 1.0, pq, next(), 0);
-    if (s.edge) out.push(s);
+    push(sample_on_edge(*top.cand[size_t(i)].edge, 1.0, pq, next(), 0));
     top.prob[size_t(i)] = 0;
   }
   // The traversal chooses among the rest, its probabilities renormalised to sum to what they did.
@@ -470,8 +507,7 @@ void sample_silhouette_set(const EdgeForest& forest, const SilhouetteQuery& quer
     for (int i = 0; i < top.n; ++i) top.prob[size_t(i)] /= rest;
   const int i = choose(top.prob.data(), top.n, next());
   if (i < 0) return;
-  const SilhouetteSample s = descend(forest, pq, next, method, top.cand[size_t(i)], top.prob[size_t(i)], top.tests);
-  if (s.edge) out.push(s);
+  push(descend(forest, pq, next, method, top.cand[size_t(i)], top.prob[size_t(i)], top.tests));
 }
 
 std::vector<const ForestEdge*> split_edges(const EdgeForest& forest, const SilhouetteQuery& query, Method method,

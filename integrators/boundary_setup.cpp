@@ -25,7 +25,11 @@ BoundarySetup build_boundary_setup(const Scene& scene, Method method) {
     options.fit.fit_quadrics = uses_quadrics(method);
     auto forest = std::make_unique<edgetree::EdgeForest>(edgetree::EdgeForest::build(inputs, options));
     out.forest = forest.get();
-    out.sampler = std::make_unique<edgetree::QuadricEdgeSampler>(*forest, method);
+    // Contour sets for narrow lobes: the quadric method only (quadric-box is the paper's
+    // ablation, kept as the paper traverses).
+    if (method == Method::Quadric)
+      out.contours = std::make_unique<edgetree::ContourIndex>(edgetree::ContourIndex::build(inputs, *forest));
+    out.sampler = std::make_unique<edgetree::QuadricEdgeSampler>(*forest, method, out.contours.get());
     out.edges = std::move(forest);
   } else {
     out.edges = std::make_unique<edgetree::EdgeSet>(edgetree::EdgeSet::build(inputs));
@@ -85,6 +89,7 @@ void set_up_boundary_term(const Scene& scene, Method method, const SceneVelociti
                           SetupReport& setup) {
   boundary = build_boundary_setup(scene, method);
   bctx.sampler = boundary.sampler.get();
+  bctx.contours = boundary.contours.get();
   bctx.velocities = velocities;
   bctx.moving = moving;
   bctx.all.assign(scene.shapes.size(), true);

@@ -61,6 +61,7 @@
 /// their share of the integrand asks for. The split set depends on p alone (not on random
 /// numbers), so the partition is fixed for each query.
 
+#include "qsil/edgetree/contour_set.h"
 #include "qsil/edgetree/edge_forest.h"
 #include "qsil/edgetree/ltc.h"
 #include "qsil/edgetree/node_rejection.h"
@@ -69,6 +70,7 @@
 
 #include <array>
 #include <functional>
+#include <span>
 #include <vector>
 
 namespace qsil::edgetree {
@@ -103,6 +105,9 @@ struct SilhouetteQuery {
   /// Per parameter: 1 / the largest |dx/dtheta_k| over the scene's vertices (0: unused), so that
   /// parameters of different units weigh alike in velocity_factor.
   std::array<double, kMaxParameters> velocity_scale{};
+  /// The narrow lobe's core and the surfaces the probe rays meet, for the contour set
+  /// (contour_set.h, set_contour_probe); count 0 (the default): none.
+  ContourProbe probe;
 
   /// True when edges of shape `shape` may contribute (see `eligible`).
   bool is_eligible(int shape) const {
@@ -150,10 +155,11 @@ inline constexpr double kSplitShare = 1.0 / 32.0;
 inline constexpr int kMaxSplitEdges = 8;
 
 /// The edge points of one traversal with splitting: up to kMaxSplitEdges split edges (each with
-/// pdf = its density of t) and the traversal's own sample (possibly none). The boundary term at
-/// the query point is estimated by the sum over all of them of integrand / pdf.
+/// pdf = its density of t), the traversal's own sample (possibly none) and the contour set's
+/// (possibly none). The boundary term at the query point is estimated by the sum over all of
+/// them of integrand / pdf.
 struct SilhouetteSampleSet {
-  std::array<SilhouetteSample, kMaxSplitEdges + 1> samples{};
+  std::array<SilhouetteSample, kMaxSplitEdges + 2> samples{};
   int count = 0;
   void push(const SilhouetteSample& s) { samples[size_t(count++)] = s; }
 };
@@ -161,8 +167,17 @@ struct SilhouetteSampleSet {
 /// Samples with splitting (see the file comment): the split edges' points, then one sample of
 /// the traversal among the other candidates (omitted when it finds no edge). `next` as for
 /// sample_silhouette. Output in `out` (cleared first).
+///
+/// With a contour set (`contour`: distinct edges, discontinuities for the query point;
+/// contour_set.h), the boundary term splits into the sum over the set and the sum over every
+/// other edge: the traversal and the split edges estimate the second, their points on edges of
+/// the set are dropped (a zero contribution: those edges are the other strategy's), and one
+/// more point estimates the first, on an edge of the set chosen with probability
+///   P(e) = (1 - eps) I_e / sum I + eps G_e / sum G   (I, G: leaf_edge_weight; eps as a leaf's),
+/// its t from EdgeMixture. Each edge is covered by exactly one strategy with positive
+/// probability, so the sum stays unbiased whatever the set.
 void sample_silhouette_set(const EdgeForest& forest, const SilhouetteQuery& query, const std::function<double()>& next,
-                           Method method, SilhouetteSampleSet& out);
+                           Method method, SilhouetteSampleSet& out, std::span<const ForestEdge* const> contour = {});
 
 /// The edges sample_silhouette_set splits for the query and the sum of their top-level
 /// probabilities (the traversal's other choices are divided by 1 minus it). For tests and

@@ -37,6 +37,9 @@ namespace qsil {
 /// What the boundary term needs besides the path context.
 struct BoundaryContext {
   const edgetree::EdgeSampler* sampler = nullptr;  ///< the --boundary method's secondary edge sampler
+  /// The mesh adjacency of the sampler's contour sets (set_contour_probe), or null when the sampler
+  /// uses none.
+  const edgetree::ContourIndex* contours = nullptr;
   const SceneVelocities* velocities = nullptr;
   std::vector<bool> moving;  ///< shapes with non-zero velocity (eligible at a static p)
   std::vector<bool> all;     ///< every shape (eligible at a moving p)
@@ -220,20 +223,68 @@ bool edge_jump(const PathContext& ctx, const SceneVelocities& vel, const edgetre
                         });
 }
 
+/// The contour probe of a boundary query (SilhouetteQuery::probe, qsil/edgetree/contour_set.h):
+/// where q's LTC is glossy and its core cone (ltc_core_cone with kContourConeMass) is no wider
+/// than kContourMaxHalfAngle and meets an eligible shape's bounding sphere
+/// (ContourIndex::cone_meets_shapes), the cone in world coordinates and the first hits on
+/// eligible shapes of the ray from the shading point along its axis, or where that ray meets no eligible
+/// shape, of the kContourRingRays rays around it (each through back faces where its direction
+/// leaves below the surface, as every ray of the path tracer does). Returns the number of rays
+/// traced.
+template <class T>
+int set_contour_probe(const PathContext& ctx, const edgetree::ContourIndex& contours, const SurfaceInteraction<T>& si,
+                      const Vec3& wo_world, edgetree::SilhouetteQuery& q) {
+  q.probe = edgetree::ContourProbe{};
+  if (edgetree::is_cosine_lobe(q.ltc) || !(q.ltc.norm > 0)) return 0;
+  const edgetree::LTCCone cone = edgetree::ltc_core_cone(q.ltc, edgetree::kContourConeMass);
+  if (!(cone.cos_half_angle >= std::cos(edgetree::kContourMaxHalfAngle))) return 0;
+  q.probe.axis = q.frame.to_world(cone.axis).normalized();
+  q.probe.cos_half_angle = cone.cos_half_angle;
+  Mat3 to_local;
+  to_local << q.frame.s.transpose(), q.frame.t.transpose(), q.frame.n.transpose();
+  q.probe.to_cosine = q.ltc.M_inv * to_local;
+  q.probe.cos_core = std::sqrt(1.0 - edgetree::kContourConeMass);
+  if (!contours.cone_meets_shapes(q.p, q.probe.axis, q.probe.cos_half_angle, q.eligible)) return 0;
+  int rays = 0;
+  auto trace = [&](const Vec3& dir) {
+    IgnoreSet ignore;
+    ignore.through_back_faces = leaves_below(si, wo_world, dir);
+    const Vec3 origin = spawn_origin(si, dir);
+    ++rays;
+    const Hit h = ctx.tracer->intersect(origin, dir, kInf, ignore);
+    if (!h.valid() || !q.is_eligible(h.shape)) return;
+    q.probe.hits[size_t(q.probe.count++)] = {h.shape, h.triangle, Vec3(origin + h.t * dir), dir};
+  };
+  trace(q.probe.axis);
+  if (q.probe.count == 0) {
+    // A ring at a fraction of the cone's half-angle: the outline of what the lobe's edge sees.
+    const double half = std::acos(std::clamp(cone.cos_half_angle, -1.0, 1.0)) * edgetree::kContourRingAngle;
+    const Vec3 u0 = q.probe.axis.unitOrthogonal(), u1 = q.probe.axis.cross(u0);
+    const Vec3 centre = std::cos(half) * q.probe.axis;
+    for (int k = 0; k < edgetree::kContourRingRays; ++k) {
+      const Vec3 side = std::sin(half) * (edgetree::kContourRingCos[k] * u0 + edgetree::kContourRingSin[k] * u1);
+      trace((centre + side).normalized());
+    }
+  }
+  return rays;
+}
+
 /// The secondary boundary term's samples at one path vertex (shared by forward mode, BoundaryHook,
 /// and reverse mode, integrators/reverse.cpp): bctx.samples_per_vertex traversals of bctx.sampler
-/// for query `q` (set up by the caller: eligibility, velocities), drawing from `sampler`; for each
+/// for query `q` (set up by the caller: eligibility, velocities; the contour probe is added here
+/// when bctx.contours is set, set_contour_probe), drawing from `sampler`; for each
 /// edge point with f_s != 0, `accept(edge, t, g)` decides before any ray whether it can contribute
 /// (edge_jump_with), and each contributing one is handed to `visit(edge, t, weight, g)` with
 /// weight = T f_s jump / (pdf samples_per_vertex), T the detached throughput (the vertex's
 /// derivative gains weight (g . v_t)). Counts traversals, zero traversals and thread time.
 template <class T, class Accept, class Visit>
 void for_each_boundary_sample(const PathContext& ctx, const BoundaryContext& bctx, Sampler& sampler,
-                              const SurfaceInteraction<T>& si, const ShadingPoint<T>& sp,
-                              const edgetree::SilhouetteQuery& q, const Vec3& wo_local, const Color& throughput,
-                              int seg, PathStats& stats, Accept&& accept, Visit&& visit) {
+                              const SurfaceInteraction<T>& si, const ShadingPoint<T>& sp, edgetree::SilhouetteQuery q,
+                              const Vec3& wo_local, const Color& throughput, int seg, PathStats& stats, Accept&& accept,
+                              Visit&& visit) {
   const auto t0 = std::chrono::steady_clock::now();
   const Vec3 wo_world = q.frame.to_world(wo_local);
+  if (bctx.contours) stats.rays += uint64_t(set_contour_probe(ctx, *bctx.contours, si, wo_world, q));
   edgetree::SilhouetteSampleSet set;
   for (int sample = 0; sample < bctx.samples_per_vertex; ++sample) {
     ++stats.boundary_traversals;

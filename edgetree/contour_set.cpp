@@ -1,0 +1,224 @@
+/// @file contour_set.cpp
+/// See qsil/edgetree/contour_set.h.
+
+#include "qsil/edgetree/contour_set.h"
+
+#include "qsil/edgetree/mesh_edges.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+
+namespace qsil::edgetree {
+
+double arc_max_cos(const Vec3& x0, const Vec3& x1, const Vec3& p, const Vec3& axis) {
+  const Vec3 w0 = x0 - p, w1 = x1 - p;
+  const double l0 = w0.norm(), l1 = w1.norm();
+  double best = std::max(l0 > 0 ? w0.dot(axis) / l0 : -1.0, l1 > 0 ? w1.dot(axis) / l1 : -1.0);
+  // The arc's directions span the plane of w0, w1; the direction of that plane closest to the axis
+  // is the axis projected onto it, which is on the arc when it lies between w0 and w1.
+  const Vec3 n = w0.cross(w1);
+  const double nn = n.squaredNorm();
+  if (!(nn > 0)) return best;
+  const Vec3 a = axis - (axis.dot(n) / nn) * n;
+  const double la = a.norm();
+  if (!(la > 0)) return best;
+  if (w0.cross(a).dot(n) >= 0 && a.cross(w1).dot(n) >= 0) best = std::max(best, a.dot(axis) / la);
+  return best;
+}
+
+bool ContourProbe::arc_in_core(const Vec3& x0, const Vec3& x1, const Vec3& p) const {
+  // A linear map takes the arc (the central projection of the segment) to the arc of the mapped
+  // segment, so the test is the circular one in the cosine domain.
+  return arc_max_cos(to_cosine * (x0 - p), to_cosine * (x1 - p), Vec3::Zero(), Vec3::UnitZ()) >= cos_core;
+}
+
+ContourIndex ContourIndex::build(std::span<const ForestShapeInput> shapes, const EdgeSet& set) {
+  ContourIndex index;
+  int max_shape = -1;
+  for (const ForestShapeInput& s : shapes) max_shape = std::max(max_shape, s.shape);
+  index.meshes_.resize(size_t(max_shape + 1));
+  for (const ForestShapeInput& in : shapes) {
+    if (!in.mesh || in.mesh->num_triangles() == 0) continue;
+    const TriangleMesh& tm = *in.mesh;
+    const MeshEdgeSet mes = build_mesh_edges(tm, in.shape, EdgeOptions{true});
+    Mesh& m = index.meshes_[size_t(in.shape)];
+    m.mesh = &tm;
+    const Box3 box = tm.bounds();
+    m.centre = box.center();
+    for (const Vec3& v : tm.positions) m.radius = std::max(m.radius, (v - m.centre).norm());
+    m.first_edge = index.total_edges_;
+    index.total_edges_ += int(mes.edges.size());
+    m.planes = mes.face_planes;
+    m.edges.resize(mes.edges.size());
+    for (size_t i = 0; i < mes.edges.size(); ++i) {
+      const MeshEdge& e = mes.edges[i];
+      m.edges[i].v0 = e.v0;
+      m.edges[i].v1 = e.v1;
+      m.edges[i].f0 = e.f0;
+      m.edges[i].f1 = e.f1;
+      m.edges[i].always_discontinuous =
+          e.cls == EdgeClass::Boundary || e.cls == EdgeClass::NonManifold || e.cls == EdgeClass::Inconsistent;
+    }
+    m.face_edges.resize(size_t(tm.num_triangles()));
+    std::vector<int> degree(tm.positions.size() + 1, 0);
+    for (int f = 0; f < tm.num_triangles(); ++f)
+      for (int k = 0; k < 3; ++k)
+        m.face_edges[size_t(f)][size_t(k)] =
+            index.find_edge(m, tm.triangles[size_t(f)][k], tm.triangles[size_t(f)][(k + 1) % 3]);
+    for (const Edge& e : m.edges) {
+      ++degree[size_t(e.v0)];
+      ++degree[size_t(e.v1)];
+    }
+    m.vertex_begin.assign(tm.positions.size() + 1, 0);
+    for (size_t v = 0; v < tm.positions.size(); ++v) m.vertex_begin[v + 1] = m.vertex_begin[v] + degree[v];
+    m.vertex_edges.resize(size_t(m.vertex_begin.back()));
+    std::vector<int> fill(m.vertex_begin.begin(), m.vertex_begin.end() - 1);
+    for (size_t i = 0; i < m.edges.size(); ++i) {
+      m.vertex_edges[size_t(fill[size_t(m.edges[i].v0)]++)] = int(i);
+      m.vertex_edges[size_t(fill[size_t(m.edges[i].v1)]++)] = int(i);
+    }
+  }
+  // Link every edge of the set to its mesh edge (one pass over the set).
+  for (const auto* arr : {&set.edges(), &set.always_edges()})
+    for (const ForestEdge& fe : *arr) {
+      if (fe.shape < 0 || fe.shape >= int(index.meshes_.size())) continue;
+      Mesh& m = index.meshes_[size_t(fe.shape)];
+      if (!m.mesh) continue;
+      const int i = index.find_edge(m, fe.v0, fe.v1);
+      if (i >= 0) m.edges[size_t(i)].entry = &fe;
+    }
+  return index;
+}
+
+int ContourIndex::find_edge(const Mesh& m, int a, int b) const {
+  const int lo = std::min(a, b), hi = std::max(a, b);
+  auto it = std::lower_bound(
+      m.edges.begin(), m.edges.end(), std::pair<int, int>(lo, hi),
+      [](const Edge& e, const std::pair<int, int>& k) { return e.v0 != k.first ? e.v0 < k.first : e.v1 < k.second; });
+  return (it != m.edges.end() && it->v0 == lo && it->v1 == hi) ? int(it - m.edges.begin()) : -1;
+}
+
+namespace {
+/// Walk directions: angles pi k / kContourWalks, k = 0 .. 2 kContourWalks - 1.
+static_assert(kContourWalks == 4, "the tables below hold 8 directions");
+constexpr double kWalkCos[8] = {1.0,  0.70710678118654757,  0.0, -0.70710678118654757,
+                                -1.0, -0.70710678118654757, 0.0, 0.70710678118654757};
+constexpr double kWalkSin[8] = {0.0, 0.70710678118654757,  1.0,  0.70710678118654757,
+                                0.0, -0.70710678118654757, -1.0, -0.70710678118654757};
+}  // namespace
+
+void ContourIndex::contour_edges(const ContourProbe& probe, const Vec3& p, const std::vector<bool>* eligible,
+                                 std::vector<const ForestEdge*>& out) const {
+  out.clear();
+  const Vec4 ph(p.x(), p.y(), p.z(), 1.0);
+  auto indexed = [&](int shape) {
+    return shape >= 0 && shape < int(meshes_.size()) && meshes_[size_t(shape)].mesh &&
+           (!eligible || (shape < int(eligible->size()) && (*eligible)[size_t(shape)]));
+  };
+  // An edge where the facing changes (or that has no second face to walk to).
+  auto turns = [&](const Mesh& m, const Edge& e) {
+    return e.always_discontinuous || e.f1 < 0 ||
+           (m.planes[size_t(e.f0)].dot(ph) > 0) != (m.planes[size_t(e.f1)].dot(ph) > 0);
+  };
+
+  // ---- 1. From each hit, walks across the faces the planes through its ray cut, to the first
+  // silhouette.
+  thread_local std::vector<std::pair<int, int>> seeds;  // (shape, edge)
+  seeds.clear();
+  for (int h = 0; h < probe.count; ++h) {
+    const ContourHit& hit = probe.hits[size_t(h)];
+    if (!indexed(hit.shape)) continue;
+    const Mesh& m = meshes_[size_t(hit.shape)];
+    if (hit.triangle < 0 || hit.triangle >= int(m.face_edges.size())) continue;
+    const std::vector<Vec3>& x = m.mesh->positions;
+    const Vec3 u0 = hit.dir.unitOrthogonal(), u1 = hit.dir.cross(u0);
+    for (int k = 0; k < 2 * kContourWalks; ++k) {
+      const Vec3 u = kWalkCos[k] * u0 + kWalkSin[k] * u1;  // walk direction, across the ray
+      const Vec3 plane = hit.dir.cross(u);                 // normal of the walk's plane through p
+      int f = hit.triangle, from = -1;
+      for (int step = 0; step < kContourWalkSteps; ++step) {
+        // The edge of f the plane leaves it through: the one other than the entry edge with its
+        // endpoints on both sides; at the start, the one on the +u side of the hit point.
+        int exit = -1;
+        Vec3 c = Vec3::Zero();
+        for (int ei : m.face_edges[size_t(f)]) {
+          if (ei < 0 || ei == from) continue;
+          const Edge& e = m.edges[size_t(ei)];
+          const double s0 = plane.dot(x[size_t(e.v0)] - p), s1 = plane.dot(x[size_t(e.v1)] - p);
+          if ((s0 > 0) == (s1 > 0)) continue;
+          const Vec3 ci = x[size_t(e.v0)] + (s0 / (s0 - s1)) * (x[size_t(e.v1)] - x[size_t(e.v0)]);
+          if (from < 0 && !((ci - hit.point).dot(u) > 0)) continue;
+          exit = ei;
+          c = ci;
+          break;
+        }
+        if (exit < 0) break;
+        if (!probe.in_core(c, p)) break;  // left the core
+        const Edge& e = m.edges[size_t(exit)];
+        if (turns(m, e)) {
+          seeds.emplace_back(hit.shape, exit);
+          break;
+        }
+        from = exit;
+        f = e.f0 == f ? e.f1 : e.f0;
+      }
+    }
+  }
+
+  // ---- 2. Contour following: silhouette edges sharing a vertex, within the cone.
+  // Visit marks: one per edge of all meshes, per thread, valid when equal to this call's stamp.
+  thread_local std::vector<std::uint32_t> marks;
+  thread_local std::uint32_t stamp = 0;
+  if (marks.size() < size_t(total_edges_)) marks.resize(size_t(total_edges_), 0);
+  if (++stamp == 0) {  // wrapped around: old marks could equal new stamps
+    std::fill(marks.begin(), marks.end(), 0);
+    stamp = 1;
+  }
+  thread_local std::vector<std::pair<int, int>> stack;
+  stack.assign(seeds.begin(), seeds.end());
+  while (!stack.empty() && int(out.size()) < kMaxContourEdges) {
+    const std::pair<int, int> cur = stack.back();
+    stack.pop_back();
+    const Mesh& m = meshes_[size_t(cur.first)];
+    std::uint32_t& mark = marks[size_t(m.first_edge + cur.second)];
+    if (mark == stamp) continue;
+    mark = stamp;
+    const Edge& e = m.edges[size_t(cur.second)];
+    const std::vector<Vec3>& x = m.mesh->positions;
+    if (!probe.arc_in_core(x[size_t(e.v0)], x[size_t(e.v1)], p)) continue;
+    if (e.entry && edge_is_silhouette(*e.entry, p)) out.push_back(e.entry);
+    for (int v : {e.v0, e.v1})
+      for (int j = m.vertex_begin[size_t(v)]; j < m.vertex_begin[size_t(v) + 1]; ++j) {
+        const int ej = m.vertex_edges[size_t(j)];
+        if (ej != cur.second && turns(m, m.edges[size_t(ej)])) stack.emplace_back(cur.first, ej);
+      }
+  }
+}
+
+bool ContourIndex::cone_meets_shapes(const Vec3& p, const Vec3& axis, double cos_half_angle,
+                                     const std::vector<bool>* eligible) const {
+  const double half = std::acos(std::clamp(cos_half_angle, -1.0, 1.0));
+  for (size_t shape = 0; shape < meshes_.size(); ++shape) {
+    const Mesh& m = meshes_[shape];
+    if (!m.mesh || (eligible && (shape >= eligible->size() || !(*eligible)[shape]))) continue;
+    const Vec3 d = m.centre - p;
+    const double dist = d.norm();
+    if (!(dist > m.radius)) return true;  // p inside the sphere (or a NaN): conservative
+    // The sphere subtends asin(r / dist) about d; the cone reaches it iff the angle between the
+    // axis and d is at most that plus the cone's half-angle.
+    const double angle = std::acos(std::clamp(d.dot(axis) / dist, -1.0, 1.0));
+    if (angle <= half + std::asin(m.radius / dist)) return true;
+  }
+  return false;
+}
+
+size_t ContourIndex::memory_bytes() const {
+  size_t b = meshes_.size() * sizeof(Mesh);
+  for (const Mesh& m : meshes_)
+    b += m.planes.size() * sizeof(Vec4) + m.face_edges.size() * sizeof(std::array<int, 3>) +
+         m.edges.size() * sizeof(Edge) + (m.vertex_begin.size() + m.vertex_edges.size()) * sizeof(int);
+  return b;
+}
+
+}  // namespace qsil::edgetree

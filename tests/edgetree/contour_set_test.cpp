@@ -1,0 +1,219 @@
+/// @file contour_set_test.cpp
+/// The contour set of a narrow lobe (qsil/edgetree/contour_set.h) against brute force over all
+/// edges, and the LTC core cone (ltc_core_cone) against quadrature of the LTC density:
+/// - on a convex mesh (a subdivided icosphere, 1280 faces) every silhouette edge from p is
+///   visible; the set must hold only silhouette edges whose arc comes within the cone (always),
+///   and all of them where the cone meets one arc of the silhouette (60 random cones reaching
+///   over the outline: at least 55 exactly equal, and every one a subset);
+/// - a cone whose walks cannot reach the outline gives an empty set;
+/// - two disjoint spheres in one mesh, the back one's outline hidden behind the front one
+///   inside the cone: the set holds the front sphere's silhouette edges only (what the walks
+///   reach from the hit on the front sphere), and brute force shows the hidden ones were there;
+/// - ltc_core_cone holds at least its mass (less 2 %, for the 16 rim directions standing for
+///   the elliptical image) of the LTC distribution over the upper hemisphere, for GGX alpha
+///   0.01-0.3 and view angles 0-75 degrees, and the diffuse cone is exact.
+/// Fixed seeds.
+
+#include "qsil/edgetree/contour_set.h"
+#include "baselines/baseline_test_util.h"
+#include "qsil/edgetree/edge_forest.h"
+#include "qsil/edgetree/ltc.h"
+#include "test_scenes.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <set>
+
+namespace qsil::edgetree {
+namespace {
+
+/// First hit of the ray o + s d (s > 0) on a mesh (brute force, Moller-Trumbore): the face and
+/// the point, face -1 for a miss.
+int first_hit(const TriangleMesh& m, const Vec3& o, const Vec3& d, Vec3& point) {
+  double best = kInf;
+  int face = -1;
+  for (int f = 0; f < m.num_triangles(); ++f) {
+    const Vec3 a = m.positions[size_t(m.triangles[size_t(f)][0])];
+    const Vec3 e1 = m.positions[size_t(m.triangles[size_t(f)][1])] - a;
+    const Vec3 e2 = m.positions[size_t(m.triangles[size_t(f)][2])] - a;
+    const Vec3 pv = d.cross(e2);
+    const double det = e1.dot(pv);
+    if (std::abs(det) < 1e-14) continue;
+    const Vec3 tv = o - a;
+    const double u = tv.dot(pv) / det;
+    const Vec3 qv = tv.cross(e1);
+    const double v = d.dot(qv) / det;
+    const double s = e2.dot(qv) / det;
+    if (u < 0 || v < 0 || u + v > 1 || !(s > 0) || s >= best) continue;
+    best = s;
+    face = f;
+  }
+  point = o + best * d;
+  return face;
+}
+
+/// The probe of a circular cone with axis `axis` and half-angle `beta` from p (its core is the
+/// cone itself): its axis ray's hit.
+ContourProbe probe_of(const TriangleMesh& m, const Vec3& p, const Vec3& axis, double beta) {
+  ContourProbe probe;
+  probe.axis = axis.normalized();
+  probe.cos_half_angle = std::cos(beta);
+  // A circular core: the rotation taking the axis to z, and the cone's own angle.
+  const Vec3 t = probe.axis.unitOrthogonal(), b = probe.axis.cross(t);
+  probe.to_cosine << t.transpose(), b.transpose(), probe.axis.transpose();
+  probe.cos_core = probe.cos_half_angle;
+  Vec3 point;
+  const int face = first_hit(m, p, probe.axis, point);
+  if (face >= 0) {
+    probe.hits[0] = {0, face, point, probe.axis};
+    probe.count = 1;
+  }
+  return probe;
+}
+
+/// Brute force: every edge of the forest (tree and always-candidate) that is a silhouette from p
+/// and whose arc from p comes within the cone.
+std::set<const ForestEdge*> brute_force(const EdgeForest& forest, const Vec3& p, const ContourProbe& probe) {
+  std::set<const ForestEdge*> out;
+  for (const auto* arr : {&forest.edges(), &forest.always_edges()})
+    for (const ForestEdge& e : *arr)
+      if (edge_is_silhouette(e, p) && arc_max_cos(e.p0, e.p1, p, probe.axis) >= probe.cos_half_angle) out.insert(&e);
+  return out;
+}
+
+std::set<const ForestEdge*> contour(const ContourIndex& index, const Vec3& p, const ContourProbe& probe) {
+  std::vector<const ForestEdge*> v;
+  index.contour_edges(probe, p, nullptr, v);
+  const std::set<const ForestEdge*> s(v.begin(), v.end());
+  EXPECT_EQ(s.size(), v.size()) << "an edge listed twice";
+  return s;
+}
+
+TEST(ContourSet, ConvexMeshGivesTheSilhouetteEdgesInTheCone) {
+  const std::vector<TriangleMesh> meshes{test::icosphere(3)};
+  const EdgeForest forest = baselines_test::forest_over(meshes);
+  const std::vector<ForestShapeInput> in{{&meshes[0], 0}};
+  const ContourIndex index = ContourIndex::build(in, forest);
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(0, 1);
+  int equal = 0, nonempty = 0;
+  const int n = 60;
+  for (int i = 0; i < n; ++i) {
+    // p at distance 3-6 from the centre; the axis at 80-98 % of the outline's angle from the
+    // centre's direction, so that it meets the sphere near its outline, and a cone 1.2-3 times
+    // as wide as the axis is from the outline, so that it reaches over it.
+    const Vec3 dir = Vec3(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5).normalized();
+    const double dist = 3 + 3 * u(rng);
+    const Vec3 p = dist * dir;
+    const double outline = std::asin(1.0 / dist);
+    const double angle = outline * (0.8 + 0.18 * u(rng));
+    const Vec3 side = (-dir).unitOrthogonal();
+    const double phi = 2 * kPi * u(rng);
+    const Vec3 across = std::cos(phi) * side + std::sin(phi) * (-dir).cross(side);
+    const Vec3 axis = std::cos(angle) * (-dir) + std::sin(angle) * across;
+    const double beta = (outline - angle) * (1.2 + 1.8 * u(rng));
+    const ContourProbe probe = probe_of(meshes[0], p, axis, beta);
+    ASSERT_EQ(probe.count, 1) << "case " << i << ": the axis must meet the sphere";
+    const std::set<const ForestEdge*> got = contour(index, p, probe), want = brute_force(forest, p, probe);
+    for (const ForestEdge* e : got) EXPECT_TRUE(want.count(e)) << "case " << i << ": not a silhouette in the cone";
+    equal += got == want;
+    nonempty += !want.empty();
+  }
+  std::printf("[ measured ] %d of %d cones gave exactly the brute-force set (%d non-empty)\n", equal, n, nonempty);
+  EXPECT_GE(equal, 55);
+  EXPECT_EQ(nonempty, n) << "every cone must reach the outline for the test to have power";
+}
+
+TEST(ContourSet, ConeAwayFromTheOutlineGivesNothing) {
+  const std::vector<TriangleMesh> meshes{test::icosphere(3)};
+  const EdgeForest forest = baselines_test::forest_over(meshes);
+  const std::vector<ForestShapeInput> in{{&meshes[0], 0}};
+  const ContourIndex index = ContourIndex::build(in, forest);
+  const Vec3 p(0, 0, 4);
+  const ContourProbe probe = probe_of(meshes[0], p, Vec3(0, 0, -1), 0.05);  // at the centre, outline 0.25 rad away
+  ASSERT_EQ(probe.count, 1);
+  EXPECT_TRUE(brute_force(forest, p, probe).empty());
+  EXPECT_TRUE(contour(index, p, probe).empty());
+  // No hit, no set.
+  ContourProbe none = probe;
+  none.count = 0;
+  EXPECT_TRUE(contour(index, p, none).empty());
+}
+
+TEST(ContourSet, HiddenOutlineBehindTheHitSurfaceIsLeftOut) {
+  // One mesh, two disjoint spheres: the front one at the origin, the back one behind it and to
+  // the side, so that from p the back sphere's outline passes behind the front sphere.
+  TriangleMesh both = test::icosphere(3);
+  const TriangleMesh back = test::icosphere(3, Vec3(0.9, 0, -4), 1.0);
+  const int offset = both.num_vertices();
+  for (const Vec3& x : back.positions) both.positions.push_back(x);
+  for (const auto& t : back.triangles) both.triangles.push_back(t + Eigen::Vector3i::Constant(offset));
+  both.normals = vertex_normals(both);
+  const std::vector<TriangleMesh> meshes{both};
+  const EdgeForest forest = baselines_test::forest_over(meshes);
+  const std::vector<ForestShapeInput> in{{&meshes[0], 0}};
+  const ContourIndex index = ContourIndex::build(in, forest);
+  const Vec3 p(0, 0, 5);
+  // The axis meets the front sphere near its right outline (x > 0), where the back sphere's
+  // left outline lies behind it.
+  const Vec3 axis = (Vec3(0.75, 0, 0) - p).normalized();
+  const ContourProbe probe = probe_of(meshes[0], p, axis, 0.12);
+  ASSERT_EQ(probe.count, 1);
+  ASSERT_GT(probe.hits[0].point.z(), -2.0) << "the axis must meet the front sphere";
+  const std::set<const ForestEdge*> got = contour(index, p, probe), want = brute_force(forest, p, probe);
+  int hidden = 0, front = 0;
+  for (const ForestEdge* e : want) (e->v0 >= offset ? hidden : front)++;
+  ASSERT_GT(hidden, 0) << "the back sphere's outline must be inside the cone for the test to have power";
+  ASSERT_GT(front, 0);
+  int got_front = 0;
+  for (const ForestEdge* e : got) {
+    EXPECT_LT(e->v0, offset) << "an edge of the hidden back sphere";
+    EXPECT_TRUE(want.count(e));
+    ++got_front;
+  }
+  EXPECT_EQ(got_front, front) << "every front silhouette edge in the cone";
+}
+
+/// Integral of the LTC density over the directions within angle `half` of `axis`, by a midpoint
+/// rule in (s, phi) with theta = half s^2 (fine near the axis, where the lobe is).
+double mass_within(const LTC& ltc, const Vec3& axis, double half) {
+  const Vec3 a = axis.normalized(), t = a.unitOrthogonal(), b = a.cross(t);
+  const int ns = 2000, np = 512;
+  double sum = 0;
+  for (int i = 0; i < ns; ++i) {
+    const double sv = (i + 0.5) / ns, th = half * sv * sv, dth = 2 * half * sv / ns;
+    for (int j = 0; j < np; ++j) {
+      const double ph = (j + 0.5) / np * 2 * kPi;
+      const Vec3 w = std::cos(th) * a + std::sin(th) * (std::cos(ph) * t + std::sin(ph) * b);
+      sum += ltc_eval(ltc, w) * std::sin(th) * dth * (2 * kPi / np);
+    }
+  }
+  return sum;
+}
+
+TEST(LTCCoreCone, HoldsItsMass) {
+  // The clamped cosine: the cone is the rim itself.
+  const LTCCone diffuse = ltc_core_cone(ltc_diffuse(), 0.75);
+  EXPECT_NEAR(diffuse.axis.z(), 1.0, 1e-12);
+  EXPECT_NEAR(diffuse.cos_half_angle, 0.5, 1e-12);
+  double worst = 1;
+  for (double alpha : {0.01, 0.03, 0.1, 0.3})
+    for (double theta_o : {0.0, 0.5, 1.0, 1.3}) {
+      const LTC ltc = ltc_ggx(alpha, Vec3(std::sin(theta_o), 0, std::cos(theta_o)));
+      for (double mass : {0.9, kContourConeMass}) {
+        const LTCCone cone = ltc_core_cone(ltc, mass);
+        // The total over the sphere (ltc_eval is 0 below the horizon: what it leaves of the lobe).
+        const double total = mass_within(ltc, cone.axis, kPi);
+        const double in = mass_within(ltc, cone.axis, std::acos(std::clamp(cone.cos_half_angle, -1.0, 1.0)));
+        worst = std::min(worst, in / total - mass);
+        EXPECT_GE(in / total, mass - 0.02) << "alpha " << alpha << " theta_o " << theta_o << " mass " << mass;
+      }
+    }
+  std::printf("[ measured ] smallest (inside share - mass): %.4f\n", worst);
+}
+
+}  // namespace
+}  // namespace qsil::edgetree
