@@ -59,6 +59,7 @@ ContourIndex ContourIndex::build(std::span<const ForestShapeInput> shapes, const
       m.edges[i].f1 = e.f1;
       m.edges[i].always_discontinuous =
           e.cls == EdgeClass::Boundary || e.cls == EdgeClass::NonManifold || e.cls == EdgeClass::Inconsistent;
+      m.edges[i].concave = e.cls == EdgeClass::Concave;
     }
     m.face_edges.resize(size_t(tm.num_triangles()));
     std::vector<int> degree(tm.positions.size() + 1, 0);
@@ -187,7 +188,7 @@ void ContourIndex::contour_edges(const ContourProbe& probe, const Vec3& p, const
     const Edge& e = m.edges[size_t(cur.second)];
     const std::vector<Vec3>& x = m.mesh->positions;
     if (!probe.arc_in_core(x[size_t(e.v0)], x[size_t(e.v1)], p)) continue;
-    if (e.entry && edge_is_silhouette(*e.entry, p)) out.push_back(e.entry);
+    if (e.entry && !e.concave && edge_is_silhouette(*e.entry, p)) out.push_back(e.entry);
     for (int v : {e.v0, e.v1})
       for (int j = m.vertex_begin[size_t(v)]; j < m.vertex_begin[size_t(v) + 1]; ++j) {
         const int ej = m.vertex_edges[size_t(j)];

@@ -6,6 +6,9 @@
 ///   and all of them where the cone meets one arc of the silhouette (60 random cones reaching
 ///   over the outline: at least 55 exactly equal, and every one a subset);
 /// - a cone whose walks cannot reach the outline gives an empty set;
+/// - on Spot (smooth: its concave edges are creases), random cones through its vertices: sets
+///   of silhouette edges in the cone and never a concave one, though concave silhouettes are in
+///   the cone in at least 20 of the non-empty cases;
 /// - two disjoint spheres in one mesh, the back one's outline hidden behind the front one
 ///   inside the cone: the set holds the front sphere's silhouette edges only (what the walks
 ///   reach from the hit on the front sphere), and brute force shows the hidden ones were there;
@@ -75,12 +78,15 @@ ContourProbe probe_of(const TriangleMesh& m, const Vec3& p, const Vec3& axis, do
 }
 
 /// Brute force: every edge of the forest (tree and always-candidate) that is a silhouette from p
-/// and whose arc from p comes within the cone.
-std::set<const ForestEdge*> brute_force(const EdgeForest& forest, const Vec3& p, const ContourProbe& probe) {
+/// and whose arc from p comes within the cone; concave ones only with `concave`.
+std::set<const ForestEdge*> brute_force(const EdgeForest& forest, const Vec3& p, const ContourProbe& probe,
+                                        bool concave = false) {
   std::set<const ForestEdge*> out;
   for (const auto* arr : {&forest.edges(), &forest.always_edges()})
     for (const ForestEdge& e : *arr)
-      if (edge_is_silhouette(e, p) && arc_max_cos(e.p0, e.p1, p, probe.axis) >= probe.cos_half_angle) out.insert(&e);
+      if ((concave || e.cls != EdgeClass::Concave) && edge_is_silhouette(e, p) &&
+          arc_max_cos(e.p0, e.p1, p, probe.axis) >= probe.cos_half_angle)
+        out.insert(&e);
   return out;
 }
 
@@ -175,6 +181,37 @@ TEST(ContourSet, HiddenOutlineBehindTheHitSurfaceIsLeftOut) {
     ++got_front;
   }
   EXPECT_EQ(got_front, front) << "every front silhouette edge in the cone";
+}
+
+TEST(ContourSet, SpotSetsHoldSilhouettesInTheConeButNoConcaveEdge) {
+  // Spot smooth-shaded: its concave edges are creases (always-candidates), and where a valley's
+  // faces face p differently the edge is a silhouette of no visible outline.
+  std::vector<TriangleMesh> meshes{baselines_test::test_mesh("spot.obj")};
+  std::vector<ForestShapeInput> in{{&meshes[0], 0, false, CreaseSet::Concave}};
+  const EdgeForest forest = EdgeForest::build(in);
+  const ContourIndex index = ContourIndex::build(in, forest);
+  const Box3 box = meshes[0].bounds();
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(0, 1);
+  int nonempty = 0, with_concave = 0;
+  for (int i = 0; i < 200; ++i) {
+    // p 1.5-3 diagonals from the centre; the axis toward a random vertex.
+    const Vec3 dir = Vec3(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5).normalized();
+    const Vec3 p = box.center() + (1.5 + 1.5 * u(rng)) * box.diagonal() * dir;
+    const Vec3 target = meshes[0].positions[size_t(u(rng) * meshes[0].num_vertices()) % meshes[0].positions.size()];
+    const ContourProbe probe = probe_of(meshes[0], p, target - p, 0.1);
+    if (probe.count == 0) continue;
+    const std::set<const ForestEdge*> got = contour(index, p, probe), want = brute_force(forest, p, probe);
+    for (const ForestEdge* e : got) {
+      EXPECT_NE(e->cls, EdgeClass::Concave) << "case " << i;
+      EXPECT_TRUE(want.count(e)) << "case " << i << ": not a silhouette in the cone";
+    }
+    nonempty += !got.empty();
+    with_concave += !got.empty() && brute_force(forest, p, probe, true).size() > want.size();
+  }
+  std::printf("[ measured ] %d non-empty sets, %d of them with concave silhouettes in the cone\n", nonempty,
+              with_concave);
+  EXPECT_GE(with_concave, 20) << "concave silhouettes must be in reach for the test to have power";
 }
 
 /// Integral of the LTC density over the directions within angle `half` of `axis`, by a midpoint
