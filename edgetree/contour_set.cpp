@@ -101,6 +101,39 @@ int ContourIndex::find_edge(const Mesh& m, int a, int b) const {
 }
 
 namespace {
+
+/// The edges a contour following has visited (numbered over all meshes): open addressing in a
+/// table of 4 kMaxContourVisits slots (at most a quarter full), cleared in O(1) by a stamp.
+class VisitedSet {
+ public:
+  void clear() {
+    if (++stamp_ == 0) {  // wrapped around: old stamps could equal new ones
+      slots_.fill({});
+      stamp_ = 1;
+    }
+  }
+  /// Adds `key`; false when it was there already.
+  bool insert(std::uint32_t key) {
+    for (std::uint32_t i = (key * 2654435761u) & (kSize - 1);; i = (i + 1) & (kSize - 1)) {
+      Slot& s = slots_[i];
+      if (s.stamp != stamp_) {
+        s = {key, stamp_};
+        return true;
+      }
+      if (s.key == key) return false;
+    }
+  }
+
+ private:
+  static constexpr std::uint32_t kSize = 4 * kMaxContourVisits;
+  static_assert((kSize & (kSize - 1)) == 0, "a power of two");
+  struct Slot {
+    std::uint32_t key = 0, stamp = 0;
+  };
+  std::array<Slot, kSize> slots_{};
+  std::uint32_t stamp_ = 0;
+};
+
 /// Walk directions: angles pi k / kContourWalks, k = 0 .. 2 kContourWalks - 1.
 static_assert(kContourWalks == 4, "the tables below hold 8 directions");
 constexpr double kWalkCos[8] = {1.0,  0.70710678118654757,  0.0, -0.70710678118654757,
@@ -167,24 +200,18 @@ void ContourIndex::contour_edges(const ContourProbe& probe, const Vec3& p, const
     }
   }
 
-  // ---- 2. Contour following: silhouette edges sharing a vertex, within the cone.
-  // Visit marks: one per edge of all meshes, per thread, valid when equal to this call's stamp.
-  thread_local std::vector<std::uint32_t> marks;
-  thread_local std::uint32_t stamp = 0;
-  if (marks.size() < size_t(total_edges_)) marks.resize(size_t(total_edges_), 0);
-  if (++stamp == 0) {  // wrapped around: old marks could equal new stamps
-    std::fill(marks.begin(), marks.end(), 0);
-    stamp = 1;
-  }
+  // ---- 2. Contour following: silhouette edges sharing a vertex, within the core.
+  thread_local VisitedSet visited;
+  visited.clear();
   thread_local std::vector<std::pair<int, int>> stack;
   stack.assign(seeds.begin(), seeds.end());
-  while (!stack.empty() && int(out.size()) < kMaxContourEdges) {
+  int visits = 0;
+  while (!stack.empty() && int(out.size()) < kMaxContourEdges && visits < kMaxContourVisits) {
     const std::pair<int, int> cur = stack.back();
     stack.pop_back();
     const Mesh& m = meshes_[size_t(cur.first)];
-    std::uint32_t& mark = marks[size_t(m.first_edge + cur.second)];
-    if (mark == stamp) continue;
-    mark = stamp;
+    if (!visited.insert(std::uint32_t(m.first_edge + cur.second))) continue;
+    ++visits;
     const Edge& e = m.edges[size_t(cur.second)];
     const std::vector<Vec3>& x = m.mesh->positions;
     if (!probe.arc_in_core(x[size_t(e.v0)], x[size_t(e.v1)], p)) continue;

@@ -7,8 +7,7 @@
 
 namespace qsil::edgetree {
 
-QuadricEdgeSampler::QuadricEdgeSampler(const EdgeForest& forest, Method method, const ContourIndex* contours)
-    : forest_(forest), method_(method), contours_(contours) {
+QuadricEdgeSampler::QuadricEdgeSampler(const EdgeForest& forest, Method method) : forest_(forest), method_(method) {
   QSIL_CHECK(uses_edge_forest(method));
 }
 
@@ -18,10 +17,7 @@ SilhouetteSample QuadricEdgeSampler::sample(const SilhouetteQuery& query, const 
 
 void QuadricEdgeSampler::sample_set(const SilhouetteQuery& query, const std::function<double()>& next,
                                     SilhouetteSampleSet& out) const {
-  thread_local std::vector<const ForestEdge*> contour;
-  contour.clear();
-  if (contours_ && query.probe.count > 0) contours_->contour_edges(query.probe, query.p, query.eligible, contour);
-  sample_silhouette_set(forest_, query, next, method_, out, contour);
+  sample_silhouette_set(forest_, query, next, method_, out);
 }
 
 }  // namespace qsil::edgetree

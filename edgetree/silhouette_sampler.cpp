@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <set>
 #include <span>
 
 namespace qsil::edgetree {
@@ -474,11 +475,26 @@ SilhouetteSample sample_contour(std::span<const ForestEdge* const> contour, cons
 }  // namespace
 
 void sample_silhouette_set(const EdgeForest& forest, const SilhouetteQuery& query, const std::function<double()>& next,
-                           Method method, SilhouetteSampleSet& out, std::span<const ForestEdge* const> contour) {
+                           Method method, SilhouetteSampleSet& out) {
   QSIL_DCHECK(uses_edge_forest(method));
   out.count = 0;
   const Prepared pq = prepare(query);
-  // Edges of the contour set are the contour strategy's: the others' points on them are dropped.
+  thread_local TopLevel top;
+  top_level(forest, pq, method, top);
+  std::array<int, kMaxSplitEdges> idx;
+  const int n_split = top.n > 0 ? split_indices(top, idx) : 0;
+  // ---- The contour set, less the split edges (which keep their point of probability 1).
+  thread_local std::vector<const ForestEdge*> contour;
+  contour.clear();
+  for (const ForestEdge* e : query.contour) {
+    QSIL_DCHECK_MSG(is_discontinuity(*e, query.p), "a contour edge that is no discontinuity");
+    bool split = false;
+    for (int j = 0; j < n_split && !split; ++j) split = top.cand[size_t(idx[size_t(j)])].edge == e;
+    if (!split) contour.push_back(e);
+  }
+  QSIL_DCHECK_MSG(std::set<const ForestEdge*>(contour.begin(), contour.end()).size() == contour.size(),
+                  "a contour edge listed twice");
+  // Edges of the contour set are the contour strategy's: the traversal's points on them are dropped.
   auto push = [&](const SilhouetteSample& s) {
     if (s.edge && std::find(contour.begin(), contour.end(), s.edge) == contour.end()) out.push(s);
   };
@@ -489,14 +505,11 @@ void sample_silhouette_set(const EdgeForest& forest, const SilhouetteQuery& quer
     const SilhouetteSample s = sample_contour(contour, pq, u_edge, u_t);
     if (s.edge) out.push(s);
   }
-  thread_local TopLevel top;
-  top_level(forest, pq, method, top);
   if (top.n == 0) return;
-  std::array<int, kMaxSplitEdges> idx;
-  const int n_split = split_indices(top, idx);
   for (int j = 0; j < n_split; ++j) {
     const int i = idx[size_t(j)];
-    push(sample_on_edge(*top.cand[size_t(i)].edge, 1.0, pq, next(), 0));
+    const SilhouetteSample s = sample_on_edge(*top.cand[size_t(i)].edge, 1.0, pq, next(), 0);
+    if (s.edge) out.push(s);
     top.prob[size_t(i)] = 0;
   }
   // The traversal chooses among the rest, its probabilities renormalised to sum to what they did.

@@ -26,10 +26,13 @@ BoundarySetup build_boundary_setup(const Scene& scene, Method method) {
     auto forest = std::make_unique<edgetree::EdgeForest>(edgetree::EdgeForest::build(inputs, options));
     out.forest = forest.get();
     // Contour sets for narrow lobes: the quadric method only (quadric-box is the paper's
-    // ablation, kept as the paper traverses).
-    if (method == Method::Quadric)
+    // ablation, kept as the paper traverses), in scenes with a glossy BSDF on some shape.
+    const bool glossy = std::any_of(scene.shapes.begin(), scene.shapes.end(), [&](const Shape& s) {
+      return s.bsdf >= 0 && scene.bsdfs[size_t(s.bsdf)].type == BSDFDesc::Type::RoughConductor;
+    });
+    if (method == Method::Quadric && glossy)
       out.contours = std::make_unique<edgetree::ContourIndex>(edgetree::ContourIndex::build(inputs, *forest));
-    out.sampler = std::make_unique<edgetree::QuadricEdgeSampler>(*forest, method, out.contours.get());
+    out.sampler = std::make_unique<edgetree::QuadricEdgeSampler>(*forest, method);
     out.edges = std::move(forest);
   } else {
     out.edges = std::make_unique<edgetree::EdgeSet>(edgetree::EdgeSet::build(inputs));

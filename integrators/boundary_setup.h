@@ -21,13 +21,13 @@ namespace qsil {
 
 /// A boundary method's structures: the scene's edge set (an EdgeForest for quadric and
 /// quadric-box, fitted with quadrics only for quadric; a plain EdgeSet for vsphere,
-/// vsphere-solid and uniform), for quadric the meshes' adjacency for contour sets, and the
-/// sampler over them.
+/// vsphere-solid and uniform), for quadric in a scene with a glossy BSDF the meshes' adjacency for
+/// contour sets, and the sampler over the edges.
 struct BoundarySetup {
   std::unique_ptr<edgetree::EdgeSet> edges;        ///< edge set or forest (the sampler points into it)
   std::unique_ptr<edgetree::EdgeSampler> sampler;  ///< the method's secondary edge sampler
   const edgetree::EdgeForest* forest = nullptr;    ///< `edges` as a forest (quadric methods), else null
-  /// Mesh adjacency for contour sets (Method::Quadric only; the sampler points into it), else null.
+  /// Mesh adjacency for contour sets (Method::Quadric in a scene with a glossy BSDF), else null.
   std::unique_ptr<edgetree::ContourIndex> contours;
   double seconds = 0;                              ///< wall time of the build
 };

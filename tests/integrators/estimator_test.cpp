@@ -2,7 +2,8 @@
 // - Two half ranges merged give the film of the full range up to the rounding of the sums, for
 //   the primal image, the gradient with every edge-sampling method (a 32 x 32 image: its primary
 //   samples are numbered so that the halves draw exactly the full run's) and finite differences.
-// - A run is bit-identical for any thread count and when repeated; disjoint ranges draw
+// - A run is bit-identical for any thread count and when repeated (shadow-quad, and spot-mirror,
+//   whose glossy vertices make contour sets); disjoint ranges draw
 //   different samples.
 // - Set-up builds only what the method samples from: no forest for vsphere, vsphere-solid and
 //   uniform, a forest without quadrics for quadric-box, quadrics for quadric.
@@ -72,9 +73,9 @@ TEST(Estimator, HalfRangesMergeToTheFullRange) {
   expect_halves_merge_to_full(Estimator(scene, EstimatorConfig::finite_differences(params)), "fd");
 }
 
-TEST(Estimator, RunsAreBitIdenticalForAnyThreadCountAndWhenRepeated) {
-  const Scene scene = shadow_quad(12);
-  const std::vector<ParameterSpec> params{parse_parameter("object:translate:1,0,0", scene)};
+/// A gradient run is bit-identical for 1 and 2 threads and when repeated (12 x 12 pixels).
+void expect_bit_identical_runs(const Scene& scene, const std::string& param) {
+  const std::vector<ParameterSpec> params{parse_parameter(param, scene)};
   const Estimator e(scene, EstimatorConfig::gradient(params, Method::Quadric));
   const RenderResult a = e.run(range(3, 2, 1)), b = e.run(range(3, 2, 2)), c = e.run(range(3, 2, 2));
   for (int ch = 0; ch < a.film.channels(); ++ch)
@@ -86,6 +87,13 @@ TEST(Estimator, RunsAreBitIdenticalForAnyThreadCountAndWhenRepeated) {
       }
   EXPECT_EQ(a.first_sample, 3);
   EXPECT_EQ(a.spp, 2);
+}
+
+TEST(Estimator, RunsAreBitIdenticalForAnyThreadCountAndWhenRepeated) {
+  expect_bit_identical_runs(shadow_quad(12), "object:translate:1,0,0");
+  // A glossy mirror: its vertices make contour sets (per-thread scratch storage, probe rays).
+  expect_bit_identical_runs(load_scene(test::data_file("scenes/spot-mirror.xml"), {{"res", "12"}, {"spp", "2"}}),
+                            "spot:translate:0,1,0");
 }
 
 TEST(Estimator, DisjointRangesDrawDifferentSamples) {

@@ -25,12 +25,15 @@
 ///    kContourWalkSteps faces were crossed.
 /// 2. Contour following: from the seeds over edges that share a vertex and are silhouettes too,
 ///    keeping the silhouette edges of the tree or always-candidate arrays (edge_is_silhouette)
-///    whose arc from p enters the core, at most kMaxContourEdges of them, except concave ones:
-///    where the faces of a valley face p differently, the one facing away is behind the other,
-///    so such an edge is a silhouette of no visible outline (why [QSS 4.1] culls them; on a
-///    smooth mesh they are creases, always candidates of the traversal). They were 12 % of a
-///    contour set's probability at one of spot-mirror's worst pixels, every sample zero. The
-///    following still passes through them: a contour on a triangle mesh may turn there.
+///    whose arc from p enters the core, at most kMaxContourEdges of them (visiting at most
+///    kMaxContourVisits), except concave ones: on a closed, opaque, consistently wound mesh seen
+///    from outside, where the faces of a valley face p differently, the one facing away is
+///    behind the other, so such an edge is a silhouette of no visible outline (why [QSS 4.1]
+///    culls them; on a smooth mesh they are creases, always candidates of the traversal). They
+///    were 12 % of a contour set's probability at one of spot-mirror's worst pixels, every
+///    sample zero. On an open or inside-out mesh this leaves visible outlines to the traversal
+///    (variance, not bias). The following still passes through them: a contour on a triangle
+///    mesh may turn there.
 /// The set is a deterministic function of p, the core and the hits; it holds only edges that
 /// are discontinuities for p.
 ///
@@ -48,13 +51,16 @@
 
 namespace qsil::edgetree {
 
-/// Walk planes through the axis (each walked in both directions: 2 × this many walks).
+/// Walk planes through each hit's ray (each walked in both directions: 2 × this many walks).
 inline constexpr int kContourWalks = 4;
 /// Faces a walk may cross before it stops without a seed.
 inline constexpr int kContourWalkSteps = 64;
 /// Largest contour set (the following stops there; the set stays a deterministic function of
 /// the query, so the estimate stays unbiased).
 inline constexpr int kMaxContourEdges = 64;
+/// Most edges a contour following visits (kept or not: concave, culled, outside the core), so
+/// that its cost per query is bounded on any mesh.
+inline constexpr int kMaxContourVisits = 512;
 
 /// Share of the BSDF lobe's LTC mass inside its core (ContourProbe), where the contour set lives.
 /// Measured on spot-mirror (GGX alpha 0.01; 128², 24 seeds of 16 spp, per-pixel variance of the
@@ -69,7 +75,8 @@ inline constexpr double kContourMaxHalfAngle = 0.3;
 /// ring of kContourRingRays directions at kContourRingAngle × the cone's half-angle around it.
 inline constexpr int kContourRingRays = 6;
 inline constexpr double kContourRingAngle = 0.5;
-inline constexpr int kMaxContourHits = 1 + kContourRingRays;
+/// Most probe hits: the axis's, or the ring's.
+inline constexpr int kMaxContourHits = kContourRingRays;
 static_assert(kContourRingRays == 6, "the tables below hold 6 directions");
 /// cos and sin of the ring's angles 2 pi k / kContourRingRays.
 inline constexpr double kContourRingCos[6] = {1.0, 0.5, -0.5, -1.0, -0.5, 0.5};
@@ -95,8 +102,8 @@ struct ContourProbe {
   double cos_half_angle = 1;          ///< the bounding cone is {w unit : w . axis >= cos_half_angle}
   Mat3 to_cosine = Mat3::Identity();  ///< T: world directions to the LTC's cosine domain
   double cos_core = 1;                ///< cos of the cosine-domain cone's half-angle
-  std::array<ContourHit, kMaxContourHits> hits{};
-  int count = 0;
+  std::array<ContourHit, kMaxContourHits> hits{};  ///< the hits on eligible shapes, hits[0 .. count)
+  int count = 0;                                   ///< number of hits (0: no contour set)
   /// Whether the arc of directions from p to the segment [x0, x1] enters the core.
   bool arc_in_core(const Vec3& x0, const Vec3& x1, const Vec3& p) const;
   /// Whether the direction of x - p is in the core.
@@ -140,7 +147,8 @@ class ContourIndex {
  private:
   struct Edge {
     int v0 = -1, v1 = -1, f0 = -1, f1 = -1;
-    bool always_discontinuous = false;  ///< boundary, non-manifold or inconsistent: no second face to walk to
+    /// Boundary, non-manifold or inconsistent: a discontinuity for every p (walks stop there).
+    bool always_discontinuous = false;
     bool concave = false;               ///< a valley: where its faces face p differently, it is hidden
     const ForestEdge* entry = nullptr;  ///< its entry in the edge set (null: culled, e.g. flat)
   };
@@ -151,7 +159,7 @@ class ContourIndex {
     std::vector<Edge> edges;                     ///< sorted by (v0, v1), v0 < v1 (build_mesh_edges' order)
     std::vector<int> vertex_begin;  ///< CSR: edges at vertex v are vertex_edges[vertex_begin[v] .. vertex_begin[v+1])
     std::vector<int> vertex_edges;
-    int first_edge = 0;          ///< number of the mesh's first edge among all meshes' edges (visit marks)
+    int first_edge = 0;          ///< number of the mesh's first edge among all meshes' edges (visited sets)
     Vec3 centre = Vec3::Zero();  ///< bounding sphere of the vertices (world frame)
     double radius = 0;
   };

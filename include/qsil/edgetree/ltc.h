@@ -66,18 +66,20 @@ inline bool is_cosine_lobe(const LTC& ltc) { return ltc.M_inv == Mat3::Identity(
 /// Multiply norm by specular_reflectance per channel.
 LTC ltc_ggx(double alpha, const Vec3& wo_local);
 
-/// A cone of directions around an LTC's peak holding at least `mass` of its distribution (before
-/// the shading horizon's cut), in the LTC's local frame: axis = M (0,0,1) normalised (M =
-/// M_inv^-1, the image of the cosine lobe's peak), cos_half_angle = the smallest cosine between
-/// the axis and the images of 16 directions on the cosine-domain cone of half-angle gamma,
-/// sin^2 gamma = mass (which holds mass `mass` of the clamped cosine, [LTC] Eq. 1-2). Sixteen rim
-/// directions bound the image (an elliptical cone) to within its curvature between them; the
-/// contour set (contour_set.h) needs a cone that follows the lobe, not an exact bound.
-/// `mass` in (0, 1).
+/// A circular cone of directions (local shading frame) bounding an LTC's core; see ltc_core_cone.
 struct LTCCone {
-  Vec3 axis = Vec3::UnitZ();
-  double cos_half_angle = -1;
+  Vec3 axis = Vec3::UnitZ();   ///< unit axis, local frame
+  double cos_half_angle = -1;  ///< cosine of the half-angle (-1: the whole sphere)
 };
+
+/// The circular cone around an LTC's peak that bounds its core, the image of the cosine-domain
+/// cone of half-angle gamma, sin^2 gamma = `mass` (which holds that share of the clamped cosine,
+/// [LTC] Eq. 1-2, and so of the LTC before the shading horizon's cut): axis = M (0,0,1)
+/// normalised (M = M_inv^-1, the image of the cosine lobe's peak), cos_half_angle = the smallest
+/// cosine between the axis and the images of 16 directions on the cosine-domain rim. Sixteen rim
+/// directions bound the image (an elliptical cone) to within its curvature between them; the
+/// contour set (contour_set.h) needs a cone that follows the lobe, not an exact bound. `mass` in
+/// (0, 1) (clamped to [0, 1]). A singular M_inv gives the default (the whole sphere).
 LTCCone ltc_core_cone(const LTC& ltc, double mass);
 
 /// The LTC density D(w) per unit solid angle (sr^-1) at direction w (local frame, need not be

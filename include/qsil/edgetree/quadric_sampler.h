@@ -14,14 +14,11 @@ class QuadricEdgeSampler final : public EdgeSampler {
  public:
   /// `method`: Method::Quadric or Method::QuadricBox. The forest must outlive the sampler; for
   /// Quadric its nodes must carry quadrics (NodeFitOptions::fit_quadrics), for QuadricBox they
-  /// need not (the box test uses nothing of the quadric). `contours`: the forest's mesh
-  /// adjacency for contour sets (ContourIndex::build over the same shapes and forest), or null
-  /// for none; it must outlive the sampler.
-  QuadricEdgeSampler(const EdgeForest& forest, Method method, const ContourIndex* contours = nullptr);
+  /// need not (the box test uses nothing of the quadric).
+  QuadricEdgeSampler(const EdgeForest& forest, Method method);
   SilhouetteSample sample(const SilhouetteQuery& query, const std::function<double()>& next) const override;
   /// sample_silhouette_set: splits bright loose always-candidate edges off the traversal, and
-  /// with a contour index and a query probe (SilhouetteQuery::probe) estimates the probe's
-  /// contour set by a strategy of its own.
+  /// estimates the query's contour set (SilhouetteQuery::contour) by a strategy of its own.
   void sample_set(const SilhouetteQuery& query, const std::function<double()>& next,
                   SilhouetteSampleSet& out) const override;
   Method method() const override { return method_; }
@@ -29,7 +26,6 @@ class QuadricEdgeSampler final : public EdgeSampler {
  private:
   const EdgeForest& forest_;
   Method method_;
-  const ContourIndex* contours_;
 };
 
 }  // namespace qsil::edgetree

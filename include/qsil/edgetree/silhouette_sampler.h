@@ -60,6 +60,10 @@
 /// moving bunny, whose self-shadow edges in front of the light got ≈ 1/7 of the probability
 /// their share of the integrand asks for. The split set depends on p alone (not on random
 /// numbers), so the partition is fixed for each query.
+///
+/// Contour sets (sample_silhouette_set, at glossy vertices; contour_set.h): the edges of the
+/// query's contour set that are not split are estimated by one more point of their own, and the
+/// traversal's points on them are dropped; another partition, fixed for each query.
 
 #include "qsil/edgetree/contour_set.h"
 #include "qsil/edgetree/edge_forest.h"
@@ -105,9 +109,11 @@ struct SilhouetteQuery {
   /// Per parameter: 1 / the largest |dx/dtheta_k| over the scene's vertices (0: unused), so that
   /// parameters of different units weigh alike in velocity_factor.
   std::array<double, kMaxParameters> velocity_scale{};
-  /// The narrow lobe's core and the surfaces the probe rays meet, for the contour set
-  /// (contour_set.h, set_contour_probe); count 0 (the default): none.
-  ContourProbe probe;
+  /// The contour set of the query (contour_set.h; made by the boundary term, boundary_contour_set,
+  /// once per shading point): distinct discontinuity edges of eligible shapes that
+  /// sample_silhouette_set estimates by a strategy of their own. Empty (the default): none.
+  /// The edges must outlive the query's use.
+  std::span<const ForestEdge* const> contour;
 
   /// True when edges of shape `shape` may contribute (see `eligible`).
   bool is_eligible(int shape) const {
@@ -168,16 +174,16 @@ struct SilhouetteSampleSet {
 /// the traversal among the other candidates (omitted when it finds no edge). `next` as for
 /// sample_silhouette. Output in `out` (cleared first).
 ///
-/// With a contour set (`contour`: distinct edges, discontinuities for the query point;
-/// contour_set.h), the boundary term splits into the sum over the set and the sum over every
-/// other edge: the traversal and the split edges estimate the second, their points on edges of
-/// the set are dropped (a zero contribution: those edges are the other strategy's), and one
-/// more point estimates the first, on an edge of the set chosen with probability
+/// With a contour set (query.contour; contour_set.h) the boundary term splits into the sum over
+/// the set's edges that are not split and the sum over every other edge: the traversal and the
+/// split edges estimate the second, the traversal's points on edges of the set are dropped (a
+/// zero contribution: those edges are the other strategy's), and one more point estimates the
+/// first, on an edge of the set (split edges left out) chosen with probability
 ///   P(e) = (1 - eps) I_e / sum I + eps G_e / sum G   (I, G: leaf_edge_weight; eps as a leaf's),
-/// its t from EdgeMixture. Each edge is covered by exactly one strategy with positive
-/// probability, so the sum stays unbiased whatever the set.
+/// its t from EdgeMixture, drawn first (two random numbers). Each edge is covered by exactly
+/// one strategy with positive probability, so the sum stays unbiased whatever the set.
 void sample_silhouette_set(const EdgeForest& forest, const SilhouetteQuery& query, const std::function<double()>& next,
-                           Method method, SilhouetteSampleSet& out, std::span<const ForestEdge* const> contour = {});
+                           Method method, SilhouetteSampleSet& out);
 
 /// The edges sample_silhouette_set splits for the query and the sum of their top-level
 /// probabilities (the traversal's other choices are divided by 1 minus it). For tests and

@@ -4,7 +4,8 @@
 ///   sum over discontinuity edges of  integral_0^1 dL_i(w(t)) f_s(w(t), wo) J(t) dt,
 ///   J(t) = det(w0, w1, v_t) / |w_t|^3,  v_t = d(edge point)/dtheta - dp/dtheta,
 /// estimated with the edge points of one traversal per vertex (EdgeSampler::sample_set: the
-/// traversal's point, and for the edge forest the split bright loose edges'). The velocity is
+/// traversal's point, and for the edge forest the split bright loose edges' and, at a glossy
+/// vertex, one on its contour set's edges, qsil/edgetree/contour_set.h). The velocity is
 /// relative to the shading point p, which moves when it lies on a moving shape or an earlier
 /// vertex of its path moved (p carries that derivative as a dual): then the edges of static
 /// shapes (occluders, a mirror's outline, a light's outline) contribute too, so every shape's
@@ -23,6 +24,7 @@
 ///   the derivative part of the path's radiance. T is the (detached) throughput to p: the
 ///   boundary term is already a first derivative.
 
+#include "qsil/edgetree/contour_set.h"
 #include "qsil/edgetree/edge_forest.h"
 #include "qsil/edgetree/edge_sampler.h"
 #include "qsil/edgetree/mesh_edges.h"
@@ -31,14 +33,15 @@
 
 #include <array>
 #include <chrono>
+#include <vector>
 
 namespace qsil {
 
 /// What the boundary term needs besides the path context.
 struct BoundaryContext {
   const edgetree::EdgeSampler* sampler = nullptr;  ///< the --boundary method's secondary edge sampler
-  /// The mesh adjacency of the sampler's contour sets (set_contour_probe), or null when the sampler
-  /// uses none.
+  /// The mesh adjacency for contour sets at glossy vertices (contour_probe; the quadric method in
+  /// a scene with a glossy BSDF), or null for none.
   const edgetree::ContourIndex* contours = nullptr;
   const SceneVelocities* velocities = nullptr;
   std::vector<bool> moving;  ///< shapes with non-zero velocity (eligible at a static p)
@@ -223,29 +226,33 @@ bool edge_jump(const PathContext& ctx, const SceneVelocities& vel, const edgetre
                         });
 }
 
-/// The contour probe of a boundary query (SilhouetteQuery::probe, qsil/edgetree/contour_set.h):
-/// where q's LTC is glossy and its core cone (ltc_core_cone with kContourConeMass) is no wider
-/// than kContourMaxHalfAngle and meets an eligible shape's bounding sphere
-/// (ContourIndex::cone_meets_shapes), the cone in world coordinates and the first hits on
-/// eligible shapes of the ray from the shading point along its axis, or where that ray meets no eligible
-/// shape, of the kContourRingRays rays around it (each through back faces where its direction
-/// leaves below the surface, as every ray of the path tracer does). Returns the number of rays
-/// traced.
+/// The contour probe of a boundary query (qsil/edgetree/contour_set.h): where q's LTC is glossy
+/// and the cone that bounds its core (ltc_core_cone with kContourConeMass) has a half-angle of at
+/// most kContourMaxHalfAngle and meets an eligible shape's bounding sphere
+/// (ContourIndex::cone_meets_shapes), the core in world coordinates and the first hit of the ray
+/// from the shading point along the cone's axis, kept when it is on an eligible shape; where it
+/// is not (a miss, or a static shape in front), the first hits of kContourRingRays rays around
+/// the axis, at kContourRingAngle times the core's extent (a ring in the LTC's cosine domain
+/// mapped to the lobe, so it stays inside a stretched core), those on eligible shapes kept. Each
+/// ray passes through back faces where its direction leaves below the surface, as every ray of
+/// the path tracer does. `rays` receives the number of rays traced. A probe with no hit (count 0)
+/// gives no contour set.
 template <class T>
-int set_contour_probe(const PathContext& ctx, const edgetree::ContourIndex& contours, const SurfaceInteraction<T>& si,
-                      const Vec3& wo_world, edgetree::SilhouetteQuery& q) {
-  q.probe = edgetree::ContourProbe{};
-  if (edgetree::is_cosine_lobe(q.ltc) || !(q.ltc.norm > 0)) return 0;
+edgetree::ContourProbe contour_probe(const PathContext& ctx, const edgetree::ContourIndex& contours,
+                                     const SurfaceInteraction<T>& si, const Vec3& wo_world,
+                                     const edgetree::SilhouetteQuery& q, int& rays) {
+  rays = 0;
+  edgetree::ContourProbe probe;
+  if (edgetree::is_cosine_lobe(q.ltc) || !(q.ltc.norm > 0)) return probe;
   const edgetree::LTCCone cone = edgetree::ltc_core_cone(q.ltc, edgetree::kContourConeMass);
-  if (!(cone.cos_half_angle >= std::cos(edgetree::kContourMaxHalfAngle))) return 0;
-  q.probe.axis = q.frame.to_world(cone.axis).normalized();
-  q.probe.cos_half_angle = cone.cos_half_angle;
+  if (!(cone.cos_half_angle >= std::cos(edgetree::kContourMaxHalfAngle))) return probe;
+  probe.axis = q.frame.to_world(cone.axis).normalized();
+  probe.cos_half_angle = cone.cos_half_angle;
+  if (!contours.cone_meets_shapes(q.p, probe.axis, probe.cos_half_angle, q.eligible)) return probe;
   Mat3 to_local;
   to_local << q.frame.s.transpose(), q.frame.t.transpose(), q.frame.n.transpose();
-  q.probe.to_cosine = q.ltc.M_inv * to_local;
-  q.probe.cos_core = std::sqrt(1.0 - edgetree::kContourConeMass);
-  if (!contours.cone_meets_shapes(q.p, q.probe.axis, q.probe.cos_half_angle, q.eligible)) return 0;
-  int rays = 0;
+  probe.to_cosine = q.ltc.M_inv * to_local;
+  probe.cos_core = std::sqrt(1.0 - edgetree::kContourConeMass);
   auto trace = [&](const Vec3& dir) {
     IgnoreSet ignore;
     ignore.through_back_faces = leaves_below(si, wo_world, dir);
@@ -253,26 +260,27 @@ int set_contour_probe(const PathContext& ctx, const edgetree::ContourIndex& cont
     ++rays;
     const Hit h = ctx.tracer->intersect(origin, dir, kInf, ignore);
     if (!h.valid() || !q.is_eligible(h.shape)) return;
-    q.probe.hits[size_t(q.probe.count++)] = {h.shape, h.triangle, Vec3(origin + h.t * dir), dir};
+    probe.hits[size_t(probe.count++)] = {h.shape, h.triangle, Vec3(origin + h.t * dir), dir};
   };
-  trace(q.probe.axis);
-  if (q.probe.count == 0) {
-    // A ring at a fraction of the cone's half-angle: the outline of what the lobe's edge sees.
-    const double half = std::acos(std::clamp(cone.cos_half_angle, -1.0, 1.0)) * edgetree::kContourRingAngle;
-    const Vec3 u0 = q.probe.axis.unitOrthogonal(), u1 = q.probe.axis.cross(u0);
-    const Vec3 centre = std::cos(half) * q.probe.axis;
+  trace(probe.axis);
+  if (probe.count == 0) {
+    // The ring: directions (k tan(gamma) cos(phi), k tan(gamma) sin(phi), 1) of the cosine domain,
+    // gamma the core's angle there (sin^2 gamma = kContourConeMass), mapped by M = M_inv^-1.
+    const Mat3 M = q.ltc.M_inv.inverse();
+    const double r =
+        edgetree::kContourRingAngle * std::sqrt(edgetree::kContourConeMass / (1.0 - edgetree::kContourConeMass));
     for (int k = 0; k < edgetree::kContourRingRays; ++k) {
-      const Vec3 side = std::sin(half) * (edgetree::kContourRingCos[k] * u0 + edgetree::kContourRingSin[k] * u1);
-      trace((centre + side).normalized());
+      const Vec3 local = M * Vec3(r * edgetree::kContourRingCos[k], r * edgetree::kContourRingSin[k], 1.0);
+      if (local.allFinite() && local.squaredNorm() > 0) trace(q.frame.to_world(local.normalized()));
     }
   }
-  return rays;
+  return probe;
 }
 
 /// The secondary boundary term's samples at one path vertex (shared by forward mode, BoundaryHook,
 /// and reverse mode, integrators/reverse.cpp): bctx.samples_per_vertex traversals of bctx.sampler
-/// for query `q` (set up by the caller: eligibility, velocities; the contour probe is added here
-/// when bctx.contours is set, set_contour_probe), drawing from `sampler`; for each
+/// for query `q` (set up by the caller: eligibility, velocities; its contour set is made here
+/// when bctx.contours is set: contour_probe, ContourIndex::contour_edges), drawing from `sampler`; for each
 /// edge point with f_s != 0, `accept(edge, t, g)` decides before any ray whether it can contribute
 /// (edge_jump_with), and each contributing one is handed to `visit(edge, t, weight, g)` with
 /// weight = T f_s jump / (pdf samples_per_vertex), T the detached throughput (the vertex's
@@ -284,7 +292,18 @@ void for_each_boundary_sample(const PathContext& ctx, const BoundaryContext& bct
                               Visit&& visit) {
   const auto t0 = std::chrono::steady_clock::now();
   const Vec3 wo_world = q.frame.to_world(wo_local);
-  if (bctx.contours) stats.rays += uint64_t(set_contour_probe(ctx, *bctx.contours, si, wo_world, q));
+  // ---- The contour set of a glossy vertex: made once, used by every traversal here. The
+  // traversals leave no other boundary query open on this thread meanwhile (their radiance paths
+  // have no vertex hook), so per-thread storage serves.
+  thread_local std::vector<const edgetree::ForestEdge*> contour;
+  contour.clear();
+  if (bctx.contours) {
+    int rays = 0;
+    const edgetree::ContourProbe probe = contour_probe(ctx, *bctx.contours, si, wo_world, q, rays);
+    stats.rays += uint64_t(rays);
+    if (probe.count > 0) bctx.contours->contour_edges(probe, q.p, q.eligible, contour);
+  }
+  q.contour = contour;
   edgetree::SilhouetteSampleSet set;
   for (int sample = 0; sample < bctx.samples_per_vertex; ++sample) {
     ++stats.boundary_traversals;
