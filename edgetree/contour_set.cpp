@@ -41,7 +41,7 @@ ContourIndex ContourIndex::build(std::span<const ForestShapeInput> shapes, const
   for (const ForestShapeInput& in : shapes) {
     if (!in.mesh || in.mesh->num_triangles() == 0) continue;
     const TriangleMesh& tm = *in.mesh;
-    const MeshEdgeSet mes = build_mesh_edges(tm, in.shape, EdgeOptions{true});
+    MeshEdgeSet mes = build_mesh_edges(tm, in.shape, EdgeOptions{true});
     Mesh& m = index.meshes_[size_t(in.shape)];
     m.mesh = &tm;
     const Box3 box = tm.bounds();
@@ -49,25 +49,15 @@ ContourIndex ContourIndex::build(std::span<const ForestShapeInput> shapes, const
     for (const Vec3& v : tm.positions) m.radius = std::max(m.radius, (v - m.centre).norm());
     m.first_edge = index.total_edges_;
     index.total_edges_ += int(mes.edges.size());
-    m.planes = mes.face_planes;
-    m.edges.resize(mes.edges.size());
-    for (size_t i = 0; i < mes.edges.size(); ++i) {
-      const MeshEdge& e = mes.edges[i];
-      m.edges[i].v0 = e.v0;
-      m.edges[i].v1 = e.v1;
-      m.edges[i].f0 = e.f0;
-      m.edges[i].f1 = e.f1;
-      m.edges[i].always_discontinuous =
-          e.cls == EdgeClass::Boundary || e.cls == EdgeClass::NonManifold || e.cls == EdgeClass::Inconsistent;
-      m.edges[i].concave = e.cls == EdgeClass::Concave;
-    }
+    m.edges = std::move(mes.edges);
+    m.entries.assign(m.edges.size(), nullptr);
     m.face_edges.resize(size_t(tm.num_triangles()));
     std::vector<int> degree(tm.positions.size() + 1, 0);
     for (int f = 0; f < tm.num_triangles(); ++f)
       for (int k = 0; k < 3; ++k)
         m.face_edges[size_t(f)][size_t(k)] =
-            index.find_edge(m, tm.triangles[size_t(f)][k], tm.triangles[size_t(f)][(k + 1) % 3]);
-    for (const Edge& e : m.edges) {
+            find_edge(m, tm.triangles[size_t(f)][k], tm.triangles[size_t(f)][(k + 1) % 3]);
+    for (const MeshEdge& e : m.edges) {
       ++degree[size_t(e.v0)];
       ++degree[size_t(e.v1)];
     }
@@ -86,17 +76,17 @@ ContourIndex ContourIndex::build(std::span<const ForestShapeInput> shapes, const
       if (fe.shape < 0 || fe.shape >= int(index.meshes_.size())) continue;
       Mesh& m = index.meshes_[size_t(fe.shape)];
       if (!m.mesh) continue;
-      const int i = index.find_edge(m, fe.v0, fe.v1);
-      if (i >= 0) m.edges[size_t(i)].entry = &fe;
+      const int i = find_edge(m, fe.v0, fe.v1);
+      if (i >= 0) m.entries[size_t(i)] = &fe;
     }
   return index;
 }
 
-int ContourIndex::find_edge(const Mesh& m, int a, int b) const {
+int ContourIndex::find_edge(const Mesh& m, int a, int b) {
   const int lo = std::min(a, b), hi = std::max(a, b);
   auto it = std::lower_bound(
       m.edges.begin(), m.edges.end(), std::pair<int, int>(lo, hi),
-      [](const Edge& e, const std::pair<int, int>& k) { return e.v0 != k.first ? e.v0 < k.first : e.v1 < k.second; });
+      [](const MeshEdge& e, const std::pair<int, int>& k) { return e.v0 != k.first ? e.v0 < k.first : e.v1 < k.second; });
   return (it != m.edges.end() && it->v0 == lo && it->v1 == hi) ? int(it - m.edges.begin()) : -1;
 }
 
@@ -150,11 +140,9 @@ void ContourIndex::contour_edges(const ContourProbe& probe, const Vec3& p, const
     return shape >= 0 && shape < int(meshes_.size()) && meshes_[size_t(shape)].mesh &&
            (!eligible || (shape < int(eligible->size()) && (*eligible)[size_t(shape)]));
   };
-  // An edge where the facing changes (or that has no second face to walk to).
-  auto turns = [&](const Mesh& m, const Edge& e) {
-    return e.always_discontinuous || e.f1 < 0 ||
-           (m.planes[size_t(e.f0)].dot(ph) > 0) != (m.planes[size_t(e.f1)].dot(ph) > 0);
-  };
+  // An edge where the facing changes (or that has no second face to walk to): the edge set's own
+  // silhouette predicate, on every mesh edge (flat and culled ones too).
+  auto turns = [&](const MeshEdge& e) { return edge_is_silhouette(e, p); };
 
   // ---- 1. From each hit, walks across the faces the planes through its ray cut, to the first
   // silhouette.
@@ -178,7 +166,7 @@ void ContourIndex::contour_edges(const ContourProbe& probe, const Vec3& p, const
         Vec3 c = Vec3::Zero();
         for (int ei : m.face_edges[size_t(f)]) {
           if (ei < 0 || ei == from) continue;
-          const Edge& e = m.edges[size_t(ei)];
+          const MeshEdge& e = m.edges[size_t(ei)];
           const double s0 = plane.dot(x[size_t(e.v0)] - p), s1 = plane.dot(x[size_t(e.v1)] - p);
           if ((s0 > 0) == (s1 > 0)) continue;
           const Vec3 ci = x[size_t(e.v0)] + (s0 / (s0 - s1)) * (x[size_t(e.v1)] - x[size_t(e.v0)]);
@@ -189,8 +177,8 @@ void ContourIndex::contour_edges(const ContourProbe& probe, const Vec3& p, const
         }
         if (exit < 0) break;
         if (!probe.in_core(c, p)) break;  // left the core
-        const Edge& e = m.edges[size_t(exit)];
-        if (turns(m, e)) {
+        const MeshEdge& e = m.edges[size_t(exit)];
+        if (turns(e)) {
           seeds.emplace_back(hit.shape, exit);
           break;
         }
@@ -212,14 +200,15 @@ void ContourIndex::contour_edges(const ContourProbe& probe, const Vec3& p, const
     const Mesh& m = meshes_[size_t(cur.first)];
     if (!visited.insert(std::uint32_t(m.first_edge + cur.second))) continue;
     ++visits;
-    const Edge& e = m.edges[size_t(cur.second)];
+    const MeshEdge& e = m.edges[size_t(cur.second)];
     const std::vector<Vec3>& x = m.mesh->positions;
     if (!probe.arc_in_core(x[size_t(e.v0)], x[size_t(e.v1)], p)) continue;
-    if (e.entry && !e.concave && edge_is_silhouette(*e.entry, p)) out.push_back(e.entry);
+    const ForestEdge* entry = m.entries[size_t(cur.second)];
+    if (entry && e.cls != EdgeClass::Concave && edge_is_silhouette(*entry, p)) out.push_back(entry);
     for (int v : {e.v0, e.v1})
       for (int j = m.vertex_begin[size_t(v)]; j < m.vertex_begin[size_t(v) + 1]; ++j) {
         const int ej = m.vertex_edges[size_t(j)];
-        if (ej != cur.second && turns(m, m.edges[size_t(ej)])) stack.emplace_back(cur.first, ej);
+        if (ej != cur.second && turns(m.edges[size_t(ej)])) stack.emplace_back(cur.first, ej);
       }
   }
 }
@@ -244,8 +233,8 @@ bool ContourIndex::cone_meets_shapes(const Vec3& p, const Vec3& axis, double cos
 size_t ContourIndex::memory_bytes() const {
   size_t b = meshes_.size() * sizeof(Mesh);
   for (const Mesh& m : meshes_)
-    b += m.planes.size() * sizeof(Vec4) + m.face_edges.size() * sizeof(std::array<int, 3>) +
-         m.edges.size() * sizeof(Edge) + (m.vertex_begin.size() + m.vertex_edges.size()) * sizeof(int);
+    b += m.face_edges.size() * sizeof(std::array<int, 3>) + m.edges.size() * sizeof(MeshEdge) +
+         m.entries.size() * sizeof(const ForestEdge*) + (m.vertex_begin.size() + m.vertex_edges.size()) * sizeof(int);
   return b;
 }
 

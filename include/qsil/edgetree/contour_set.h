@@ -43,6 +43,7 @@
 /// sample_silhouette_set.
 
 #include "qsil/edgetree/edge_set.h"
+#include "qsil/edgetree/mesh_edges.h"
 #include "qsil/math.h"
 
 #include <array>
@@ -145,18 +146,14 @@ class ContourIndex {
   size_t memory_bytes() const;
 
  private:
-  struct Edge {
-    int v0 = -1, v1 = -1, f0 = -1, f1 = -1;
-    /// Boundary, non-manifold or inconsistent: a discontinuity for every p (walks stop there).
-    bool always_discontinuous = false;
-    bool concave = false;               ///< a valley: where its faces face p differently, it is hidden
-    const ForestEdge* entry = nullptr;  ///< its entry in the edge set (null: culled, e.g. flat)
-  };
   struct Mesh {
     const TriangleMesh* mesh = nullptr;
-    std::vector<Vec4> planes;                    ///< per face, [n, -n.x0]
     std::vector<std::array<int, 3>> face_edges;  ///< per face, its edges (indices into edges)
-    std::vector<Edge> edges;                     ///< sorted by (v0, v1), v0 < v1 (build_mesh_edges' order)
+    /// build_mesh_edges' edges (concave ones classified, not culled), sorted by (v0, v1), v0 < v1.
+    std::vector<MeshEdge> edges;
+    /// Per edge, its entry in the edge set (tree edge or always-candidate); null: not in the set
+    /// (flat, or culled).
+    std::vector<const ForestEdge*> entries;
     std::vector<int> vertex_begin;  ///< CSR: edges at vertex v are vertex_edges[vertex_begin[v] .. vertex_begin[v+1])
     std::vector<int> vertex_edges;
     int first_edge = 0;          ///< number of the mesh's first edge among all meshes' edges (visited sets)
@@ -164,7 +161,7 @@ class ContourIndex {
     double radius = 0;
   };
   /// Index of the edge (a, b) in m.edges (sorted by (v0, v1), v0 < v1), -1 if none.
-  int find_edge(const Mesh& m, int a, int b) const;
+  static int find_edge(const Mesh& m, int a, int b);
   std::vector<Mesh> meshes_;  ///< by shape index (empty Mesh for shapes not in the input)
   int total_edges_ = 0;       ///< edges of all meshes
 };
