@@ -5,6 +5,7 @@
 
 #include "qsil/error.h"
 #include "qsil/scene.h"
+#include "ray_hits.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -39,39 +40,9 @@ bool has_vertex(const TriangleMesh& m, const Vec3& p) {
   return std::any_of(m.positions.begin(), m.positions.end(), [&](const Vec3& q) { return (q - p).norm() < 1e-12; });
 }
 
-/// Slab test: does the ray o + t d, t > 0, meet the box?
-bool ray_hits_box(const Vec3& o, const Vec3& d, const Box3& b) {
-  double t0 = 0, t1 = kInf;
-  for (int k = 0; k < 3; ++k) {
-    const double inv = 1.0 / d[k];
-    double a = (b.lo[k] - o[k]) * inv, c = (b.hi[k] - o[k]) * inv;
-    if (std::isnan(a) || std::isnan(c)) {  // d[k] == 0 and o on a slab plane
-      if (o[k] < b.lo[k] || o[k] > b.hi[k]) return false;
-      continue;
-    }
-    if (a > c) std::swap(a, c);
-    t0 = std::max(t0, a);
-    t1 = std::min(t1, c);
-  }
-  return t0 <= t1;
-}
+/// Slab test: does the ray o + t d, t > 0, meet the box? (test::ray_hits_box from o.)
+bool ray_hits_box(const Vec3& o, const Vec3& d, const Box3& b) { return test::ray_hits_box(d, b.lo - o, b.hi - o); }
 
-/// Nearest hit t > 0 of a ray with a mesh (Möller–Trumbore), or nullopt.
-std::optional<double> ray_hits_mesh(const Vec3& o, const Vec3& d, const TriangleMesh& m) {
-  std::optional<double> best;
-  for (const auto& t : m.triangles) {
-    const Vec3 &p0 = m.positions[t[0]], &p1 = m.positions[t[1]], &p2 = m.positions[t[2]];
-    const Vec3 e1 = p1 - p0, e2 = p2 - p0, q = d.cross(e2);
-    const double det = e1.dot(q);
-    if (std::abs(det) < 1e-14) continue;
-    const Vec3 s = o - p0;
-    const double u = s.dot(q) / det;
-    const Vec3 r = s.cross(e1);
-    const double v = d.dot(r) / det, tt = e2.dot(r) / det;
-    if (u >= 0 && v >= 0 && u + v <= 1 && tt > 0 && (!best || tt < *best)) best = tt;
-  }
-  return best;
-}
 
 // ---------------------------------------------------------------------------------------------
 // Features
@@ -334,11 +305,11 @@ TEST(SceneLoaderTest, SpotMirrorShowsSpotOnlyInTheMirror) {
   for (int j = 0; j < cam.height; ++j) {
     for (int i = 0; i < cam.width; ++i) {
       const Vec3 d = cam.direction(i + 0.5, j + 0.5);
-      const auto t = ray_hits_mesh(o, d, mirror.mesh);
-      if (!t || d.dot(n) >= 0) continue;
+      const auto hit = test::ray_hits_mesh(o, d, mirror.mesh);
+      if (!hit || d.dot(n) >= 0) continue;
       ++on_mirror;
       const Vec3 r = d - 2 * d.dot(n) * n;
-      reflected_hits += ray_hits_box(o + *t * d, r, box);
+      reflected_hits += ray_hits_box(o + hit->t * d, r, box);
     }
   }
   const int pixels = cam.width * cam.height;

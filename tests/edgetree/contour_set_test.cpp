@@ -21,6 +21,7 @@
 #include "baselines/baseline_test_util.h"
 #include "qsil/edgetree/edge_forest.h"
 #include "qsil/edgetree/ltc.h"
+#include "ray_hits.h"
 #include "test_scenes.h"
 
 #include <gtest/gtest.h>
@@ -33,31 +34,6 @@
 namespace qsil::edgetree {
 namespace {
 
-/// First hit of the ray o + s d (s > 0) on a mesh (brute force, Moller-Trumbore): the face and
-/// the point, face -1 for a miss.
-int first_hit(const TriangleMesh& m, const Vec3& o, const Vec3& d, Vec3& point) {
-  double best = kInf;
-  int face = -1;
-  for (int f = 0; f < m.num_triangles(); ++f) {
-    const Vec3 a = m.positions[size_t(m.triangles[size_t(f)][0])];
-    const Vec3 e1 = m.positions[size_t(m.triangles[size_t(f)][1])] - a;
-    const Vec3 e2 = m.positions[size_t(m.triangles[size_t(f)][2])] - a;
-    const Vec3 pv = d.cross(e2);
-    const double det = e1.dot(pv);
-    if (std::abs(det) < 1e-14) continue;
-    const Vec3 tv = o - a;
-    const double u = tv.dot(pv) / det;
-    const Vec3 qv = tv.cross(e1);
-    const double v = d.dot(qv) / det;
-    const double s = e2.dot(qv) / det;
-    if (u < 0 || v < 0 || u + v > 1 || !(s > 0) || s >= best) continue;
-    best = s;
-    face = f;
-  }
-  point = o + best * d;
-  return face;
-}
-
 /// The probe of a circular cone with axis `axis` and half-angle `beta` from p (its core is the
 /// cone itself): its axis ray's hit.
 ContourProbe probe_of(const TriangleMesh& m, const Vec3& p, const Vec3& axis, double beta) {
@@ -68,10 +44,8 @@ ContourProbe probe_of(const TriangleMesh& m, const Vec3& p, const Vec3& axis, do
   const Vec3 t = probe.axis.unitOrthogonal(), b = probe.axis.cross(t);
   probe.to_cosine << t.transpose(), b.transpose(), probe.axis.transpose();
   probe.cos_core = probe.cos_half_angle;
-  Vec3 point;
-  const int face = first_hit(m, p, probe.axis, point);
-  if (face >= 0) {
-    probe.hits[0] = {0, face, point, probe.axis};
+  if (const auto hit = test::ray_hits_mesh(p, probe.axis, m)) {
+    probe.hits[0] = {0, hit->face, Vec3(p + hit->t * probe.axis), probe.axis};
     probe.count = 1;
   }
   return probe;
