@@ -5,7 +5,7 @@ docs/images/compare/<scene>-<k>/).
 
 Usage: python3 tools/references.py ...              # first: make or reuse the references
        python3 tools/results_report.py [--qsil PATH] [--res 256] [--budgets 4,15,60]
-       [--k8-res 128] [--k8-budgets 2,8,15] [--k8-scenes LIST] [--threads 2]
+       [--k8-res 128] [--k8-budgets 2,8,15] [--k8-scenes LIST] [--threads 2] [--only NAMES]
 
 For each scene: the cached FD reference of tools/references.py (out/references/index.json; the
 report stops if it is missing), then `qsil compare` with quadric, vsphere, uniform and fd at each
@@ -13,6 +13,13 @@ budget (methods interleaved), whose plot_compare.py draws the charts; the same w
 parameters (k8) on --k8-scenes. FD in the charts uses qsil's default step (what a user gets);
 the reference uses the step its study chose. qsil runs in the repository root with
 repository-relative paths, so results.csv/json carry no absolute paths.
+
+Each section's record is committed beside its charts: docs/images/compare/<scene>-<k>/results.json
+(the comparison) and reference.json (the reference's index entry, and the commit and date of the
+qsil that made the comparison). With --only spot-mirror-k1,... only those sections are re-run; the
+others are rebuilt from their committed records (an error if one is missing or was made at other
+budgets or another resolution), so a change that leaves some scenes' images pixel-identical needs
+only the affected scenes' references and comparisons (out/ is a cache, not a record).
 """
 import argparse
 import json
@@ -126,12 +133,54 @@ def largest_budget_rows(res_json):
     return {r["method"]: r for r in res_json["rows"] if r["target"] == last and r["rel_mse"] is not None}
 
 
+def git_commit():
+    """The repository's HEAD commit (short), with "+" when the working tree differs from it."""
+    head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True, text=True)
+    dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=ROOT, capture_output=True,
+                           text=True)
+    return (head.stdout.strip() or "unknown") + ("+" if dirty.stdout.strip() else "")
+
+
+def record_dir(name):
+    """docs/images/compare/NAME: a section's committed charts and records."""
+    return os.path.join(ROOT, "docs", "images", "compare", name)
+
+
 def copy_charts(d, name):
     """Copies a comparison's charts and data into docs/images/compare/NAME/."""
-    dst = os.path.join(ROOT, "docs", "images", "compare", name)
+    dst = record_dir(name)
     os.makedirs(dst, exist_ok=True)
     for f in ("error_vs_time.png", "grid.png", "results.csv", "results.json"):
         shutil.copy(os.path.join(ROOT, d, f), os.path.join(dst, f))
+
+
+def write_record(name, entry, fd_ref_rows):
+    """Writes docs/images/compare/NAME/reference.json: the section's reference record (the index entry
+    of tools/references.py), the rows of FD at the reference's step (not in results.json: a comparison
+    of its own) and the commit and date of the qsil that made the comparisons. Returns the record."""
+    dst = record_dir(name)
+    record = dict(entry, fd_ref_step_rows=fd_ref_rows,
+                  comparison={"commit": git_commit(), "date": time.strftime("%Y-%m-%d")})
+    with open(os.path.join(dst, "reference.json.tmp"), "w") as f:
+        json.dump(record, f, indent=1)
+    os.replace(os.path.join(dst, "reference.json.tmp"), os.path.join(dst, "reference.json"))
+    return record
+
+
+def kept_section(name, res, budgets):
+    """A section not re-run (--only): (reference record, results.json) from docs/images/compare/NAME/.
+    Raises SystemExit when a record is missing or was made at another resolution or other budgets."""
+    paths = [os.path.join(record_dir(name), f) for f in ("reference.json", "results.json")]
+    missing = [p for p in paths if not os.path.exists(p)]
+    if missing:
+        raise SystemExit(f"results_report: {os.path.relpath(missing[0], ROOT)} is missing; re-run section {name} "
+                         "(leave it out of --only's list, or add it)")
+    entry, res_json = (json.load(open(p)) for p in paths)
+    res_json["rows"] += entry.get("fd_ref_step_rows", [])
+    if res_json["resolution"] != [res, res] or res_json["targets"] != [float(b) for b in budgets.split(",")]:
+        raise SystemExit(f"results_report: docs/images/compare/{name} was made at {res_json['resolution'][0]}², "
+                         f"budgets {res_json['targets']}, not {res}², budgets {budgets}; re-run it too (--only)")
+    return entry, res_json
 
 
 def per_pixel_study(entry):
@@ -269,24 +318,44 @@ def main():
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--reuse", action="store_true",
                     help="keep earlier comparisons against the same reference and budgets (out/results/)")
+    ap.add_argument("--only", default="",
+                    help="re-run only these sections (e.g. spot-mirror-k1,spot-mirror-k8); the others come from "
+                         "their committed records in docs/images/compare/")
     args = ap.parse_args()
     args.qsil = os.path.abspath(args.qsil)
     index_path = os.path.join(ROOT, "out", "references", "index.json")
     index = json.load(open(index_path)) if os.path.exists(index_path) else {}
     jobs = [(scene, "k1", args.res, args.budgets) for scene, _ in SCENES]
     jobs += [(scene, "k8", args.k8_res, args.k8_budgets) for scene in args.k8_scenes.split(",") if scene]
+    only = [n for n in args.only.split(",") if n]
+    unknown = sorted(set(only) - {f"{scene}-{kset}" for scene, kset, _, _ in jobs})
+    if unknown:
+        raise SystemExit(f"results_report: --only names no section {', '.join(unknown)} (sections: "
+                         f"{', '.join(f'{scene}-{kset}' for scene, kset, _, _ in jobs)})")
     started = time.time()
     results = {}
+    kept = {}
     for scene, kset, res, budgets in jobs:
+        if only and f"{scene}-{kset}" not in only:
+            kept[(scene, kset)] = kept_section(f"{scene}-{kset}", res, budgets)
+    for scene, kset, res, budgets in jobs:
+        if (scene, kset) in kept:
+            results[(scene, kset)] = kept[(scene, kset)]
+            continue
         entry = index.get(f"{scene}-{kset}-{res}")
         if not entry:
             raise SystemExit(f"results_report: no reference {scene}-{kset}-{res} in {index_path}; run "
                              f"python3 tools/references.py --scenes {scene} --params {kset} --res {res}")
         res_json = compare(args, scene, kset, res, budgets, entry)
-        res_json["rows"] += compare_fd_at_reference_step(args, scene, kset, res, budgets, entry)
-        results[(scene, kset)] = (entry, res_json)
+        fd_ref_rows = compare_fd_at_reference_step(args, scene, kset, res, budgets, entry)
+        res_json["rows"] += fd_ref_rows
+        results[(scene, kset)] = (write_record(f"{scene}-{kset}", entry, fd_ref_rows), res_json)
     elapsed = time.time() - started
-    render_seconds = sum(r["wall_seconds"] for _, res in results.values() for r in res["rows"])
+    render_seconds = sum(r["wall_seconds"] for key, (_, res) in results.items() if key not in kept
+                         for r in res["rows"])
+    made_by = "; ".join(f"{scene}, k = {len(entry['params'])}: {entry['comparison']['commit']} "
+                        f"({entry['comparison']['date']})" for (scene, _), (entry, _) in results.items()
+                        if "comparison" in entry)
 
     lines = ["# Equal-time comparisons", "",
              "Generated by `tools/results_report.py` from the references of `tools/references.py` (do not edit "
@@ -305,8 +374,11 @@ def main():
              f"Machine: {cpu_model()}, {os.cpu_count()} hardware threads, {args.threads} render threads, shared "
              "with other jobs (**timings are noisy**: treat ratios within a factor ~1.5 as ties). "
              f"k = 1: {args.res}², budgets {args.budgets} s; k = 8: {args.k8_res}², budgets {args.k8_budgets} s; "
-             f"the comparisons' renders took {render_seconds:.0f} s (summed over methods and budgets; "
-             "comparisons reused with --reuse were made by earlier runs).", ""]
+             f"this run's comparisons took {render_seconds:.0f} s of renders (summed over methods and budgets; "
+             "comparisons reused with --reuse were made by earlier runs"
+             + (f"; sections kept from earlier runs: {', '.join(f'{s}-{k}' for s, k in kept)}" if kept else "")
+             + "). " + (f"Commit (and date) of the qsil that made each section's comparisons: {made_by}." if made_by
+                        else ""), ""]
     lines += ["## Relative MSE at the largest budget", "",
               "| scene | k | " + " | ".join(METHODS + [FD_REF]) + " | best fd / quadric | vsphere / quadric | uniform / quadric "
               "| ref. floor |", "|---" * (len(METHODS) + 7) + "|"]
