@@ -39,3 +39,56 @@ def test_the_floor_is_judged_against_the_smaller_error():
     assert ratio_cell(0.5, 0.1, 0.02).startswith("≥")
     assert ratio_cell(0.1, 0.5, 0.02).startswith("≤")
     assert ratio_cell(0.5, 0.1, 0.01) == f"{0.49 / 0.09:.3g}"
+
+
+# ---- Committed section records (docs/images/compare/<name>/reference.json + results.json): the
+# report rebuilds a section it does not re-run (--only) from them, so they must say what the
+# committed docs/results.md says.
+
+import json  # noqa: E402
+import re  # noqa: E402
+
+import results_report  # noqa: E402
+
+
+def _records():
+    base = os.path.join(ROOT, "docs", "images", "compare")
+    for name in sorted(os.listdir(base)):
+        if os.path.exists(os.path.join(base, name, "reference.json")):
+            yield name, results_report.kept_section(name, *_settings(name))
+
+
+def _settings(name):
+    res_json = json.load(open(os.path.join(ROOT, "docs", "images", "compare", name, "results.json")))
+    return res_json["resolution"][0], ",".join(f"{b:g}" for b in res_json["targets"])
+
+
+def test_every_section_has_a_record_that_regenerates_its_paragraph():
+    md = open(os.path.join(ROOT, "docs", "results.md")).read()
+    sections = re.findall(r"^## (\S+), k = (\d+) \(", md, re.M)
+    records = dict(_records())
+    assert len(sections) == 6
+    for scene, k in sections:
+        name = f"{scene}-k{k}"
+        assert name in records, f"docs/images/compare/{name}/reference.json is missing"
+        entry, res_json = records[name]
+        para = re.search(r"^## " + re.escape(scene) + r", k = " + k + r" \(.*\)\n\n(Reference: .*)$", md, re.M).group(1)
+        assert results_report.reference_text(entry, res_json) == para, name
+
+
+def test_a_kept_section_is_refused_when_its_record_is_missing_or_made_otherwise(tmp_path, monkeypatch):
+    name = "shadow-quad-k1"
+    res, budgets = _settings(name)
+    monkeypatch.setattr(results_report, "record_dir", lambda n: str(tmp_path / n))
+    with pytest.raises(SystemExit, match="reference.json is missing"):
+        results_report.kept_section(name, res, budgets)
+    src = os.path.join(ROOT, "docs", "images", "compare", name)
+    os.makedirs(tmp_path / name)
+    for f in ("reference.json", "results.json"):
+        (tmp_path / name / f).write_text(open(os.path.join(src, f)).read())
+    entry, res_json = results_report.kept_section(name, res, budgets)
+    assert entry["spp"] > 0 and res_json["rows"]
+    with pytest.raises(SystemExit, match="budgets"):
+        results_report.kept_section(name, res, budgets + ",120")
+    with pytest.raises(SystemExit, match="budgets"):
+        results_report.kept_section(name, res * 2, budgets)
