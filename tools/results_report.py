@@ -41,7 +41,7 @@ METHODS = ["quadric", "vsphere", "uniform", "fd"]
 WHY_FD_WINS = (
     "FD at the reference's own step (column `fd (ref. step)`) shares the reference's step bias, which no other "
     "method does, so its error is understated by up to that bias. Why FD at a good step still wins on "
-    "`shadow-quad` (and where it does on `spot-mirror`), measured on 2026-11-23 after the contour sets at glossy "
+    "`shadow-quad` (and ties on `spot-mirror`), measured on 2026-11-23 after the contour sets at glossy "
     "vertices (`python3 tools/bench/grad_cost.py --perf`, 256², 16 spp, 2 threads, a shared machine): `grad` "
     "costs 9.6× (spot-mirror), 15.6× (shadow-quad) and 8.6× (direct) `render` per sample, the boundary term "
     "80–88 % of it, mostly importance (of nodes: LTC integrals over box outlines and bounding cones; of edges: "
@@ -138,10 +138,11 @@ def largest_budget_rows(res_json):
 
 
 def git_commit():
-    """The repository's HEAD commit (short), with "+" when the working tree differs from it."""
+    """The repository's HEAD commit (short), with "+" when a tracked file outside docs/ (what the report
+    writes) differs from it."""
     head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True, text=True)
-    dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=ROOT, capture_output=True,
-                           text=True)
+    dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no", "--", ".", ":!docs"], cwd=ROOT,
+                           capture_output=True, text=True)
     return (head.stdout.strip() or "unknown") + ("+" if dirty.stdout.strip() else "")
 
 
