@@ -15,12 +15,13 @@ namespace {
 const EdgePointSampler kEmpty(Vec3::Zero(), Vec3::Zero(), LTC{});
 
 /// The interval [lo, hi] of t where w0 + t (w1 − w0) lies inside the pyramid from the origin over
-/// the light (all local, relative to p); hi < lo when the segment misses it.
-void pyramid_interval(const LocalLight& light, const Vec3& w0, const Vec3& w1, double& lo, double& hi) {
+/// a light with inward side normals `sides` (w0, w1 relative to p, in the sides' frame); hi < lo
+/// when the segment misses it.
+void pyramid_interval(const std::array<Vec3, 4>& sides, const Vec3& w0, const Vec3& w1, double& lo, double& hi) {
   lo = 0.0;
   hi = 1.0;
   for (int i = 0; i < 4 && hi >= lo; ++i) {
-    const Vec3& n = light.sides[size_t(i)];
+    const Vec3& n = sides[size_t(i)];
     const double a = n.dot(w0), b = n.dot(w1);  // n . w(t) >= 0 on the light's side
     if (a >= 0 && b >= 0) continue;
     if (a < 0 && b < 0) {
@@ -42,10 +43,10 @@ double component_weight(double radiance, double integral) {
 }
 
 /// Calls component(lo, hi, radiance) for each of the mixture's components of edge e (endpoints
-/// w0, w1 relative to p, local frame), in order: the whole edge with the environment's radiance
-/// (plus e's emission), then the part in front of each of the first kMaxLights lights that the
-/// edge crosses, with that light's.
-template <class Component>
+/// w0, w1 relative to p, in the local frame, or in the world frame when `world`), in order: the
+/// whole edge with the environment's radiance (plus e's emission), then the part in front of each
+/// of the first kMaxLights lights that the edge crosses, with that light's.
+template <bool world = false, class Component>
 void for_each_component(const ForestEdge& e, const SilhouetteQuery& q, std::span<const LocalLight> lights,
                         const Vec3& w0, const Vec3& w1, Component&& component) {
   double base = q.env_weight;
@@ -55,7 +56,7 @@ void for_each_component(const ForestEdge& e, const SilhouetteQuery& q, std::span
   for (const LocalLight& light : lights) {
     if (used == EdgeMixture::kMaxLights) break;
     double lo, hi;
-    pyramid_interval(light, w0, w1, lo, hi);
+    pyramid_interval(world ? light.sides_world : light.sides, w0, w1, lo, hi);
     if (!(hi > lo)) continue;
     component(lo, hi, light.weight);
     ++used;
@@ -105,14 +106,20 @@ double positive_part_integral(double a, double b, double lo, double hi) {
 }  // namespace
 
 double EdgeMixture::far_total(const ForestEdge& e, const SilhouetteQuery& q, std::span<const LocalLight> lights) {
-  const Vec3 w0 = q.frame.to_local(e.p0 - q.p), w1 = q.frame.to_local(e.p1 - q.p);
-  const double d2 = (0.5 * (w0 + w1)).squaredNorm();
+  return far_total(e, q, lights, EdgeGeometry(e, q.p));
+}
+
+double EdgeMixture::far_total(const ForestEdge& e, const SilhouetteQuery& q, std::span<const LocalLight> lights,
+                              const EdgeGeometry& g) {
+  const double d2 = g.mid2;
   if (!(d2 > 0)) return 0.0;
-  // g(t) = |w0 x w1| / |w_t|^4 * norm * max(0, w_t.z) / pi with |w_t| = d.
-  const double scale = w0.cross(w1).norm() / (d2 * d2) * q.ltc.norm / kPi;
+  // g(t) = |w0 x w1| / |w_t|^4 * norm * max(0, w_t.z) / pi with |w_t| = d; in the world frame
+  // (the lights' side normals too), w.z = n . w with n the shading normal.
+  const double scale = g.normal_len / (d2 * d2) * q.ltc.norm / kPi;
+  const double z0 = q.frame.n.dot(g.w0), z1 = q.frame.n.dot(g.w1);
   double total = 0;
-  for_each_component(e, q, lights, w0, w1, [&](double lo, double hi, double radiance) {
-    total += component_weight(radiance, scale * positive_part_integral(w0.z(), w1.z(), lo, hi));
+  for_each_component<true>(e, q, lights, g.w0, g.w1, [&](double lo, double hi, double radiance) {
+    total += component_weight(radiance, scale * positive_part_integral(z0, z1, lo, hi));
   });
   return total;
 }

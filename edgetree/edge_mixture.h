@@ -13,6 +13,21 @@
 
 namespace qsil::edgetree {
 
+/// An edge relative to a query point p, in the world frame: what an edge's far-field importance
+/// (EdgeMixture::far_total) and its normal-velocity factor (velocity_factor) share.
+struct EdgeGeometry {
+  Vec3 w0, w1;        ///< endpoints relative to p (scene units)
+  Vec3 normal;        ///< w0 x w1: normal of the plane through p and the edge, |w0| |w1| sin(angle) long
+  double normal_len;  ///< |w0 x w1|
+  double mid2;        ///< |midpoint - p|^2
+  EdgeGeometry(const ForestEdge& e, const Vec3& p)
+      : w0(e.p0 - p),
+        w1(e.p1 - p),
+        normal(w0.cross(w1)),
+        normal_len(normal.norm()),
+        mid2((0.5 * (w0 + w1)).squaredNorm()) {}
+};
+
 /// The density of t on edge e seen from the query point: the [QSS Eq. 4] × LTC target (f_s cos
 /// over the edge, EdgePointSampler's LTC part) weighted by the radiance that can jump there,
 ///   p(t) = (1 − ε) Σ_i (W_i / W) p_i(t) + ε p_angle(t),   W_i = radiance_i × ∫ p_i's target,
@@ -47,6 +62,10 @@ class EdgeMixture {
   /// from p (leaf_edge_weight); the relative error is O((half length / d)²). Zero exactly where
   /// total() is (the same components and horizon), up to rounding at the ends of an interval.
   static double far_total(const ForestEdge& e, const SilhouetteQuery& q, std::span<const LocalLight> lights);
+  /// far_total from the edge's geometry relative to the query point, computed once for it and
+  /// velocity_factor (leaf_edge_weight). Equal to far_total(e, q, lights) up to rounding.
+  static double far_total(const ForestEdge& e, const SilhouetteQuery& q, std::span<const LocalLight> lights,
+                          const EdgeGeometry& g);
   /// One sample from u in [0, 1): t in [0, 1] and its density pdf(t) > 0.
   EdgePointSample sample(double u) const;
   /// The density at t (per unit t): > 0 on [0, 1], 0 outside.

@@ -10,9 +10,6 @@
 namespace qsil::edgetree {
 namespace {
 
-/// psi/2 + sin(2 psi)/4 = integral of cos^2 from 0 to psi.
-double int_cos2(double psi) { return 0.5 * psi + 0.25 * std::sin(2.0 * psi); }
-
 /// psi/2 - sin(2 psi)/4 = integral of sin^2 from 0 to psi; a series below 1e-2 avoids the
 /// cancellation (relative error < 1e-16 there: the next term is 4 psi^9 / 2835... times psi^2).
 double int_sin2(double psi) {
@@ -21,6 +18,15 @@ double int_sin2(double psi) {
     return psi * p2 * (1.0 / 3.0 - p2 * (1.0 / 15.0 - p2 * (2.0 / 315.0)));
   }
   return 0.5 * psi - 0.25 * std::sin(2.0 * psi);
+}
+
+/// psi/2 + sin(2 psi)/4 = integral of cos^2 from 0 to psi, and int_sin2, given s = sin(psi) and
+/// c = cos(psi) (sin 2 psi = 2 s c): no trigonometric call where the caller has them (setup_ltc,
+/// from the cross and dot products psi came from; sample_ltc, one sine and cosine per step).
+double int_cos2(double psi, double s, double c) { return 0.5 * (psi + s * c); }
+double int_sin2(double psi, double s, double c) {
+  if (std::abs(psi) < 1e-2) return int_sin2(psi);
+  return 0.5 * (psi - s * c);
 }
 
 /// Interval of t in [0, 1] where the linear function a + t (b - a) is > 0, intersected with
@@ -90,7 +96,8 @@ void EdgePointSampler::setup_ltc(double cross01, double t_lo, double t_hi) {
   lb_ = ub.norm();
   const Vec3 cu = ua.cross(ub);
   const double cun = cu.norm();
-  psi_max_ = std::atan2(cun, ua.dot(ub));
+  const double dot_ab = ua.dot(ub);
+  psi_max_ = std::atan2(cun, dot_ab);
   if (!(cun > 0.0) || !(psi_max_ > 0.0) || !(la_ > 0.0)) return;
   const Vec3 e1 = ua / la_;
   const Vec3 n = cu / cun;
@@ -104,8 +111,11 @@ void EdgePointSampler::setup_ltc(double cross01, double t_lo, double t_hi) {
   z2_ = e2.z();
   m1_ = m.dot(e1);
   m2_ = m.dot(e2);
-  F_total_ = z1_ * m1_ * int_cos2(psi_max_) + (z1_ * m2_ + z2_ * m1_) * 0.5 * std::sin(psi_max_) * std::sin(psi_max_) +
-             z2_ * m2_ * int_sin2(psi_max_);
+  // sin and cos of psi_max from the cross and dot products it came from (no trigonometric call).
+  const double lab = la_ * lb_;
+  const double sp = cun / lab, cp = dot_ab / lab;
+  F_total_ = z1_ * m1_ * int_cos2(psi_max_, sp, cp) + (z1_ * m2_ + z2_ * m1_) * 0.5 * sp * sp +
+             z2_ * m2_ * int_sin2(psi_max_, sp, cp);
   if (!(F_total_ > 0.0) || !std::isfinite(F_total_)) return;
   const double cross_u01 = u0_.cross(u1_).norm();  // = |ua x ub| / (tb - ta)
   if (!(cross_u01 > 0.0)) return;
@@ -154,24 +164,22 @@ double EdgePointSampler::sample_angle(double u) const {
 
 double EdgePointSampler::sample_ltc(double u) const {
   const double target = u * F_total_;
-  auto F = [&](double p) {
-    const double s = std::sin(p);
-    return z1_ * m1_ * int_cos2(p) + (z1_ * m2_ + z2_ * m1_) * 0.5 * s * s + z2_ * m2_ * int_sin2(p);
+  // F (the CDF up to F_total) and its derivative f at p, from one sine and cosine of p.
+  auto F = [&](double p, double s, double c) {
+    return z1_ * m1_ * int_cos2(p, s, c) + (z1_ * m2_ + z2_ * m1_) * 0.5 * s * s + z2_ * m2_ * int_sin2(p, s, c);
   };
-  auto f = [&](double p) {
-    const double c = std::cos(p), s = std::sin(p);
-    return (z1_ * c + z2_ * s) * (m1_ * c + m2_ * s);
-  };
+  auto f = [&](double s, double c) { return (z1_ * c + z2_ * s) * (m1_ * c + m2_ * s); };
   double lo = 0.0, hi = psi_max_;
   double psi = u * psi_max_;
   for (int it = 0; it < 100; ++it) {
-    const double val = F(psi) - target;
+    const double sn = std::sin(psi), cs = std::cos(psi);
+    const double val = F(psi, sn, cs) - target;
     if (val > 0.0)
       hi = psi;
     else
       lo = psi;
     if (std::abs(val) <= 1e-15 * F_total_ || hi - lo <= 1e-15 * psi_max_) break;
-    const double d = f(psi);
+    const double d = f(sn, cs);
     double next = psi - val / d;
     if (!(d > 0.0) || !(next > lo && next < hi)) next = 0.5 * (lo + hi);
     psi = next;

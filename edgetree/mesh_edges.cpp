@@ -102,12 +102,4 @@ MeshEdgeSet build_mesh_edges(const TriangleMesh& mesh, int shape, const EdgeOpti
   return out;
 }
 
-bool edge_is_silhouette(const MeshEdge& e, const Vec3& p) {
-  if (e.f1 < 0 || e.cls == EdgeClass::Boundary || e.cls == EdgeClass::NonManifold || e.cls == EdgeClass::Inconsistent)
-    return true;
-  const double g0 = e.q0.head<3>().dot(p) + e.q0[3];
-  const double g1 = e.q1.head<3>().dot(p) + e.q1[3];
-  return g0 * g1 <= 0.0 || !(std::isfinite(g0) && std::isfinite(g1));
-}
-
 }  // namespace qsil::edgetree

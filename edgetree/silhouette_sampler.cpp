@@ -169,17 +169,28 @@ SilhouetteSample sample_on_edge(const ForestEdge& e, double pmf, const Prepared&
 
 }  // namespace
 
-double velocity_factor(const ForestEdge& e, const SilhouetteQuery& q) {
+namespace {
+
+/// velocity_factor from the edge's geometry relative to p (shared with its far_total).
+double velocity_factor(const ForestEdge& e, const SilhouetteQuery& q, const EdgeGeometry& g) {
   if (!q.velocities) return 1.0;
-  const Vec3 n = (e.p0 - q.p).cross(e.p1 - q.p);
-  const double len = n.norm();
-  if (!(len > 0)) return 0.0;  // p on the edge's line: no plane, J = 0
+  if (!(g.normal_len > 0)) return 0.0;  // p on the edge's line: no plane, J = 0
   const auto& V = q.velocities->position[size_t(e.shape)];
-  const SceneVelocities::Block v0 = V[size_t(e.v0)] - q.dp, v1 = V[size_t(e.v1)] - q.dp;
+  const SceneVelocities::Block& v0 = V[size_t(e.v0)];
+  const SceneVelocities::Block& v1 = V[size_t(e.v1)];
   double f = 0;
-  for (int k = 0; k < q.velocities->num_params; ++k)
-    f += 0.5 * (std::abs(n.dot(v0.col(k))) + std::abs(n.dot(v1.col(k)))) * q.velocity_scale[size_t(k)];
-  return f / len;
+  for (int k = 0; k < q.velocities->num_params; ++k) {
+    const double n_dp = g.normal.dot(q.dp.col(k));
+    f += 0.5 * (std::abs(g.normal.dot(v0.col(k)) - n_dp) + std::abs(g.normal.dot(v1.col(k)) - n_dp)) *
+         q.velocity_scale[size_t(k)];
+  }
+  return f / g.normal_len;
+}
+
+}  // namespace
+
+double velocity_factor(const ForestEdge& e, const SilhouetteQuery& q) {
+  return velocity_factor(e, q, EdgeGeometry(e, q.p));
 }
 
 void local_lights(const SilhouetteQuery& q, std::vector<LocalLight>& out) {
@@ -194,6 +205,7 @@ void local_lights(const SilhouetteQuery& q, std::vector<LocalLight>& out) {
       if (n.dot(inside) < 0) n = -n;
       const double len = n.norm();
       l.sides[size_t(i)] = len > 0 ? Vec3(n / len) : Vec3::Zero();
+      l.sides_world[size_t(i)] = q.frame.to_world(l.sides[size_t(i)]);
     }
     l.weight = light.weight;
     out.push_back(l);
@@ -210,12 +222,12 @@ namespace {
 
 NodeWeight leaf_edge_weight(const ForestEdge& e, const Prepared& pq) {
   const SilhouetteQuery& q = pq.q;
+  const EdgeGeometry g(e, q.p);  // computed once for the importance, its velocity factor and G
   const double half = 0.5 * e.length;
-  const bool far = pq.cosine_lobe &&
-                   half * half < kConeImportanceSin * kConeImportanceSin * (0.5 * (e.p0 + e.p1) - q.p).squaredNorm();
-  const double total = far ? EdgeMixture::far_total(e, q, pq.lights) : EdgeMixture::total(e, q, pq.lights);
+  const bool far = pq.cosine_lobe && half * half < kConeImportanceSin * kConeImportanceSin * g.mid2;
+  const double total = far ? EdgeMixture::far_total(e, q, pq.lights, g) : EdgeMixture::total(e, q, pq.lights);
   // velocity_factor is finite, so a zero total needs no factor (below the horizon, outside every light).
-  return {total > 0 ? total * velocity_factor(e, q) : 0.0, edge_defensive(e, q.p)};
+  return {total > 0 ? total * velocity_factor(e, q, g) : 0.0, g.mid2 > 0 ? e.length / g.mid2 : e.length};
 }
 
 NodeWeight loose_edge_weight(const ForestEdge& e, const Prepared& pq) {

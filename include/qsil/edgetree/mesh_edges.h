@@ -12,6 +12,7 @@
 #include "qsil/scene.h"
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -78,6 +79,13 @@ MeshEdgeSet build_mesh_edges(const TriangleMesh& mesh, int shape = 0, const Edge
 /// Exact silhouette predicate of one edge for the shading point p (world frame) [QSS 3.1]:
 /// true iff (q0.x)(q1.x) <= 0 with x = [p, 1]; always true for boundary, non-manifold and
 /// inconsistent edges. This is the ground truth of every soundness test (docs/architecture.md §3).
-bool edge_is_silhouette(const MeshEdge& e, const Vec3& p);
+/// Inline: the traversal's flat choices test tens of edges per query with it.
+inline bool edge_is_silhouette(const MeshEdge& e, const Vec3& p) {
+  if (e.f1 < 0 || e.cls == EdgeClass::Boundary || e.cls == EdgeClass::NonManifold || e.cls == EdgeClass::Inconsistent)
+    return true;
+  const double g0 = e.q0.head<3>().dot(p) + e.q0[3];
+  const double g1 = e.q1.head<3>().dot(p) + e.q1[3];
+  return g0 * g1 <= 0.0 || !(std::isfinite(g0) && std::isfinite(g1));
+}
 
 }  // namespace qsil::edgetree

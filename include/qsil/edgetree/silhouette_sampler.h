@@ -135,9 +135,10 @@ inline bool light_toward(const LightPolygon& light, const SilhouetteQuery& q, st
 /// that n · w >= 0 for directions w inside. The per-query constants of the light-aware importance
 /// [QSS 3.6], computed once per traversal (local_lights) instead of at every node.
 struct LocalLight {
-  std::array<Vec3, 4> corners;  ///< local frame, relative to p (scene units)
-  std::array<Vec3, 4> sides;    ///< inward unit side normals (local frame; zero for a degenerate side)
-  double weight = 0;            ///< the light's radiance (luminance)
+  std::array<Vec3, 4> corners;      ///< local frame, relative to p (scene units)
+  std::array<Vec3, 4> sides;        ///< inward unit side normals (local frame; zero for a degenerate side)
+  std::array<Vec3, 4> sides_world;  ///< the same normals in the world frame
+  double weight = 0;                ///< the light's radiance (luminance)
 };
 
 /// The lights of `q` that emit toward q.p (light_toward), in order, as LocalLight; `out` is
