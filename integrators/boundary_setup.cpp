@@ -7,9 +7,12 @@
 #include "qsil/edgetree/quadric_sampler.h"
 #include "qsil/edgetree/uniform_sampler.h"
 #include "qsil/edgetree/vsphere_sampler.h"
+#include "qsil/error.h"
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <string>
 
 namespace qsil {
 
@@ -71,6 +74,12 @@ void set_light_importance(const Scene& scene, const EnvironmentLight& environmen
   if (context.lights.empty() && context.env_weight == 0) context.env_weight = 1.0;  // plain [QSS 3.5] importance
 }
 
+void check_boundary_spp(double boundary_spp) {
+  if (!(boundary_spp >= 0) || !std::isfinite(boundary_spp))
+    throw Error("boundary samples per shading point must be >= 0 and finite (got " + std::to_string(boundary_spp) +
+                "; 0: the method's default)");
+}
+
 void describe_boundary_setup(const BoundarySetup& boundary, Method method, int primary_edges, SetupReport& setup) {
   setup.edge_seconds = boundary.seconds;
   setup.edges = int(boundary.edges->edges().size() + boundary.edges->always_edges().size());
@@ -86,20 +95,19 @@ void describe_boundary_setup(const BoundarySetup& boundary, Method method, int p
   }
 }
 
-void set_up_boundary_term(const Scene& scene, Method method, const SceneVelocities* velocities,
-                          const std::vector<bool>& moving, int boundary_spp, const EnvironmentLight& environment,
-                          BoundarySetup& boundary, BoundaryContext& bctx, std::vector<PrimaryEdge>& primary,
-                          SetupReport& setup) {
+void set_up_boundary_term(const Scene& scene, const RayTracer& tracer, Method method, const SceneVelocities* velocities,
+                          const std::vector<bool>& moving, double boundary_spp, const EnvironmentLight& environment,
+                          BoundarySetup& boundary, BoundaryContext& bctx, PrimaryEdges& primary, SetupReport& setup) {
   boundary = build_boundary_setup(scene, method);
   bctx.sampler = boundary.sampler.get();
   bctx.contours = boundary.contours.get();
   bctx.velocities = velocities;
   bctx.moving = moving;
   bctx.all.assign(scene.shapes.size(), true);
-  bctx.samples_per_vertex = std::max(1, boundary_spp);
+  bctx.samples_per_vertex = boundary_spp > 0 ? boundary_spp : default_boundary_spp(method);
   set_light_importance(scene, environment, bctx);
-  primary = find_primary_edges(scene, *boundary.edges, moving);
-  describe_boundary_setup(boundary, method, int(primary.size()), setup);
+  primary = find_primary_edges(scene, *boundary.edges, moving, tracer);
+  describe_boundary_setup(boundary, method, int(primary.edges.size()), setup);
 }
 
 }  // namespace qsil

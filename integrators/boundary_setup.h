@@ -44,6 +44,9 @@ BoundarySetup build_boundary_setup(const Scene& scene, Method method);
 /// context.velocities (set it first; none: no scale), each parameter's velocity scale.
 void set_light_importance(const Scene& scene, const EnvironmentLight& environment, BoundaryContext& context);
 
+/// Throws qsil::Error unless `boundary_spp` (EstimatorConfig::boundary_spp) is >= 0 and finite.
+void check_boundary_spp(double boundary_spp);
+
 /// Fills the set-up report's edge-structure fields from a built boundary method: build time, edge
 /// count, fitted and quadric node counts, `primary_edges`, and the structure's name ("edge forest
 /// (dual box + quadrics)", "edge forest (dual box)", "edge set + uniform tables", "edge set +
@@ -53,12 +56,13 @@ void describe_boundary_setup(const BoundarySetup& boundary, Method method, int p
 /// The boundary term of a run, set up once (what GradientEstimator and ReverseEstimator both do):
 /// build_boundary_setup of `method` into `boundary`; `bctx` with its sampler, `velocities` (forward
 /// mode's; null in reverse mode: velocity factor 1), `moving` (the shapes whose edges are eligible
-/// at a static shading point), every shape eligible at a moving one, max(1, boundary_spp) samples
-/// per vertex and set_light_importance; `primary` = find_primary_edges of the `moving` shapes; and
-/// describe_boundary_setup into `setup`. `scene` and `velocities` must outlive the results.
-void set_up_boundary_term(const Scene& scene, Method method, const SceneVelocities* velocities,
-                          const std::vector<bool>& moving, int boundary_spp, const EnvironmentLight& environment,
-                          BoundarySetup& boundary, BoundaryContext& bctx, std::vector<PrimaryEdge>& primary,
-                          SetupReport& setup);
+/// at a static shading point), every shape eligible at a moving one, boundary_spp traversals per
+/// vertex (0: default_boundary_spp of the method) and set_light_importance; `primary` =
+/// find_primary_edges of the `moving` shapes (their visibility from the camera tested with
+/// `tracer`); and describe_boundary_setup into `setup`. `scene`, `tracer` and `velocities` must
+/// outlive the results.
+void set_up_boundary_term(const Scene& scene, const RayTracer& tracer, Method method, const SceneVelocities* velocities,
+                          const std::vector<bool>& moving, double boundary_spp, const EnvironmentLight& environment,
+                          BoundarySetup& boundary, BoundaryContext& bctx, PrimaryEdges& primary, SetupReport& setup);
 
 }  // namespace qsil

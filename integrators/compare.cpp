@@ -79,9 +79,9 @@ ProgressiveOptions progressive_options(const CompareOptions& o, double target, u
 
 /// The estimator configuration of a method.
 EstimatorConfig method_config(Method m, const std::vector<ParameterSpec>& params, const std::vector<double>& steps,
-                              int boundary_spp) {
+                              double boundary_spp, double primary_samples) {
   if (m == Method::FiniteDifferences) return EstimatorConfig::finite_differences(params, steps);
-  return EstimatorConfig::gradient(params, m, boundary_spp);
+  return EstimatorConfig::gradient(params, m, boundary_spp, primary_samples);
 }
 
 /// The reference: read from options.reference, or rendered with `quadric` (set up by the caller
@@ -183,7 +183,7 @@ CompareReport run_compare(const Scene& scene, const std::vector<ParameterSpec>& 
   auto estimator = [&](Method m) -> const Estimator& {
     auto& e = estimators[m];
     if (!e) {
-      e = std::make_unique<Estimator>(scene, method_config(m, params, rep.fd_steps, o.boundary_spp));
+      e = std::make_unique<Estimator>(scene, method_config(m, params, rep.fd_steps, o.boundary_spp, o.primary_samples));
       if (log) *log << "compare: set up " << method_name(m) << " once: " << e->setup().describe() << "\n";
     }
     return *e;

@@ -94,8 +94,8 @@ class GradientEstimator final : public Estimator::Impl {
     ctx = lights.context(s, tracer);
     // ---- The boundary method's structures, only when something moves.
     if (samples_edges(config.method) && vel.any_moving()) {
-      set_up_boundary_term(s, config.method, &vel, vel.moving, config.boundary_spp, lights.environment, boundary, bctx,
-                           primary, setup);
+      set_up_boundary_term(s, tracer, config.method, &vel, vel.moving, config.boundary_spp, lights.environment,
+                           boundary, bctx, primary, setup);
     }
   }
 
@@ -105,6 +105,8 @@ class GradientEstimator final : public Estimator::Impl {
     const DualView<N> view{&scene, &vel};
     const int K = layout.num_params();
     const bool with_boundary = bool(boundary.sampler);
+    // A fractional boundary rate draws a pixel's samples unalike (boundary_traversals).
+    const bool stratified = with_boundary && bctx.samples_per_vertex != std::floor(bctx.samples_per_vertex);
     PathStats total;
     run_pixels(
         cam, layout, options, first, count, "grad",
@@ -114,10 +116,13 @@ class GradientEstimator final : public Estimator::Impl {
           ++st.rays;
           const Hit hit = tracer.intersect(origin, d);
           ColorT<Dual<N>> L;
-          if (with_boundary) {
+          const uint64_t pixel = uint64_t(y) * cam.width + x;
+          const int traversals =
+              with_boundary ? boundary_traversals(bctx.samples_per_vertex, options.seed, pixel, uint64_t(s)) : 0;
+          if (traversals > 0) {
             // The boundary term draws from a stream of its own, so it leaves the path's decisions unchanged.
-            Sampler bsampler(options.seed, uint64_t(y) * cam.width + x, uint64_t(s), 1);
-            const BoundaryHook<N> hook{&ctx, &bctx, &bsampler};
+            Sampler bsampler(options.seed, pixel, uint64_t(s), 1);
+            const BoundaryHook<N> hook{&ctx, &bctx, &bsampler, traversals};
             L = trace_path(ctx, view, lift<Dual<N>>(origin), d, hit, 0, 0.0, sampler, st, hook);
           } else {
             L = trace_path(ctx, view, lift<Dual<N>>(origin), d, hit, 0, 0.0, sampler, st);
@@ -128,14 +133,17 @@ class GradientEstimator final : public Estimator::Impl {
             out[layout.derivative_mean(k)] =
                 (out[layout.derivative(k, 0)] + out[layout.derivative(k, 1)] + out[layout.derivative(k, 2)]) / 3.0;
           }
+          // Stratum 1: the samples that made the rate's fractional traversal (Film::standard_error).
+          return stratified && traversals > int(bctx.samples_per_vertex) ? 1 : 0;
         },
-        r, total);
-    // ---- Primary silhouettes: one edge sample per pixel sample, splatted where it lands.
+        r, total, stratified);
+    // ---- Primary silhouettes: primary_samples edge samples per pixel sample, splatted where they land.
     if (with_boundary) {
       const auto t0 = Clock::now();
       PathStats primary_stats;
-      add_primary_boundary(r.film, ctx, vel, primary, first, count, options.seed, options.threads, primary_stats,
-                           options.part, options.parts, options.parts > 1 ? &r.splats : nullptr);
+      add_primary_boundary(r.film, ctx, vel, primary, config.primary_samples, first, count, options.seed,
+                           options.threads, primary_stats, options.part, options.parts,
+                           options.parts > 1 ? &r.splats : nullptr);
       const double dt = seconds_since(t0);
       r.seconds += dt;
       r.rays += primary_stats.rays;
@@ -156,7 +164,7 @@ class GradientEstimator final : public Estimator::Impl {
   PathContext ctx;
   BoundarySetup boundary;
   BoundaryContext bctx;
-  std::vector<PrimaryEdge> primary;
+  PrimaryEdges primary;
 };
 
 /// Central finite differences with common random numbers (`qsil fd`): the primal scene and, per
@@ -242,11 +250,13 @@ std::unique_ptr<Estimator::Impl> make_impl(const Scene& scene, EstimatorConfig c
 
 EstimatorConfig EstimatorConfig::primal() { return {}; }
 
-EstimatorConfig EstimatorConfig::gradient(std::vector<ParameterSpec> params, Method method, int boundary_spp) {
+EstimatorConfig EstimatorConfig::gradient(std::vector<ParameterSpec> params, Method method, double boundary_spp,
+                                          double primary_samples) {
   EstimatorConfig c;
   c.params = std::move(params);
   c.method = method;
   c.boundary_spp = boundary_spp;
+  c.primary_samples = primary_samples;
   return c;
 }
 
@@ -283,6 +293,8 @@ Estimator::Estimator(const Scene& scene, EstimatorConfig config) {
   if (!config.params.empty() && config.method != Method::FiniteDifferences && config.method != Method::None &&
       !samples_edges(config.method))
     throw Error("method " + std::string(method_name(config.method)) + " cannot estimate derivatives");
+  primary_samples_per_index(scene.camera.width, scene.camera.height, config.primary_samples);  // throws if invalid
+  check_boundary_spp(config.boundary_spp);
   const auto t0 = Clock::now();
   impl_ = make_impl(scene, std::move(config));
   impl_->setup.seconds = seconds_since(t0);

@@ -18,6 +18,7 @@
 #include <cmath>
 #include <functional>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 namespace qsil {
@@ -30,16 +31,19 @@ void for_each_pixel(int width, int height, int threads, const std::string& label
 
 /// One estimator run over samples [first, first + count) of every pixel of `camera`'s image:
 /// `sample(x, y, s, sampler, stats, out)` fills out[0 .. layout.channels()) for sample s of
-/// pixel (x, y), drawing from `sampler` = Sampler(seed, pixel, s), for the pixels of part
+/// pixel (x, y), drawing from `sampler` = Sampler(seed, pixel, s), and returns nothing or the
+/// sample's stratum (0 or 1, Film::add_sample: samples of a pixel drawn unalike; 1 only with
+/// `stratified`, which makes the film stratified), for the pixels of part
 /// options.part of options.parts (every pixel when parts = 1). A sample with a non-finite
 /// value is replaced by zeros and counted. Fills result.film, spp, first_sample, seconds, rays and
 /// nonfinite; adds every thread's counters to `total`.
 template <class SampleFn>
 void run_pixels(const Camera& camera, const FilmLayout& layout, const RenderOptions& options, int first, int count,
-                const std::string& label, SampleFn&& sample, RenderResult& result, PathStats& total) {
+                const std::string& label, SampleFn&& sample, RenderResult& result, PathStats& total,
+                bool stratified = false) {
   const int W = camera.width, H = camera.height;
   const int channels = layout.channels();
-  result.film = Film(W, H, layout);
+  result.film = Film(W, H, layout, stratified);
   result.first_sample = first;
   result.spp = count;
   tbb::enumerable_thread_specific<PathStats> stats;
@@ -53,14 +57,18 @@ void run_pixels(const Camera& camera, const FilmLayout& layout, const RenderOpti
         const uint64_t pixel = uint64_t(y) * W + x;
         for (int s = first; s < first + count; ++s) {
           Sampler sampler(options.seed, pixel, uint64_t(s));
-          sample(x, y, s, sampler, st, out.data());
+          int stratum = 0;
+          if constexpr (std::is_void_v<decltype(sample(x, y, s, sampler, st, out.data()))>)
+            sample(x, y, s, sampler, st, out.data());
+          else
+            stratum = sample(x, y, s, sampler, st, out.data());
           bool finite = true;
           for (double v : out) finite = finite && std::isfinite(v);
           if (!finite) {
             nonfinite.fetch_add(1);
             std::fill(out.begin(), out.end(), 0.0);
           }
-          result.film.add_sample(x, y, out.data());
+          result.film.add_sample(x, y, out.data(), stratum);
         }
       },
       options.part, options.parts);

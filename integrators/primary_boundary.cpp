@@ -4,12 +4,15 @@
 #include "integrators/primary_boundary.h"
 
 #include "qsil/edgetree/mesh_edges.h"
+#include "qsil/error.h"
 #include "qsil/integrators/boundary_term.h"
 
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <cmath>
+#include <string>
 
 namespace qsil {
 
@@ -34,27 +37,29 @@ bool clip(const Vec3& c0, const Vec3& c1, const Vec3& n, double d, double& ta, d
 /// per_sample / pdf (so the pixel's derivative gains weight (g . v_t)). Shared by forward mode
 /// (add_primary_boundary) and reverse mode (for_each_primary_sample).
 template <class Accept, class Emit>
-void sample_chunk(const PathContext& ctx, const std::vector<PrimaryEdge>& edges, const std::vector<double>& cdf,
-                  long long count, double per_sample, uint64_t seed, long long chunk, int range_key, PathStats& stats,
-                  Accept&& accept, Emit&& emit) {
+void sample_chunk(const PathContext& ctx, const PrimaryEdges& primary, long long count, double per_sample,
+                  uint64_t seed, long long chunk, int range_key, PathStats& stats, Accept&& accept, Emit&& emit) {
   const Camera& cam = ctx.scene->camera;
   const Vec2 tanf = cam.tan_half_fov();
   const double fx = cam.width / (2.0 * tanf.x()), fy = cam.height / (2.0 * tanf.y());
   const Vec3 o = cam.origin();
   const Vec3 forward = cam.to_world.block<3, 1>(0, 2).normalized();
+  const std::vector<double>& cdf = primary.cdf;
   Sampler sampler(seed, uint64_t(chunk), uint64_t(range_key), 2);
   for (long long i = 0; i < count; ++i) {
     ++stats.boundary_traversals;
-    // ---- An edge by its weight (projected length, less for creases), a point uniformly along
-    // its projected segment.
+    // ---- A piece of an edge by its weight (projected length, less for creases and hidden
+    // pieces), a point uniformly along its projected part.
     const double u = sampler.next() * cdf.back();
-    const size_t j = std::min(size_t(std::upper_bound(cdf.begin(), cdf.end(), u) - cdf.begin()) - 1, edges.size() - 1);
-    const PrimaryEdge& pe = edges[j];
-    const double s = sampler.next();
-    const double tp = s * pe.za / (pe.zb * (1 - s) + s * pe.za);                     // perspective-correct
-    const double dsdt = pe.za * pe.zb / std::pow((1 - tp) * pe.za + tp * pe.zb, 2);  // ds/dt'
+    const size_t j =
+        std::min(size_t(std::upper_bound(cdf.begin(), cdf.end(), u) - cdf.begin()) - 1, primary.pieces.size() - 1);
+    const PrimaryPiece& piece = primary.pieces[j];
+    const PrimaryEdge& pe = primary.edges[size_t(piece.edge)];
+    const double s = piece.s0 + sampler.next() * (piece.s1 - piece.s0);
+    const double tp = pe.tp_at(s);  // perspective-correct
     const double t = pe.ta + tp * (pe.tb - pe.ta);
-    const double pdf = (pe.weight / cdf.back()) * dsdt / (pe.tb - pe.ta);
+    const double dsdt = pe.za * pe.zb / std::pow((1 - tp) * pe.za + tp * pe.zb, 2);  // ds/dt'
+    const double pdf = (piece.weight / cdf.back()) / (piece.s1 - piece.s0) * dsdt / (pe.tb - pe.ta);
     const Vec2 film = pe.a + s * (pe.b - pe.a);
     const int px = std::clamp(int(film.x()), 0, cam.width - 1), py = std::clamp(int(film.y()), 0, cam.height - 1);
     // ---- W(w) = f_x f_y / cos^3: pixels^2 per steradian of the box-filtered pixel.
@@ -83,9 +88,9 @@ void sample_chunk(const PathContext& ctx, const std::vector<PrimaryEdge>& edges,
 /// Forward mode: the splats of one chunk, J[k] = g . (velocity of the edge point) (the camera
 /// does not move).
 template <int N>
-void run_chunk(const PathContext& ctx, const SceneVelocities& vel, const std::vector<PrimaryEdge>& edges,
-               const std::vector<double>& cdf, long long count, double per_sample, uint64_t seed, long long chunk,
-               int range_key, std::vector<FilmSplat>& out, PathStats& stats) {
+void run_chunk(const PathContext& ctx, const SceneVelocities& vel, const PrimaryEdges& primary, long long count,
+               double per_sample, uint64_t seed, long long chunk, int range_key, std::vector<FilmSplat>& out,
+               PathStats& stats) {
   const int K = vel.num_params;
   const FilmLayout layout(K);
   Eigen::Matrix<double, 1, N> J;
@@ -100,33 +105,32 @@ void run_chunk(const PathContext& ctx, const SceneVelocities& vel, const std::ve
       out.push_back({px, py, layout.derivative_mean(k), weight.mean() * J[k]});
     }
   };
-  sample_chunk(ctx, edges, cdf, count, per_sample, seed, chunk, range_key, stats, accept, emit);
+  sample_chunk(ctx, primary, count, per_sample, seed, chunk, range_key, stats, accept, emit);
 }
 
 /// The chunks of samples [first_sample, first_sample + spp) of the primary term and this part's
 /// share of them (see add_primary_boundary for the numbering).
 struct ChunkPlan {
-  std::vector<double> cdf;  ///< cumulative edge weights
-  double per_sample = 0;    ///< each sample estimates the whole image's term; a pixel's mean divides by spp
-  long long g0 = 0, g1 = 0;  ///< global sample numbers of the range
+  double per_sample = 0;         ///< each sample estimates the whole image's term; a pixel's mean divides by spp
+  long long g0 = 0, g1 = 0;      ///< global sample numbers of the range
   long long c0 = 0, chunks = 0;  ///< this part's first chunk and chunk count
   static constexpr long long kChunkSize = 1024;
-  ChunkPlan(const Camera& cam, const std::vector<PrimaryEdge>& edges, int first_sample, int spp, int part, int parts) {
-    const long long per_index = (long long)cam.width * cam.height;  // primary samples per sample index
+  ChunkPlan(const Camera& cam, const PrimaryEdges& primary, double ratio, int first_sample, int spp, int part,
+            int parts) {
+    const long long per_index = primary_samples_per_index(cam.width, cam.height, ratio);
     const long long num_samples = per_index * spp;
-    cdf.assign(1, 0.0);
-    for (const auto& e : edges) cdf.push_back(cdf.back() + e.weight);
     per_sample = double(spp) / double(std::max(1LL, num_samples));
-    // Sample index s owns primary samples [s W H, (s + 1) W H); chunk c holds numbers
-    // [c 1024, (c + 1) 1024) and draws from stream (seed, c, 0, 2), whichever run draws it. A
-    // chunk cut by the start of this range draws its part from (seed, c, first_sample, 2).
+    // Sample index s owns primary samples [s n, (s + 1) n), n a whole number of chunks; chunk c
+    // holds numbers [c 1024, (c + 1) 1024) and draws from stream (seed, c, 0, 2), whichever run
+    // draws it. (A chunk cut by the start of a range would draw its part from (seed, c,
+    // first_sample, 2); with n a multiple of 1024 no range cuts a chunk.)
     g0 = per_index * first_sample;
     g1 = g0 + num_samples;
     const long long first_chunk = g0 / kChunkSize, all_chunks = (g1 + kChunkSize - 1) / kChunkSize - first_chunk;
     // This part's share of the chunks: a contiguous run of them, in order.
     c0 = first_chunk + all_chunks * part / parts;
     chunks = first_chunk + all_chunks * (part + 1) / parts - c0;
-    if (edges.empty() || num_samples <= 0) chunks = 0;
+    if (primary.empty() || num_samples <= 0) chunks = 0;
   }
   /// Runs body(j, count, chunk, cut) in parallel for chunks j in [j0, j1) of this part (default:
   /// all): `count` samples of global chunk `chunk`, `cut` = 1 when the range's start cuts it.
@@ -147,12 +151,49 @@ struct ChunkPlan {
 
 }  // namespace
 
-std::vector<PrimaryEdge> find_primary_edges(const Scene& scene, const edgetree::EdgeSet& edges,
-                                            const std::vector<bool>& moving) {
+namespace {
+
+/// Whether the point of `pe` at s is visible from o: the boundary term's own visibility test
+/// (edge_jump_with: a ray to the point, ignoring the edge's faces, stopping 1/4096 short of it).
+bool primary_point_visible(const RayTracer& tracer, const Vec3& o, const PrimaryEdge& pe, double s) {
+  const edgetree::ForestEdge& e = *pe.edge;
+  IgnoreSet ignore;
+  ignore.prims[0] = {e.shape, e.f0};
+  ignore.prims[1] = {e.f1 >= 0 ? e.shape : -1, e.f1};
+  const Vec3 to = pe.point_at(s) - o;
+  const double dist = to.norm();
+  if (!(dist > 0)) return true;
+  return !tracer.occluded(o, to / dist, dist * (1.0 - 1.0 / 4096.0), ignore);
+}
+
+}  // namespace
+
+long long primary_samples_per_index(int width, int height, double ratio) {
+  if (!(ratio > 0) || !std::isfinite(ratio))
+    throw Error("primary samples per pixel sample must be positive and finite (got " + std::to_string(ratio) + ")");
+  constexpr long long kChunk = ChunkPlan::kChunkSize;
+  const double n = std::ceil(ratio * double(width) * double(height) / double(kChunk));
+  if (!(n < 1e12)) throw Error("too many primary samples per pixel sample (" + std::to_string(ratio) + ")");
+  return std::max(1LL, (long long)n) * kChunk;
+}
+
+double PrimaryEdges::density(int edge, double s) const {
+  if (edge < 0 || edge >= int(edges.size()) || cdf.empty() || !(cdf.back() > 0)) return 0.0;
+  const PrimaryEdge& pe = edges[size_t(edge)];
+  double d = 0;
+  for (int k = pe.first_piece; k < pe.first_piece + pe.piece_count; ++k) {
+    const PrimaryPiece& piece = pieces[size_t(k)];
+    if (s >= piece.s0 && s <= piece.s1) d = std::max(d, piece.weight / (piece.s1 - piece.s0));
+  }
+  return d / cdf.back();
+}
+
+PrimaryEdges find_primary_edges(const Scene& scene, const edgetree::EdgeSet& edges, const std::vector<bool>& moving,
+                                const RayTracer& tracer, double hidden_share) {
   const Camera& cam = scene.camera;
   const Vec3 o = cam.origin();
   const Vec2 tf = cam.tan_half_fov();
-  std::vector<PrimaryEdge> out;
+  PrimaryEdges out;
   // Silhouettes and boundary edges from o, and every crease of a flat-shaded shape (its two
   // faces both seen: the shading jumps across it).
   auto consider = [&](const edgetree::ForestEdge& e) {
@@ -171,24 +212,50 @@ std::vector<PrimaryEdge> find_primary_edges(const Scene& scene, const edgetree::
     pe.b = cam.project(e.p0 + pe.tb * (e.p1 - e.p0), &pe.zb);
     pe.length = (pe.b - pe.a).norm();
     pe.weight = pe.length * (e.crease ? std::max(e.angle, 1e-3) / kPi : 1.0);
-    if (pe.weight > 0 && pe.za > 0 && pe.zb > 0) out.push_back(pe);
+    if (pe.weight > 0 && pe.za > 0 && pe.zb > 0) out.edges.push_back(pe);
   };
   for (const auto& e : edges.edges()) consider(e);
   for (const auto& e : edges.always_edges()) consider(e);
+  // ---- Pieces and their visibility from the camera (in parallel: one task per edge; each edge's
+  // pieces depend on it alone, so the result is the same for any thread count).
+  std::vector<std::vector<PrimaryPiece>> per_edge(out.edges.size());
+  tbb::parallel_for(size_t(0), out.edges.size(), [&](size_t i) {
+    const PrimaryEdge& pe = out.edges[i];
+    const int k = std::clamp(int(std::ceil(pe.length / kPrimaryPieceLength)), 1, kPrimaryMaxPieces);
+    bool prev = primary_point_visible(tracer, o, pe, 0.0);
+    for (int j = 0; j < k; ++j) {
+      const double s0 = double(j) / k, s1 = j + 1 == k ? 1.0 : double(j + 1) / k;
+      const bool mid = primary_point_visible(tracer, o, pe, 0.5 * (s0 + s1));
+      const bool end = primary_point_visible(tracer, o, pe, s1);
+      const bool visible = prev || mid || end;
+      per_edge[i].push_back({int(i), s0, s1, pe.weight * (s1 - s0) * (visible ? 1.0 : hidden_share), visible});
+      prev = end;
+    }
+  });
+  out.cdf.assign(1, 0.0);
+  for (size_t i = 0; i < out.edges.size(); ++i) {
+    out.edges[i].first_piece = int(out.pieces.size());
+    out.edges[i].piece_count = int(per_edge[i].size());
+    for (const PrimaryPiece& piece : per_edge[i]) {
+      out.hidden_pieces += !piece.visible;
+      out.pieces.push_back(piece);
+      out.cdf.push_back(out.cdf.back() + piece.weight);
+    }
+  }
   return out;
 }
 
 void add_primary_boundary(Film& film, const PathContext& ctx, const SceneVelocities& velocities,
-                          const std::vector<PrimaryEdge>& edges, int first_sample, int spp, uint64_t seed, int threads,
-                          PathStats& stats, int part, int parts, std::vector<FilmSplat>* deferred) {
-  const ChunkPlan plan(ctx.scene->camera, edges, first_sample, spp, part, parts);
+                          const PrimaryEdges& edges, double ratio, int first_sample, int spp, uint64_t seed,
+                          int threads, PathStats& stats, int part, int parts, std::vector<FilmSplat>* deferred) {
+  const ChunkPlan plan(ctx.scene->camera, edges, ratio, first_sample, spp, part, parts);
   std::vector<std::vector<FilmSplat>> splats{static_cast<size_t>(plan.chunks)};
   std::vector<PathStats> chunk_stats{static_cast<size_t>(plan.chunks)};
   const int K = velocities.num_params;
   plan.run(threads, [&](long long j, long long count, long long c, int cut) {
     with_dual_size(K, [&](auto n) {
-      run_chunk<decltype(n)::value>(ctx, velocities, edges, plan.cdf, count, plan.per_sample, seed, c,
-                                    cut ? first_sample : 0, splats[size_t(j)], chunk_stats[size_t(j)]);
+      run_chunk<decltype(n)::value>(ctx, velocities, edges, count, plan.per_sample, seed, c, cut ? first_sample : 0,
+                                    splats[size_t(j)], chunk_stats[size_t(j)]);
     });
   });
   // Merge in chunk order: the same sums whatever the thread count (or hand them on in that order).
@@ -205,9 +272,9 @@ void add_primary_boundary(Film& film, const PathContext& ctx, const SceneVelocit
   }
 }
 
-void for_each_primary_sample(const PathContext& ctx, const std::vector<PrimaryEdge>& edges, int first_sample, int spp,
+void for_each_primary_sample(const PathContext& ctx, const PrimaryEdges& edges, double ratio, int first_sample, int spp,
                              uint64_t seed, int threads, PathStats& stats, const PrimarySampleFn& fn) {
-  const ChunkPlan plan(ctx.scene->camera, edges, first_sample, spp, 0, 1);
+  const ChunkPlan plan(ctx.scene->camera, edges, ratio, first_sample, spp, 0, 1);
   // In batches of chunks (a bounded buffer), each drawn in parallel and handed on in order.
   const long long batch = 64;
   std::vector<std::vector<PrimarySample>> samples{static_cast<size_t>(batch)};
@@ -221,8 +288,8 @@ void for_each_primary_sample(const PathContext& ctx, const std::vector<PrimaryEd
           out.clear();
           chunk_stats[size_t(j - j0)] = PathStats{};
           sample_chunk(
-              ctx, edges, plan.cdf, count, plan.per_sample, seed, c, cut ? first_sample : 0,
-              chunk_stats[size_t(j - j0)], [](const edgetree::ForestEdge&, double, const Vec3&) { return true; },
+              ctx, edges, count, plan.per_sample, seed, c, cut ? first_sample : 0, chunk_stats[size_t(j - j0)],
+              [](const edgetree::ForestEdge&, double, const Vec3&) { return true; },
               [&](int px, int py, const edgetree::ForestEdge& e, double t, const Color& weight, const Vec3& g) {
                 out.push_back({px, py, &e, t, weight, g});
               });

@@ -11,14 +11,15 @@
 /// in pixels, theta the angle to the optical axis), so the boundary term of [QSS Eq. 3] applies
 /// with W in place of the cosine-weighted BSDF:
 ///   dI_pixel/dtheta = sum_e integral s (L_bg - L_fg) W(w(t)) det(w0, w1, v_t)/|w_t|^3 dt
-/// restricted to the t whose image point lies in the pixel. An edge is chosen with probability
-/// proportional to PrimaryEdge::weight (projected length, times angle/pi for a crease) and a
-/// point uniformly along its projected segment (so
-/// the density in t carries the perspective Jacobian ds/dt); each sample is splatted into the
-/// pixel it lands in.
+/// restricted to the t whose image point lies in the pixel. A piece of an edge is chosen with
+/// probability proportional to its weight (projected length, times angle/pi for a crease, times
+/// kPrimaryHiddenShare where it is hidden from the camera: PrimaryEdges) and a point uniformly
+/// along its projected part (so the density in t carries the perspective Jacobian ds/dt); each
+/// sample is splatted into the pixel it lands in.
 
 #include "qsil/edgetree/edge_set.h"
 #include "qsil/film.h"
+#include "qsil/integrators/estimator.h"
 #include "qsil/integrators/path_tracer.h"
 #include "qsil/parameters.h"
 
@@ -37,21 +38,73 @@ struct PrimaryEdge {
   /// for a crease, whose jump grows with its bend angle (always_edge_weight's scale): a smooth
   /// mesh's many shallow concave creases do not crowd out its silhouettes.
   double weight = 0;
+  int first_piece = 0, piece_count = 0;  ///< its pieces in PrimaryEdges::pieces
+
+  /// The fraction t' of the way from ta to tb whose image lies at a + s (b - a), s in [0, 1]:
+  /// perspective-correct (s is linear in film position, t' in world position).
+  double tp_at(double s) const { return s * za / (zb * (1 - s) + s * za); }
+  /// The edge parameter t (of edge->p0 + t (p1 - p0)) whose image lies at a + s (b - a).
+  double t_at(double s) const { return ta + tp_at(s) * (tb - ta); }
+  /// The world point at projected parameter s.
+  Vec3 point_at(double s) const { return edge->p0 + t_at(s) * (edge->p1 - edge->p0); }
+};
+
+/// A piece [s0, s1] of a primary edge's projected segment (s = 0 at `a`, 1 at `b`, linear in
+/// film position) with its sampling weight: the edge's weight times (s1 - s0), times
+/// kPrimaryHiddenShare when the piece was found hidden from the camera (find_primary_edges).
+struct PrimaryPiece {
+  int edge = 0;  ///< index into PrimaryEdges::edges
+  double s0 = 0, s1 = 1;
+  double weight = 0;
+  bool visible = true;  ///< a test point (an end or the middle) is visible from the camera
+};
+
+/// Projected length (pixels) of the pieces a primary edge is cut into for the visibility test:
+/// at most this long, at most kPrimaryMaxPieces per edge.
+inline constexpr double kPrimaryPieceLength = 1.0;
+inline constexpr int kPrimaryMaxPieces = 64;
+/// The weight, relative to a visible piece of the same length, of a piece whose three test points
+/// (its ends and its middle) are all hidden from the camera: small, never 0, so the estimator stays
+/// unbiased where a piece the test called hidden is partly visible (variance, not bias).
+inline constexpr double kPrimaryHiddenShare = 1.0 / 8.0;
+
+/// The primary discontinuity edges of a render and the distribution the primary boundary term
+/// samples from: a piece of an edge with probability weight / total, and s uniformly in the piece.
+struct PrimaryEdges {
+  std::vector<PrimaryEdge> edges;
+  std::vector<PrimaryPiece> pieces;  ///< every edge's pieces, edge by edge, in order of s
+  std::vector<double> cdf;           ///< cumulative piece weights (size pieces + 1, cdf[0] = 0)
+  int hidden_pieces = 0;             ///< pieces found hidden (for the set-up report and tests)
+  bool empty() const { return pieces.empty(); }
+  /// The density of s on edge `edge` at `s` (per unit s): sum of the weights of its pieces that
+  /// contain s, each over its length, divided by the total weight (0 where no piece is).
+  double density(int edge, double s) const;
 };
 
 /// The discontinuity edges of moving shapes seen from the camera centre, clipped and projected
-/// (the edge set's tree and always-candidate edges; the edges point into `edges`).
-std::vector<PrimaryEdge> find_primary_edges(const Scene& scene, const edgetree::EdgeSet& edges,
-                                            const std::vector<bool>& moving);
+/// (the edge set's tree and always-candidate edges; the edges point into `edges`), cut into pieces
+/// of at most kPrimaryPieceLength pixels whose visibility from the camera is tested at their ends
+/// and middle with `tracer` (the same test as the boundary term's: a ray to the edge point that
+/// ignores the edge's own faces). A hidden piece keeps kPrimaryHiddenShare of its weight: about
+/// 40 % of primary samples fell on hidden contour edges before (shadow-quad, direct, the stability
+/// scenes), each a visibility ray for nothing. The camera is fixed, so this is done once per set-up.
+/// `hidden_share` replaces kPrimaryHiddenShare (tests; 1 weighs every piece by its length alone).
+PrimaryEdges find_primary_edges(const Scene& scene, const edgetree::EdgeSet& edges, const std::vector<bool>& moving,
+                                const RayTracer& tracer, double hidden_share = kPrimaryHiddenShare);
+
+/// Primary edge samples per sample index for a W x H image at `ratio` samples per pixel sample:
+/// ratio W H rounded up to a whole chunk of 1024 (at least one chunk), so that runs over ranges
+/// that partition [0, spp) draw exactly the samples of the run over [0, spp) for every image size.
+/// Throws qsil::Error unless ratio is positive and finite.
+long long primary_samples_per_index(int width, int height, double ratio);
 
 /// Adds the primary boundary term of the sample range [first_sample, first_sample + spp) to the
-/// derivative channels of `film` (a gradient film of velocities.num_params parameters): W x H
-/// edge samples per sample index. The samples are numbered globally (sample index s owns numbers
-/// [s W H, (s + 1) W H)) and drawn in chunks of 1024 numbers, chunk c from the stream
-/// Sampler(seed, c, 0, 2) whichever run draws it, except that a chunk cut by the start of the
-/// range draws its part from Sampler(seed, c, first_sample, 2). So a run over [0, spp) draws what
-/// a single run of spp samples always drew; runs over disjoint ranges draw independent samples;
-/// and when W H is a multiple of 1024 (every power-of-two image of 32 x 32 or more), runs over
+/// derivative channels of `film` (a gradient film of velocities.num_params parameters): n =
+/// primary_samples_per_index(W, H, ratio) edge samples per sample index. The samples are numbered
+/// globally (sample index s owns numbers [s n, (s + 1) n)) and drawn in chunks of 1024 numbers,
+/// chunk c from the stream Sampler(seed, c, 0, 2) whichever run draws it (n is a whole number of
+/// chunks, so no chunk straddles two sample indices). So a run over [0, spp) draws what a single
+/// run of spp samples always drew; runs over disjoint ranges draw independent samples; runs over
 /// ranges that partition [0, spp) draw exactly the samples of the run over [0, spp) (their films
 /// merge into its film up to the rounding of the sums). Deterministic for a seed whatever the
 /// thread count (chunks are merged in order). Counts rays and zero contributions in `stats`.
@@ -59,8 +112,9 @@ std::vector<PrimaryEdge> find_primary_edges(const Scene& scene, const edgetree::
 /// shares of the range's chunks (each exactly as the whole run draws it); with `deferred` its
 /// splats are appended there in the order the whole run adds them, instead of to `film`.
 void add_primary_boundary(Film& film, const PathContext& ctx, const SceneVelocities& velocities,
-                          const std::vector<PrimaryEdge>& edges, int first_sample, int spp, uint64_t seed, int threads,
-                          PathStats& stats, int part = 0, int parts = 1, std::vector<FilmSplat>* deferred = nullptr);
+                          const PrimaryEdges& edges, double ratio, int first_sample, int spp, uint64_t seed,
+                          int threads, PathStats& stats, int part = 0, int parts = 1,
+                          std::vector<FilmSplat>* deferred = nullptr);
 
 /// One contributing primary edge sample (reverse mode): the pixel it lands in, the edge point
 /// (edge, t), its weight s (L_bg - L_fg) W / pdf per sample index, and g = (w0 x w1) / |w_t|^3:
@@ -79,7 +133,7 @@ using PrimarySampleFn = std::function<void(const PrimarySample&)>;
 /// every sample whose edge point is visible and whose jump is non-zero is passed to `fn`, on the
 /// calling thread, in chunk order (deterministic for a seed whatever the thread count). The edges
 /// are those of the shapes whose vertices are differentiated. Counts rays and zero contributions.
-void for_each_primary_sample(const PathContext& ctx, const std::vector<PrimaryEdge>& edges, int first_sample, int spp,
+void for_each_primary_sample(const PathContext& ctx, const PrimaryEdges& edges, double ratio, int first_sample, int spp,
                              uint64_t seed, int threads, PathStats& stats, const PrimarySampleFn& fn);
 
 }  // namespace qsil

@@ -122,6 +122,7 @@ struct ReverseBoundaryHook {
   const PathContext* ctx;
   const BoundaryContext* bctx;
   Sampler* sampler;  ///< a stream of its own, so the hook leaves the path's own decisions unchanged
+  int traversals;    ///< at every vertex (boundary_traversals of the sample)
   const Tape* tape;
   const std::vector<int>* chosen_index;  ///< per shape: its index in the chosen list, or -1
   Color adjoint;                         ///< the pixel's adjoint / spp
@@ -136,7 +137,7 @@ struct ReverseBoundaryHook {
     q.eligible = tape->moving ? &bctx->all : &bctx->moving;
     q.velocities = nullptr;  // a parameter per vertex: no normal-velocity factor
     for_each_boundary_sample(
-        *ctx, *bctx, *sampler, si, sp, q, wo_local, value(beta), seg, stats,
+        *ctx, *bctx, *sampler, si, sp, q, wo_local, value(beta), seg, traversals, stats,
         [](const edgetree::ForestEdge&, double, const Vec3&) { return true; },
         [&](const edgetree::ForestEdge& e, double t, const Color& weight, const Vec3& g) {
           // p's share: J = g . (v_edge - dp), the -g . dp part through L's slots.
@@ -165,6 +166,8 @@ bool finite(const std::vector<Contribution>& cs) {
 class ReverseEstimator::Impl {
  public:
   Impl(const Scene& s, ReverseConfig c) : scene(s), config(std::move(c)), tracer(s), lights(s) {
+    primary_samples_per_index(s.camera.width, s.camera.height, config.primary_samples);  // throws if invalid
+    check_boundary_spp(config.boundary_spp);
     if (config.shapes.empty()) throw Error("reverse mode: no shape to differentiate");
     chosen.assign(s.shapes.size(), false);
     chosen_index.assign(s.shapes.size(), -1);
@@ -181,8 +184,8 @@ class ReverseEstimator::Impl {
       throw Error("method " + std::string(method_name(config.method)) + " cannot estimate derivatives");
     ctx = lights.context(s, tracer);
     if (samples_edges(config.method)) {
-      set_up_boundary_term(s, config.method, nullptr, chosen, config.boundary_spp, lights.environment, boundary, bctx,
-                           primary, setup);
+      set_up_boundary_term(s, tracer, config.method, nullptr, chosen, config.boundary_spp, lights.environment, boundary,
+                           bctx, primary, setup);
     }
   }
 
@@ -220,7 +223,7 @@ class ReverseEstimator::Impl {
   PathContext ctx;
   BoundarySetup boundary;
   BoundaryContext bctx;
-  std::vector<PrimaryEdge> primary;
+  PrimaryEdges primary;
   std::vector<bool> chosen;
   std::vector<int> chosen_index;
   SetupReport setup;
@@ -292,10 +295,12 @@ ReverseResult ReverseEstimator::run(const std::vector<double>& adjoint, const Re
             const Vec3 d = cam.direction(x + u.x(), y + u.y());
             ++st.rays;
             const Hit hit = m.tracer.intersect(origin, d);
-            if (with_boundary) {
+            const int traversals =
+                with_boundary ? boundary_traversals(m.bctx.samples_per_vertex, options.seed, pixel, uint64_t(s)) : 0;
+            if (traversals > 0) {
               Sampler bsampler(options.seed, pixel, uint64_t(s), 1);
-              const ReverseBoundaryHook hook{&m.ctx, &m.bctx, &bsampler, &tape, &m.chosen_index,
-                                             a,      window == 0, &contributions};
+              const ReverseBoundaryHook hook{&m.ctx,          &m.bctx, &bsampler,   traversals,    &tape,
+                                             &m.chosen_index, a,       window == 0, &contributions};
               L = trace_path(m.ctx, view, lift<RDual>(origin), d, hit, 0, 0.0, sampler, st, hook);
             } else {
               L = trace_path(m.ctx, view, lift<RDual>(origin), d, hit, 0, 0.0, sampler, st);
@@ -353,7 +358,7 @@ ReverseResult ReverseEstimator::run(const std::vector<double>& adjoint, const Re
   // ---- Primary boundary term: the camera's edge samples, weighted by their pixel's adjoint.
   if (with_boundary) {
     PathStats st;
-    for_each_primary_sample(m.ctx, m.primary, first, count, options.seed, options.threads, st,
+    for_each_primary_sample(m.ctx, m.primary, m.config.primary_samples, first, count, options.seed, options.threads, st,
                             [&](const PrimarySample& ps) {
                               const size_t pixel = size_t(ps.py) * size_t(W) + size_t(ps.px);
                               const double a = (Eigen::Map<const Color>(&adjoint[3 * pixel]) * ps.weight).sum() / count;

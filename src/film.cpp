@@ -34,21 +34,25 @@ std::vector<std::string> FilmLayout::standard_error_names() const {
   return names;
 }
 
-Film::Film(int width, int height, const FilmLayout& layout)
+Film::Film(int width, int height, const FilmLayout& layout, bool stratified)
     : width_(width),
       height_(height),
       channels_(layout.channels()),
       layout_(layout),
+      stratified_(stratified),
       sum_(size_t(width) * height * channels_, 0.0),
       sum_sq_(size_t(width) * height * channels_, 0.0),
       splat_sum_(size_t(width) * height * channels_, 0.0),
       splat_sq_(size_t(width) * height * channels_, 0.0),
-      count_(size_t(width) * height, 0) {
+      sum1_(stratified ? size_t(width) * height * channels_ : 0, 0.0),
+      sum_sq1_(stratified ? size_t(width) * height * channels_ : 0, 0.0),
+      count_(size_t(width) * height, 0),
+      count1_(stratified ? size_t(width) * height : 0, 0) {
   QSIL_CHECK(width > 0 && height > 0);
 }
 
-void Film::add_sample(int x, int y, const double* values) {
-  QSIL_DCHECK(x >= 0 && x < width_ && y >= 0 && y < height_);
+void Film::add_sample(int x, int y, const double* values, int stratum) {
+  QSIL_DCHECK(x >= 0 && x < width_ && y >= 0 && y < height_ && (stratum == 0 || (stratum == 1 && stratified_)));
   const size_t p = size_t(y) * width_ + x;
   double* s = &sum_[p * channels_];
   double* q = &sum_sq_[p * channels_];
@@ -57,6 +61,15 @@ void Film::add_sample(int x, int y, const double* values) {
     q[c] += values[c] * values[c];
   }
   ++count_[p];
+  if (stratum == 1 && stratified_) {
+    double* s1 = &sum1_[p * channels_];
+    double* q1 = &sum_sq1_[p * channels_];
+    for (int c = 0; c < channels_; ++c) {
+      s1[c] += values[c];
+      q1[c] += values[c] * values[c];
+    }
+    ++count1_[p];
+  }
 }
 
 void Film::splat(int x, int y, int channel, double value) {
@@ -73,55 +86,87 @@ double Film::mean(int c, int x, int y) const {
   return count_[p] > 0 ? (sum_[i] + splat_sum_[i]) / double(count_[p]) : 0.0;
 }
 
+namespace {
+
+/// The sample variance (n - 1 in the denominator) of n values with this sum and squared sum.
+double sample_variance(double sum, double sum_sq, double n) {
+  const double m = sum / n;
+  return std::max(0.0, (sum_sq / n - m * m)) * n / (n - 1);
+}
+
+}  // namespace
+
 double Film::standard_error(int c, int x, int y) const {
   QSIL_DCHECK(c >= 0 && c < channels_);
   const size_t p = size_t(y) * width_ + x;
+  const size_t i = p * channels_ + c;
   const double n = double(count_[p]);
   if (n < 2) return 0.0;
-  const double m = sum_[p * channels_ + c] / n;
-  const double var = std::max(0.0, (sum_sq_[p * channels_ + c] / n - m * m)) * n / (n - 1);
-  return std::sqrt(var / n + splat_sq_[p * channels_ + c] / (n * n));
+  const double n1 = stratified_ ? double(count1_[p]) : 0.0, n0 = n - n1;
+  double var_of_sum;  // the variance of the sum of the n samples
+  if (n0 >= 2 && n1 >= 2) {
+    // Stratified: each stratum's own variance (the strata's means differ).
+    var_of_sum = n0 * sample_variance(sum_[i] - sum1_[i], sum_sq_[i] - sum_sq1_[i], n0) +
+                 n1 * sample_variance(sum1_[i], sum_sq1_[i], n1);
+  } else {
+    var_of_sum = n * sample_variance(sum_[i], sum_sq_[i], n);
+  }
+  return std::sqrt(var_of_sum / (n * n) + splat_sq_[i] / (n * n));
 }
 
 void Film::merge(const Film& other) {
-  QSIL_CHECK(other.width_ == width_ && other.height_ == height_ && other.channels_ == channels_);
+  QSIL_CHECK(other.width_ == width_ && other.height_ == height_ && other.channels_ == channels_ &&
+             other.stratified_ == stratified_);
   for (size_t i = 0; i < sum_.size(); ++i) {
     sum_[i] += other.sum_[i];
     sum_sq_[i] += other.sum_sq_[i];
     splat_sum_[i] += other.splat_sum_[i];
     splat_sq_[i] += other.splat_sq_[i];
   }
+  for (size_t i = 0; i < sum1_.size(); ++i) {
+    sum1_[i] += other.sum1_[i];
+    sum_sq1_[i] += other.sum_sq1_[i];
+  }
   for (size_t i = 0; i < count_.size(); ++i) count_[i] += other.count_[i];
+  for (size_t i = 0; i < count1_.size(); ++i) count1_[i] += other.count1_[i];
 }
 
 void Film::copy_part(const Film& other, int part, int parts) {
-  QSIL_CHECK(other.width_ == width_ && other.height_ == height_ && other.channels_ == channels_);
+  QSIL_CHECK(other.width_ == width_ && other.height_ == height_ && other.channels_ == channels_ &&
+             other.stratified_ == stratified_);
   QSIL_CHECK(parts >= 1 && part >= 0 && part < parts);
   const size_t C = size_t(channels_);
   for (size_t p = size_t(part); p < count_.size(); p += size_t(parts)) {
     std::copy_n(&other.sum_[p * C], C, &sum_[p * C]);
     std::copy_n(&other.sum_sq_[p * C], C, &sum_sq_[p * C]);
     count_[p] = other.count_[p];
+    if (stratified_) {
+      std::copy_n(&other.sum1_[p * C], C, &sum1_[p * C]);
+      std::copy_n(&other.sum_sq1_[p * C], C, &sum_sq1_[p * C]);
+      count1_[p] = other.count1_[p];
+    }
   }
 }
 
 std::vector<double> Film::state() const {
   std::vector<double> s;
   s.reserve(state_size());
-  for (const std::vector<double>* v : {&sum_, &sum_sq_, &splat_sum_, &splat_sq_})
+  for (const std::vector<double>* v : {&sum_, &sum_sq_, &splat_sum_, &splat_sq_, &sum1_, &sum_sq1_})
     s.insert(s.end(), v->begin(), v->end());
   for (long long n : count_) s.push_back(double(n));
+  for (long long n : count1_) s.push_back(double(n));
   return s;
 }
 
 void Film::set_state(const std::vector<double>& s) {
   QSIL_CHECK(s.size() == state_size());
   auto it = s.begin();
-  for (std::vector<double>* v : {&sum_, &sum_sq_, &splat_sum_, &splat_sq_}) {
+  for (std::vector<double>* v : {&sum_, &sum_sq_, &splat_sum_, &splat_sq_, &sum1_, &sum_sq1_}) {
     std::copy_n(it, v->size(), v->begin());
     it += std::ptrdiff_t(v->size());
   }
   for (long long& n : count_) n = (long long)*it++;
+  for (long long& n : count1_) n = (long long)*it++;
 }
 
 ImageSum Film::derivative_sum(int k) const {

@@ -43,4 +43,6 @@ bool uses_edge_forest(Method method) { return method == Method::Quadric || metho
 
 bool uses_quadrics(Method method) { return method == Method::Quadric; }
 
+double default_boundary_spp(Method method) { return uses_edge_forest(method) ? 0.5 : 1.0; }
+
 }  // namespace qsil

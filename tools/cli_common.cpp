@@ -66,8 +66,20 @@ void add_param_option(CLI::App& app, std::vector<std::string>& params) {
       ->allow_extra_args(false);
 }
 
-void add_boundary_spp_option(CLI::App& app, int& boundary_spp) {
-  app.add_option("--boundary-spp", boundary_spp, "Discontinuity samples per shading point")
+void add_boundary_spp_option(CLI::App& app, double& boundary_spp) {
+  app.add_option("--boundary-spp", boundary_spp,
+                 "Secondary boundary-term samples per shading point, on average over a pixel's samples (a fraction "
+                 "is a stratified pick of samples: 0.5 = every other sample, weighted 2); 0 = the method's default "
+                 "(quadric, quadric-box: 0.5; the others: 1)")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+}
+
+void add_primary_samples_option(CLI::App& app, double& primary_samples) {
+  app.add_option("--primary-samples", primary_samples,
+                 "Primary boundary-term edge samples per pixel sample (Mitsuba 3's sppp as a ratio to spp; the "
+                 "camera's silhouettes): R x width x height edge samples per sample index, rounded up to a whole "
+                 "chunk of 1024")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
 }

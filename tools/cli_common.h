@@ -54,7 +54,11 @@ void add_scene_options(CLI::App& app, std::string& scene, std::vector<std::strin
 void add_param_option(CLI::App& app, std::vector<std::string>& params);
 
 /// Adds --boundary-spp N (discontinuity samples per shading point).
-void add_boundary_spp_option(CLI::App& app, int& boundary_spp);
+void add_boundary_spp_option(CLI::App& app, double& boundary_spp);
+
+/// Adds --primary-samples R (primary boundary-term edge samples per pixel sample,
+/// EstimatorConfig::primary_samples).
+void add_primary_samples_option(CLI::App& app, double& primary_samples);
 
 /// Adds --h H (finite-difference steps: one for all, or one per --param).
 void add_fd_step_option(CLI::App& app, std::vector<double>& h);

@@ -25,7 +25,8 @@ struct Flags {
   std::vector<int> spp_list;
   std::string reference;
   std::vector<double> h;
-  int boundary_spp = 1;
+  double boundary_spp = 0;
+  double primary_samples = kDefaultPrimarySamples;
   std::string out;
   double reference_factor = 8;
   uint64_t seed = 0;
@@ -60,6 +61,7 @@ void add_options(CLI::App& app, Flags& f) {
       ->check(CLI::PositiveNumber);
   add_fd_step_option(app, f.h);
   add_boundary_spp_option(app, f.boundary_spp);
+  add_primary_samples_option(app, f.primary_samples);
   app.add_option("--out", f.out, "Output directory")->required();
   app.add_flag("--no-plot", f.no_plot, "Do not call plot_compare.py (the charts)");
   add_scripts_dir_option(app, f.scripts_dir);
@@ -77,6 +79,7 @@ CompareOptions compare_options(const Flags& f) {
   o.reference_factor = f.reference_factor;
   o.h = f.h;
   o.boundary_spp = f.boundary_spp;
+  o.primary_samples = f.primary_samples;
   o.out = f.out;
   o.seed = f.seed;
   o.threads = f.threads;

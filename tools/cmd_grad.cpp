@@ -19,7 +19,8 @@ const CommandRegistrar registrar{
        struct Flags : CommonFlags {
          std::vector<std::string> params;
          std::string boundary = "quadric";
-         int boundary_spp = 1;
+         double boundary_spp = 0;
+         double primary_samples = kDefaultPrimarySamples;
          std::string preview_dir;
        };
        auto flags = std::make_shared<Flags>();
@@ -32,6 +33,7 @@ const CommandRegistrar registrar{
                       "dihedral angle), none (interior term only: misses silhouettes, shadows, outlines)")
            ->capture_default_str();
        add_boundary_spp_option(app, flags->boundary_spp);
+       add_primary_samples_option(app, flags->primary_samples);
        app.add_option("--preview-dir", flags->preview_dir, "Write primal.png and one diverging PNG per parameter here");
        return [flags]() {
          const ProcessGroup& group = process_group();
@@ -40,8 +42,8 @@ const CommandRegistrar registrar{
          group.all_or_none([&] {
            const Method method = parse_method(flags->boundary, "--boundary", kBoundaryMethods);
            scene.emplace(load_scene_with_flags(flags->scene, flags->defines));
-           estimator.emplace(
-               *scene, EstimatorConfig::gradient(parse_parameters(flags->params, *scene), method, flags->boundary_spp));
+           estimator.emplace(*scene, EstimatorConfig::gradient(parse_parameters(flags->params, *scene), method,
+                                                               flags->boundary_spp, flags->primary_samples));
          });
          const RenderResult r = group.run(*estimator, flags->render);
          const uint64_t invalid_rays = group_invalid_rays();

@@ -20,7 +20,10 @@ struct Flags : CommonFlags {
   std::vector<std::string> params;
   std::string method = "quadric";
   std::vector<double> h;
-  int boundary_spp = 1;
+  // One boundary estimate per sample (not the method's default): a reference's per-pixel standard
+  // errors are exact only when every sample is drawn alike (boundary_traversals in boundary_term.h).
+  double boundary_spp = 1;
+  double primary_samples = kDefaultPrimarySamples;
 };
 
 /// Writes the reference EXR (and preview) of run `r` and prints its summary (rank 0).
@@ -62,6 +65,7 @@ const CommandRegistrar registrar{
            ->capture_default_str();
        add_fd_step_option(app, flags->h);
        add_boundary_spp_option(app, flags->boundary_spp);
+       add_primary_samples_option(app, flags->primary_samples);
        return [flags]() {
          const ProcessGroup& group = process_group();
          std::optional<Scene> scene;
@@ -71,10 +75,10 @@ const CommandRegistrar registrar{
            const Method method = parse_method(flags->method, "--method", kReferenceMethods);
            scene.emplace(load_scene_with_flags(flags->scene, flags->defines));
            params = parse_parameters(flags->params, *scene);
-           estimator.emplace(*scene,
-                             method == Method::FiniteDifferences
-                                 ? EstimatorConfig::finite_differences(params, fd_steps(*scene, params, flags->h))
-                                 : EstimatorConfig::gradient(params, method, flags->boundary_spp));
+           estimator.emplace(
+               *scene, method == Method::FiniteDifferences
+                           ? EstimatorConfig::finite_differences(params, fd_steps(*scene, params, flags->h))
+                           : EstimatorConfig::gradient(params, method, flags->boundary_spp, flags->primary_samples));
          });
          // One run with the progress bar (a reference is one long run, not passes).
          const RenderResult r = group.run(*estimator, flags->render);

@@ -52,7 +52,8 @@ const CommandRegistrar registrar{
          std::vector<std::string> shapes;
          std::string adjoint, target, image;
          std::string boundary = "quadric";
-         int boundary_spp = 1;
+         double boundary_spp = 0;
+         double primary_samples = kDefaultPrimarySamples;
        };
        auto flags = std::make_shared<Flags>();
        add_common_flags(app, *flags, "grad.npy");
@@ -68,6 +69,7 @@ const CommandRegistrar registrar{
                       "(interior term only)")
            ->capture_default_str();
        add_boundary_spp_option(app, flags->boundary_spp);
+       add_primary_samples_option(app, flags->primary_samples);
        app.add_option("--image", flags->image, "Also write the primal image of the same paths (EXR)");
        return [flags]() {
          if (process_group().size() > 1) throw Error("reverse: runs in one process (no MPI launcher)");
@@ -76,7 +78,7 @@ const CommandRegistrar registrar{
          const Scene scene = load_scene_with_flags(flags->scene, flags->defines);
          const Camera& cam = scene.camera;
          const ReverseEstimator reverse(scene, ReverseConfig{resolve_shapes(scene, flags->shapes), method,
-                                                             flags->boundary_spp});
+                                                             flags->boundary_spp, flags->primary_samples});
          std::vector<double> w;
          double l2 = NAN;
          if (!flags->adjoint.empty()) {

@@ -79,15 +79,22 @@ struct ImageSum {
 /// A width x height film of FilmLayout::channels() channels.
 class Film {
  public:
-  Film(int width, int height, const FilmLayout& layout);
+  /// A film of width x height pixels; `stratified`: its pixels' samples come in two strata
+  /// (add_sample), whose sums it keeps apart (W H (2 channels() + 1) more numbers).
+  Film(int width, int height, const FilmLayout& layout, bool stratified = false);
   int width() const { return width_; }
   int height() const { return height_; }
   int channels() const { return channels_; }
   const FilmLayout& layout() const { return layout_; }
+  bool stratified() const { return stratified_; }
 
-  /// Adds one sample (channels() values) to pixel (x, y). Not thread-safe for the same pixel;
+  /// Adds one sample (channels() values) to pixel (x, y), of stratum 0 or 1 (1 only on a
+  /// stratified film): an estimator whose samples of a pixel are not all drawn alike marks the
+  /// kind each is (the samples that make one more secondary boundary traversal,
+  /// boundary_traversals in qsil/integrators/boundary_term.h: stratum 1), so that
+  /// standard_error() weighs each stratum's own variance. Not thread-safe for the same pixel;
   /// the renderer gives each pixel to one thread.
-  void add_sample(int x, int y, const double* values);
+  void add_sample(int x, int y, const double* values, int stratum = 0);
   /// Adds a splatted estimate to pixel (x, y) without counting a sample (primary-edge boundary
   /// samples land in pixels other than the one being sampled). `value` is in the units of one
   /// pixel sample; the pixel's mean becomes (sum of samples + sum of splats) / samples, and its
@@ -99,9 +106,12 @@ class Film {
   long long samples(int x, int y) const { return count_[size_t(y) * width_ + x]; }
   /// Sample mean of channel c at (x, y), splats included (divided by the pixel's sample count).
   double mean(int c, int x, int y) const;
-  /// Standard error of the mean of channel c at (x, y): sqrt(sample variance / n).
+  /// Standard error of the mean of channel c at (x, y): sqrt(sample variance / n); when the pixel
+  /// has samples of both strata (add_sample), the stratified estimate sqrt((n0 s0² + n1 s1²) / n²)
+  /// with s_i² the sample variance within stratum i (the pooled one where a stratum has fewer than
+  /// two samples: conservative). Splats add their squared sum / n².
   double standard_error(int c, int x, int y) const;
-  /// Adds another film's sums (same size and layout): the films of disjoint sample ranges of the
+  /// Adds another film's sums (same size, layout and stratification): the films of disjoint sample ranges of the
   /// same estimator merge into the film of their union (sums add, so the result equals one run
   /// over the union up to the rounding of the additions).
   void merge(const Film& other);
@@ -114,11 +124,15 @@ class Film {
   /// are bit for bit the other film's.
   void copy_part(const Film& other, int part, int parts);
   /// The film's whole state as one array of state_size() doubles (sums, squared sums, splat sums,
-  /// splat squared sums, then sample counts, exact below 2^53), to send it between processes;
+  /// splat squared sums, on a stratified film stratum 1's sums and squared sums, then sample counts
+  /// and on a stratified film stratum 1's sample counts, exact below 2^53), to send it between
+  /// processes;
   /// set_state() restores it bit for bit.
   std::vector<double> state() const;
-  /// Size of state(): W H (4 channels() + 1).
-  size_t state_size() const { return size_t(width_) * height_ * (4 * size_t(channels_) + 1); }
+  /// Size of state(): W H (4 channels() + 1), W H (6 channels() + 2) when stratified.
+  size_t state_size() const {
+    return size_t(width_) * height_ * (stratified_ ? 6 * size_t(channels_) + 2 : 4 * size_t(channels_) + 1);
+  }
   /// Restores a state() of a film of the same size and layout (a wrong size is a bug: checked).
   void set_state(const std::vector<double>& state);
   /// Image sum of parameter k's derivative (its hidden mean channel) and its standard error.
@@ -132,9 +146,11 @@ class Film {
  private:
   int width_, height_, channels_;
   FilmLayout layout_;
+  bool stratified_ = false;
   std::vector<double> sum_, sum_sq_;
   std::vector<double> splat_sum_, splat_sq_;
-  std::vector<long long> count_;
+  std::vector<double> sum1_, sum_sq1_;  ///< the sums of the samples of stratum 1 (stratified films)
+  std::vector<long long> count_, count1_;
 };
 
 }  // namespace qsil

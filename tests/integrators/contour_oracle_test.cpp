@@ -81,9 +81,10 @@ OracleResult run_oracle(const Scene& scene) {
   const PathContext ctx = lights.context(scene, tracer);
   BoundarySetup boundary;
   BoundaryContext bctx;
-  std::vector<PrimaryEdge> primary;
+  PrimaryEdges primary;
   SetupReport setup;
-  set_up_boundary_term(scene, Method::Quadric, &vel, vel.moving, 1, lights.environment, boundary, bctx, primary, setup);
+  set_up_boundary_term(scene, tracer, Method::Quadric, &vel, vel.moving, 1, lights.environment, boundary, bctx, primary,
+                       setup);
   EXPECT_TRUE(boundary.contours && bctx.contours == boundary.contours.get()) << "a glossy scene has contour sets";
   if (!bctx.contours) return r;
 
@@ -155,13 +156,13 @@ OracleResult run_oracle(const Scene& scene) {
   auto estimate = [&](const BoundaryContext& b, uint64_t seed) {
     Sampler sampler(seed, 0, 0);
     PathStats st;
-    const int n = 200000 / b.samples_per_vertex;
+    const int n = int(200000 / b.samples_per_vertex);
     double sum = 0, sum2 = 0;
     for (int i = 0; i < n; ++i) {
       double v = 0;
       Eigen::Matrix<double, 1, 1> J;
       for_each_boundary_sample(
-          ctx, b, sampler, si, sp, q, wo_local, Color::Ones(), 1, st,
+          ctx, b, sampler, si, sp, q, wo_local, Color::Ones(), 1, int(b.samples_per_vertex), st,
           [&](const edgetree::ForestEdge& e, double t, const Vec3& gv) {
             J = edge_point_jacobian<1>(vel, e, t, gv, dp);
             return !J.isZero(0.0);

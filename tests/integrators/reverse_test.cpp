@@ -9,12 +9,14 @@
 //   the check is statistical: independent seeds, the difference from forward mode and from
 //   central finite differences each within 3.5 combined standard errors (two-sided, 99.95 % for
 //   a correct estimator), with power: each combined standard error below 4 % of the value; on
-//   spot-selfshadow (a diffuse mesh under a small light) and on spot-mirror (whose glossy mirror
-//   vertices estimate contour sets, qsil/edgetree/contour_set.h). Both modes are bit-identical
+//   spot-selfshadow (a diffuse mesh under a small light; both modes at the quadric method's
+//   default of one traversal every other sample, boundary_traversals) and on spot-mirror (whose
+//   glossy mirror vertices estimate contour sets, qsil/edgetree/contour_set.h; one traversal per
+//   sample, for power at a test's spp). Both modes are bit-identical
 //   for 1 and 2 threads on both scenes.
-#include "qsil/integrators/estimator.h"
 #include "qsil/integrators/reverse.h"
 #include "qsil/error.h"
+#include "qsil/integrators/estimator.h"
 #include "qsil/rng.h"
 #include "qsil/scene.h"
 #include "qsil/vertex_normals.h"
@@ -175,13 +177,16 @@ Estimate estimate(int runs, F&& one) {
 
 /// The boundary-term check of the file comment for `param` of shape `shape_id` in a scene. The
 /// adjoint is the sign of a pilot forward-mode derivative per pixel-channel (its own seed), so
-/// that the weighted sum adds the derivative's magnitude everywhere instead of cancelling.
-void expect_boundary_agreement(const Scene& scene, const std::string& param, const std::string& shape_id, int runs) {
+/// that the weighted sum adds the derivative's magnitude everywhere instead of cancelling. Both
+/// modes run at `rate` secondary traversals per vertex (EstimatorConfig::boundary_spp; 0: the
+/// method's default, a stratified pick of half the samples).
+void expect_boundary_agreement(const Scene& scene, const std::string& param, const std::string& shape_id, int runs,
+                               double rate) {
   const std::vector<ParameterSpec> params = parse_parameters({param}, scene);
   const std::vector<int> shapes = resolve_shapes(scene, {shape_id});
   const SceneVelocities vel = compute_velocities(scene, params);
-  const Estimator forward(scene, EstimatorConfig::gradient(params, Method::Quadric));
-  const ReverseEstimator reverse(scene, ReverseConfig{shapes, Method::Quadric, 1});
+  const Estimator forward(scene, EstimatorConfig::gradient(params, Method::Quadric, rate));
+  const ReverseEstimator reverse(scene, ReverseConfig{shapes, Method::Quadric, rate});
   RenderOptions pilot_options;
   pilot_options.seed = 99;
   pilot_options.progress = false;
@@ -228,9 +233,9 @@ void expect_boundary_agreement(const Scene& scene, const std::string& param, con
 TEST(ReverseMode, SecondaryBoundaryTermAgreesWithForwardMode) {
   // Spot translating under a small light: its shadows on itself (a moving p sees the static
   // light's outline and Spot's own silhouettes move), and its outline against the environment.
-  const Scene scene = load_scene(test::data_file("tests/data/gradient/spot-selfshadow.xml"),
-                                 {{"res", "16"}, {"spp", "192"}});
-  expect_boundary_agreement(scene, "spot:translate:1,0,0", "spot", 8);
+  const Scene scene =
+      load_scene(test::data_file("tests/data/gradient/spot-selfshadow.xml"), {{"res", "16"}, {"spp", "192"}});
+  expect_boundary_agreement(scene, "spot:translate:1,0,0", "spot", 8, 0);
 }
 
 TEST(ReverseMode, PrimaryBoundaryTermAgreesWithForwardMode) {
@@ -239,7 +244,7 @@ TEST(ReverseMode, PrimaryBoundaryTermAgreesWithForwardMode) {
   // boundary term alone.
   const Scene scene = load_scene(test::data_file("tests/data/gradient/spot-selfshadow.xml"),
                                  {{"res", "16"}, {"spp", "64"}, {"max_depth", "1"}});
-  expect_boundary_agreement(scene, "spot:translate:1,0,0", "spot", 8);
+  expect_boundary_agreement(scene, "spot:translate:1,0,0", "spot", 8, 1);
 }
 
 TEST(ReverseMode, SecondaryBoundaryTermAgreesWithForwardModeAtAGlossyMirror) {
@@ -247,7 +252,7 @@ TEST(ReverseMode, SecondaryBoundaryTermAgreesWithForwardModeAtAGlossyMirror) {
   // segments: Spot is black, so the term is Spot's reflected outline against the environment.
   const Scene scene =
       load_scene(test::data_file("scenes/spot-mirror.xml"), {{"res", "16"}, {"spp", "256"}, {"max_depth", "2"}});
-  expect_boundary_agreement(scene, "spot:translate:0,1,0", "spot", 8);
+  expect_boundary_agreement(scene, "spot:translate:0,1,0", "spot", 8, 1);
 }
 
 /// Reverse mode's gradient is bit-identical for 1 and 2 threads (a diffuse scene, and the glossy

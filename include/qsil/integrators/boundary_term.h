@@ -33,6 +33,7 @@
 
 #include <array>
 #include <chrono>
+#include <cmath>
 #include <vector>
 
 namespace qsil {
@@ -46,7 +47,10 @@ struct BoundaryContext {
   const SceneVelocities* velocities = nullptr;
   std::vector<bool> moving;  ///< shapes with non-zero velocity (eligible at a static p)
   std::vector<bool> all;     ///< every shape (eligible at a moving p)
-  int samples_per_vertex = 1;
+  /// Secondary boundary-term traversals per path vertex, on average over a pixel's samples
+  /// (EstimatorConfig::boundary_spp; positive and finite): boundary_traversals() of them at every
+  /// vertex of a sample's path, each weighted 1 / samples_per_vertex.
+  double samples_per_vertex = 1.0;
   std::vector<edgetree::LightPolygon> lights;  ///< quad area lights for I_light [QSS 3.6]
   double env_weight = 1.0;                     ///< environment intensity (luminance of its mean)
   std::vector<double> emission;                ///< per shape: luminance of its emission (0: none)
@@ -277,19 +281,43 @@ edgetree::ContourProbe contour_probe(const PathContext& ctx, const edgetree::Con
   return probe;
 }
 
+/// How many secondary boundary traversals sample `sample` of pixel `pixel` makes at each vertex of
+/// its path, at `rate` = BoundaryContext::samples_per_vertex: the whole part of the rate, plus one
+/// where a stratified pick over the pixel's samples selects it: with f the fraction of the rate
+/// and phi uniform in [0, 1) drawn once per pixel (Sampler(seed, pixel, 0, 3): the same for every
+/// sample range and process split), sample s is picked iff floor(f (s + 1) + phi) > floor(f s +
+/// phi). Every sample is picked with probability exactly f (phi is uniform), so weighting each
+/// traversal by 1 / rate is unbiased; and any n consecutive samples hold floor(f n) or ceil(f n)
+/// picks, so unlike Russian roulette per sample the term's own mean adds no variance (a rate of
+/// 1/2 is one boundary estimate every other sample, the sppi of Mitsuba 3's projective
+/// integrators). The pixel's samples are then not identically distributed: the per-pixel
+/// variance of its samples over-estimates the variance of its mean (standard errors are
+/// conservative) unless the rate is whole.
+inline int boundary_traversals(double rate, uint64_t seed, uint64_t pixel, uint64_t sample) {
+  const int whole = int(rate);
+  const double f = rate - double(whole);
+  if (!(f > 0)) return whole;
+  const double phi = Sampler(seed, pixel, 0, 3).next();
+  const double s = double(sample);
+  return whole + int(std::floor(f * (s + 1.0) + phi) - std::floor(f * s + phi));
+}
+
 /// The secondary boundary term's samples at one path vertex (shared by forward mode, BoundaryHook,
-/// and reverse mode, integrators/reverse.cpp): bctx.samples_per_vertex traversals of bctx.sampler
-/// for query `q` (set up by the caller: eligibility, velocities; its contour set is made here
-/// when bctx.contours is set: contour_probe, ContourIndex::contour_edges), drawing from `sampler`; for each
-/// edge point with f_s != 0, `accept(edge, t, g)` decides before any ray whether it can contribute
-/// (edge_jump_with), and each contributing one is handed to `visit(edge, t, weight, g)` with
-/// weight = T f_s jump / (pdf samples_per_vertex), T the detached throughput (the vertex's
-/// derivative gains weight (g . v_t)). Counts traversals, zero traversals and thread time.
+/// and reverse mode, integrators/reverse.cpp): `traversals` traversals of bctx.sampler
+/// (boundary_traversals) for query `q` (set up by the caller: eligibility, velocities; its
+/// contour set is made here when bctx.contours is set: contour_probe,
+/// ContourIndex::contour_edges), drawing from `sampler`; for each edge point with f_s != 0,
+/// `accept(edge, t, g)` decides before any ray whether it can contribute (edge_jump_with), and
+/// each contributing one is handed to `visit(edge, t, weight, g)` with weight = T f_s jump / (pdf
+/// r), r = bctx.samples_per_vertex and T the detached throughput (the vertex's derivative gains
+/// weight (g . v_t)). Counts traversals, zero traversals and thread time.
 template <class T, class Accept, class Visit>
 void for_each_boundary_sample(const PathContext& ctx, const BoundaryContext& bctx, Sampler& sampler,
                               const SurfaceInteraction<T>& si, const ShadingPoint<T>& sp, edgetree::SilhouetteQuery q,
-                              const Vec3& wo_local, const Color& throughput, int seg, PathStats& stats, Accept&& accept,
-                              Visit&& visit) {
+                              const Vec3& wo_local, const Color& throughput, int seg, int traversals, PathStats& stats,
+                              Accept&& accept, Visit&& visit) {
+  if (traversals <= 0) return;
+  const double rate = bctx.samples_per_vertex;
   const auto t0 = std::chrono::steady_clock::now();
   const Vec3 wo_world = q.frame.to_world(wo_local);
   // ---- The contour set of a glossy vertex: made once, used by every traversal here. The
@@ -305,7 +333,7 @@ void for_each_boundary_sample(const PathContext& ctx, const BoundaryContext& bct
   }
   q.contour = contour;
   edgetree::SilhouetteSampleSet set;
-  for (int sample = 0; sample < bctx.samples_per_vertex; ++sample) {
+  for (int sample = 0; sample < traversals; ++sample) {
     ++stats.boundary_traversals;
     bctx.sampler->sample_set(q, [&sampler] { return sampler.next(); }, set);
     // Counted per traversal: zero when none of its edge points contributed.
@@ -333,7 +361,7 @@ void for_each_boundary_sample(const PathContext& ctx, const BoundaryContext& bct
           (jump == 0).all())
         continue;
       contributed = true;
-      visit(e, s.t, Color(throughput * f * jump / (s.pdf * bctx.samples_per_vertex)), g);
+      visit(e, s.t, Color(throughput * f * jump / (s.pdf * rate)), g);
     }
     stats.boundary_zero += !contributed;
   }
@@ -361,6 +389,7 @@ struct BoundaryHook {
   const PathContext* ctx;
   const BoundaryContext* bctx;
   Sampler* sampler;  ///< a stream of its own, so the hook leaves the path's own decisions unchanged
+  int traversals;    ///< at every vertex (boundary_traversals of the sample)
 
   void operator()(const SurfaceInteraction<Dual<N>>& si, const ShadingPoint<Dual<N>>& sp, const Vec3& wo_local,
                   const ColorT<Dual<N>>& beta, int seg, Sampler&, PathStats& stats, ColorT<Dual<N>>& L) const {
@@ -375,7 +404,7 @@ struct BoundaryHook {
     q.velocity_scale = bctx->velocity_scale;
     Eigen::Matrix<double, 1, N> J;  // of the sample being evaluated
     for_each_boundary_sample(
-        *ctx, *bctx, *sampler, si, sp, q, wo_local, value(beta), seg, stats,
+        *ctx, *bctx, *sampler, si, sp, q, wo_local, value(beta), seg, traversals, stats,
         [&](const edgetree::ForestEdge& e, double t, const Vec3& g) {
           J = edge_point_jacobian<N>(*bctx->velocities, e, t, g, dp);
           return !J.isZero(0.0);

@@ -35,7 +35,10 @@ struct CompareOptions {
   std::string reference;        ///< reference EXR (`qsil reference`); empty: render one
   double reference_factor = 8;  ///< automatic reference: this times the largest target, quadric
   std::vector<double> h;        ///< FD steps (fd_steps())
-  int boundary_spp = 1;
+  /// EstimatorConfig::boundary_spp and primary_samples of every edge-sampling method (0: each
+  /// method's default rate).
+  double boundary_spp = 0;
+  double primary_samples = kDefaultPrimarySamples;
   std::filesystem::path out;  ///< output directory (created)
   uint64_t seed = 0;          ///< base seed: every method, target and the reference derive theirs
   int threads = 0;

@@ -36,6 +36,11 @@
 
 namespace qsil {
 
+/// Default primary boundary-term edge samples per pixel sample (EstimatorConfig::primary_samples):
+/// the ratio at which the primary term's share of the variance and of the time balance on the
+/// bundled scenes (docs/architecture.md §6 "How many primary samples").
+inline constexpr double kDefaultPrimarySamples = 0.25;
+
 /// What an estimator estimates.
 struct EstimatorConfig {
   /// Parameters theta_k (1 to 8); empty: the primal image (method ignored).
@@ -43,7 +48,14 @@ struct EstimatorConfig {
   /// With parameters: an edge-sampling method or Method::None (primal + interior term + boundary
   /// term of that method), or Method::FiniteDifferences.
   Method method = Method::Quadric;
-  int boundary_spp = 1;  ///< discontinuity samples per shading point (edge-sampling methods)
+  /// Secondary boundary-term traversals per shading point (edge-sampling methods), on average over
+  /// a pixel's samples: a fraction is taken by a stratified pick of samples (boundary_traversals
+  /// in boundary_term.h). 0: the method's default (default_boundary_spp). Finite and >= 0.
+  double boundary_spp = 0;
+  /// Primary boundary-term edge samples per pixel sample (edge-sampling methods; Mitsuba 3's
+  /// `sppp` as a ratio to spp): ratio x W x H edge samples per sample index, rounded up to a whole
+  /// chunk of 1024 (integrators/primary_boundary.h). Must be positive and finite.
+  double primary_samples = kDefaultPrimarySamples;
   /// Finite differences: one step h per parameter (units of theta); empty: default_fd_step each.
   std::vector<double> fd_steps;
 
@@ -51,7 +63,7 @@ struct EstimatorConfig {
   static EstimatorConfig primal();
   /// Primal + derivatives with `method` (an edge sampler or Method::None).
   static EstimatorConfig gradient(std::vector<ParameterSpec> params, Method method = Method::Quadric,
-                                  int boundary_spp = 1);
+                                  double boundary_spp = 0, double primary_samples = kDefaultPrimarySamples);
   /// Primal + central finite differences with steps `steps` (empty: defaults).
   static EstimatorConfig finite_differences(std::vector<ParameterSpec> params, std::vector<double> steps = {});
 };
@@ -115,7 +127,8 @@ class Estimator {
  public:
   /// Sets up `config` for `scene`, which must outlive the estimator. Throws qsil::Error for a
   /// parameter count outside 1..8 (check_parameter_count), a method that cannot estimate
-  /// derivatives, or finite-difference steps that are not positive and finite or not one per
+  /// derivatives, primary_samples that is not positive and finite, boundary_spp that is negative or
+  /// not finite, or finite-difference steps that are not positive and finite or not one per
   /// parameter. Uses the caller's TBB arena (forest fitting is parallel).
   Estimator(const Scene& scene, EstimatorConfig config);
   ~Estimator();

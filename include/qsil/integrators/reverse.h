@@ -37,7 +37,9 @@ namespace qsil {
 struct ReverseConfig {
   std::vector<int> shapes;          ///< indices into Scene::shapes whose vertex positions are differentiated
   Method method = Method::Quadric;  ///< boundary term: an edge-sampling method, or Method::None (interior only)
-  int boundary_spp = 1;             ///< discontinuity samples per shading point
+  double boundary_spp = 0;          ///< EstimatorConfig::boundary_spp (0: the method's default)
+  /// Primary boundary-term edge samples per pixel sample (EstimatorConfig::primary_samples).
+  double primary_samples = kDefaultPrimarySamples;
 };
 
 /// One reverse-mode run.
