@@ -20,9 +20,7 @@ struct Flags : CommonFlags {
   std::vector<std::string> params;
   std::string method = "quadric";
   std::vector<double> h;
-  // One boundary estimate per sample (not the method's default): a reference's per-pixel standard
-  // errors are exact only when every sample is drawn alike (boundary_traversals in boundary_term.h).
-  double boundary_spp = 1;
+  double boundary_spp = 0;
   double primary_samples = kDefaultPrimarySamples;
 };
 

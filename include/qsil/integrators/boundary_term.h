@@ -290,9 +290,9 @@ edgetree::ContourProbe contour_probe(const PathContext& ctx, const edgetree::Con
 /// traversal by 1 / rate is unbiased; and any n consecutive samples hold floor(f n) or ceil(f n)
 /// picks, so unlike Russian roulette per sample the term's own mean adds no variance (a rate of
 /// 1/2 is one boundary estimate every other sample, the sppi of Mitsuba 3's projective
-/// integrators). The pixel's samples are then not identically distributed: the per-pixel
-/// variance of its samples over-estimates the variance of its mean (standard errors are
-/// conservative) unless the rate is whole.
+/// integrators). The pixel's samples are then not identically distributed, so the estimator marks
+/// the picked ones as a stratum of their own (Film::add_sample), whose variance the film's
+/// standard error takes apart.
 inline int boundary_traversals(double rate, uint64_t seed, uint64_t pixel, uint64_t sample) {
   const int whole = int(rate);
   const double f = rate - double(whole);
