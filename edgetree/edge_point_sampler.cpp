@@ -11,7 +11,7 @@ namespace qsil::edgetree {
 namespace {
 
 /// psi/2 - sin(2 psi)/4 = integral of sin^2 from 0 to psi; a series below 1e-2 avoids the
-/// cancellation (relative error < 1e-16 there: the next term is 4 psi^9 / 2835... times psi^2).
+/// cancellation (relative error about 1e-15 there: the next term is -psi^9 / 2835).
 double int_sin2(double psi) {
   if (std::abs(psi) < 1e-2) {
     const double p2 = psi * psi;

@@ -31,9 +31,11 @@ void choice_probabilities(const Range& c, int n, double* prob) {
       c, n, [](const Candidate& x) { return x.w.importance; }, [](const Candidate& x) { return x.w.defensive; }, prob);
 }
 
+/// G_e = length / d2, d2 the squared distance of the edge's midpoint from p (length where p is at
+/// the midpoint).
+double edge_defensive(double length, double d2) { return d2 > 0 ? length / d2 : length; }
 double edge_defensive(const ForestEdge& e, const Vec3& p) {
-  const double d2 = (0.5 * (e.p0 + e.p1) - p).squaredNorm();
-  return d2 > 0 ? e.length / d2 : e.length;
+  return edge_defensive(e.length, (0.5 * (e.p0 + e.p1) - p).squaredNorm());
 }
 
 /// Inner nodes of the quadric method with at most this many edges are tested edge by edge
@@ -222,12 +224,12 @@ namespace {
 
 NodeWeight leaf_edge_weight(const ForestEdge& e, const Prepared& pq) {
   const SilhouetteQuery& q = pq.q;
-  const EdgeGeometry g(e, q.p);  // computed once for the importance, its velocity factor and G
+  const EdgeGeometry g(e, q.p);  // once for the importance, its velocity factor and the defensive weight
   const double half = 0.5 * e.length;
   const bool far = pq.cosine_lobe && half * half < kConeImportanceSin * kConeImportanceSin * g.mid2;
   const double total = far ? EdgeMixture::far_total(e, q, pq.lights, g) : EdgeMixture::total(e, q, pq.lights);
   // velocity_factor is finite, so a zero total needs no factor (below the horizon, outside every light).
-  return {total > 0 ? total * velocity_factor(e, q, g) : 0.0, g.mid2 > 0 ? e.length / g.mid2 : e.length};
+  return {total > 0 ? total * velocity_factor(e, q, g) : 0.0, edge_defensive(e.length, g.mid2)};
 }
 
 NodeWeight loose_edge_weight(const ForestEdge& e, const Prepared& pq) {

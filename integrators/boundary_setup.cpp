@@ -75,9 +75,12 @@ void set_light_importance(const Scene& scene, const EnvironmentLight& environmen
 }
 
 void check_boundary_spp(double boundary_spp) {
-  if (!(boundary_spp >= 0) || !std::isfinite(boundary_spp))
-    throw Error("boundary samples per shading point must be >= 0 and finite (got " + std::to_string(boundary_spp) +
-                "; 0: the method's default)");
+  // Beyond these a traversal's weight 1 / rate or its count overflows nothing yet, but no use
+  // needs them: 1/1024 is one traversal in 1024 samples.
+  if (boundary_spp == 0) return;
+  if (!(boundary_spp >= 1.0 / 1024 && boundary_spp <= 1024))
+    throw Error("boundary samples per shading point must be 0 (the method's default) or in [1/1024, 1024] (got " +
+                std::to_string(boundary_spp) + ")");
 }
 
 void describe_boundary_setup(const BoundarySetup& boundary, Method method, int primary_edges, SetupReport& setup) {

@@ -44,7 +44,8 @@ BoundarySetup build_boundary_setup(const Scene& scene, Method method);
 /// context.velocities (set it first; none: no scale), each parameter's velocity scale.
 void set_light_importance(const Scene& scene, const EnvironmentLight& environment, BoundaryContext& context);
 
-/// Throws qsil::Error unless `boundary_spp` (EstimatorConfig::boundary_spp) is >= 0 and finite.
+/// Throws qsil::Error unless `boundary_spp` (EstimatorConfig::boundary_spp) is 0 (the method's
+/// default) or in [1/1024, 1024].
 void check_boundary_spp(double boundary_spp);
 
 /// Fills the set-up report's edge-structure fields from a built boundary method: build time, edge

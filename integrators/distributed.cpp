@@ -31,7 +31,7 @@ void merge_part(RenderResult& whole, const RenderResult& p, int part, int parts)
   }
   if (part == 0) {
     whole = RenderResult();
-    whole.film = Film(p.film.width(), p.film.height(), p.film.layout(), p.film.stratified());
+    whole.film = Film(p.film.width(), p.film.height(), p.film.layout(), p.film.stratum_fraction());
     whole.first_sample = p.first_sample;
     whole.spp = p.spp;
   }
@@ -109,9 +109,8 @@ void send_result(const RenderResult& r, int dest) {
                                uint64_t(r.spp),
                                uint64_t(r.film.width()),
                                uint64_t(r.film.height()),
-                               uint64_t(r.film.layout().num_params()),
-                               uint64_t(r.film.stratified())};
-  const double times[] = {r.seconds, r.boundary_seconds};
+                               uint64_t(r.film.layout().num_params())};
+  const double times[] = {r.seconds, r.boundary_seconds, r.film.stratum_fraction()};
   MPI_Send(counters, std::size(counters), MPI_UINT64_T, dest, kTagCounters, MPI_COMM_WORLD);
   MPI_Send(times, std::size(times), MPI_DOUBLE, dest, kTagCounters, MPI_COMM_WORLD);
   const std::vector<double> state = r.film.state();
@@ -133,8 +132,8 @@ void wait_politely(MPI_Request& request) {
 
 /// Receives what send_result sent from rank `source`.
 RenderResult receive_result(int source) {
-  uint64_t counters[10];
-  double times[2];
+  uint64_t counters[9];
+  double times[3];
   MPI_Recv(counters, std::size(counters), MPI_UINT64_T, source, kTagCounters, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
   MPI_Recv(times, std::size(times), MPI_DOUBLE, source, kTagCounters, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
   RenderResult r;
@@ -146,7 +145,7 @@ RenderResult receive_result(int source) {
   r.spp = int(counters[5]);
   r.seconds = times[0];
   r.boundary_seconds = times[1];
-  r.film = Film(int(counters[6]), int(counters[7]), FilmLayout(int(counters[8])), counters[9] != 0);
+  r.film = Film(int(counters[6]), int(counters[7]), FilmLayout(int(counters[8])), times[2]);
   std::vector<double> state(r.film.state_size());
   for (size_t i = 0; i < state.size(); i += kPiece)
     MPI_Recv(state.data() + i, int(std::min(kPiece, state.size() - i)), MPI_DOUBLE, source, kTagFilm, MPI_COMM_WORLD,

@@ -105,8 +105,9 @@ class GradientEstimator final : public Estimator::Impl {
     const DualView<N> view{&scene, &vel};
     const int K = layout.num_params();
     const bool with_boundary = bool(boundary.sampler);
-    // A fractional boundary rate draws a pixel's samples unalike (boundary_traversals).
-    const bool stratified = with_boundary && bctx.samples_per_vertex != std::floor(bctx.samples_per_vertex);
+    // A fractional boundary rate draws a pixel's samples unalike (boundary_traversals): that
+    // fraction of them makes one more traversal, stratum 1 of the film.
+    const double fraction = with_boundary ? bctx.samples_per_vertex - std::floor(bctx.samples_per_vertex) : 0.0;
     PathStats total;
     run_pixels(
         cam, layout, options, first, count, "grad",
@@ -134,9 +135,9 @@ class GradientEstimator final : public Estimator::Impl {
                 (out[layout.derivative(k, 0)] + out[layout.derivative(k, 1)] + out[layout.derivative(k, 2)]) / 3.0;
           }
           // Stratum 1: the samples that made the rate's fractional traversal (Film::standard_error).
-          return stratified && traversals > int(bctx.samples_per_vertex) ? 1 : 0;
+          return fraction > 0 && traversals > int(bctx.samples_per_vertex) ? 1 : 0;
         },
-        r, total, stratified);
+        r, total, fraction);
     // ---- Primary silhouettes: primary_samples edge samples per pixel sample, splatted where they land.
     if (with_boundary) {
       const auto t0 = Clock::now();

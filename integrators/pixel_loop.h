@@ -32,18 +32,18 @@ void for_each_pixel(int width, int height, int threads, const std::string& label
 /// One estimator run over samples [first, first + count) of every pixel of `camera`'s image:
 /// `sample(x, y, s, sampler, stats, out)` fills out[0 .. layout.channels()) for sample s of
 /// pixel (x, y), drawing from `sampler` = Sampler(seed, pixel, s), and returns nothing or the
-/// sample's stratum (0 or 1, Film::add_sample: samples of a pixel drawn unalike; 1 only with
-/// `stratified`, which makes the film stratified), for the pixels of part
+/// sample's stratum (0 or 1, Film::add_sample: samples of a pixel drawn unalike; 1 only with a
+/// `stratum_fraction` > 0, the film's, the share of stratum 1), for the pixels of part
 /// options.part of options.parts (every pixel when parts = 1). A sample with a non-finite
 /// value is replaced by zeros and counted. Fills result.film, spp, first_sample, seconds, rays and
 /// nonfinite; adds every thread's counters to `total`.
 template <class SampleFn>
 void run_pixels(const Camera& camera, const FilmLayout& layout, const RenderOptions& options, int first, int count,
                 const std::string& label, SampleFn&& sample, RenderResult& result, PathStats& total,
-                bool stratified = false) {
+                double stratum_fraction = 0.0) {
   const int W = camera.width, H = camera.height;
   const int channels = layout.channels();
-  result.film = Film(W, H, layout, stratified);
+  result.film = Film(W, H, layout, stratum_fraction);
   result.first_sample = first;
   result.spp = count;
   tbb::enumerable_thread_specific<PathStats> stats;

@@ -31,21 +31,21 @@ bool clip(const Vec3& c0, const Vec3& c1, const Vec3& n, double d, double& ta, d
   return ta < tb;
 }
 
-/// Draws `count` primary edge samples of chunk `chunk` from Sampler(seed, chunk, range_key, 2) and
+/// Draws `count` primary edge samples of chunk `chunk` from Sampler(seed, chunk, 0, 2) and
 /// evaluates them: `accept(edge, t, g)` sees the Jacobian's linear form g (edge_jump_with) before
 /// any ray; `emit(px, py, edge, t, weight, g)` receives each contributing sample, weight = jump W
 /// per_sample / pdf (so the pixel's derivative gains weight (g . v_t)). Shared by forward mode
 /// (add_primary_boundary) and reverse mode (for_each_primary_sample).
 template <class Accept, class Emit>
 void sample_chunk(const PathContext& ctx, const PrimaryEdges& primary, long long count, double per_sample,
-                  uint64_t seed, long long chunk, int range_key, PathStats& stats, Accept&& accept, Emit&& emit) {
+                  uint64_t seed, long long chunk, PathStats& stats, Accept&& accept, Emit&& emit) {
   const Camera& cam = ctx.scene->camera;
   const Vec2 tanf = cam.tan_half_fov();
   const double fx = cam.width / (2.0 * tanf.x()), fy = cam.height / (2.0 * tanf.y());
   const Vec3 o = cam.origin();
   const Vec3 forward = cam.to_world.block<3, 1>(0, 2).normalized();
   const std::vector<double>& cdf = primary.cdf;
-  Sampler sampler(seed, uint64_t(chunk), uint64_t(range_key), 2);
+  Sampler sampler(seed, uint64_t(chunk), 0, 2);
   for (long long i = 0; i < count; ++i) {
     ++stats.boundary_traversals;
     // ---- A piece of an edge by its weight (projected length, less for creases and hidden
@@ -89,7 +89,7 @@ void sample_chunk(const PathContext& ctx, const PrimaryEdges& primary, long long
 /// does not move).
 template <int N>
 void run_chunk(const PathContext& ctx, const SceneVelocities& vel, const PrimaryEdges& primary, long long count,
-               double per_sample, uint64_t seed, long long chunk, int range_key, std::vector<FilmSplat>& out,
+               double per_sample, uint64_t seed, long long chunk, std::vector<FilmSplat>& out,
                PathStats& stats) {
   const int K = vel.num_params;
   const FilmLayout layout(K);
@@ -105,7 +105,7 @@ void run_chunk(const PathContext& ctx, const SceneVelocities& vel, const Primary
       out.push_back({px, py, layout.derivative_mean(k), weight.mean() * J[k]});
     }
   };
-  sample_chunk(ctx, primary, count, per_sample, seed, chunk, range_key, stats, accept, emit);
+  sample_chunk(ctx, primary, count, per_sample, seed, chunk, stats, accept, emit);
 }
 
 /// The chunks of samples [first_sample, first_sample + spp) of the primary term and this part's
@@ -118,12 +118,14 @@ struct ChunkPlan {
   ChunkPlan(const Camera& cam, const PrimaryEdges& primary, double ratio, int first_sample, int spp, int part,
             int parts) {
     const long long per_index = primary_samples_per_index(cam.width, cam.height, ratio);
+    if (!(double(per_index) * (double(first_sample) + double(spp)) < 0x1p62))
+      throw Error("primary boundary term: " + std::to_string(per_index) + " samples per sample index up to sample " +
+                  std::to_string(first_sample + spp) + " overflow its numbering (fewer --primary-samples)");
     const long long num_samples = per_index * spp;
     per_sample = double(spp) / double(std::max(1LL, num_samples));
     // Sample index s owns primary samples [s n, (s + 1) n), n a whole number of chunks; chunk c
     // holds numbers [c 1024, (c + 1) 1024) and draws from stream (seed, c, 0, 2), whichever run
-    // draws it. (A chunk cut by the start of a range would draw its part from (seed, c,
-    // first_sample, 2); with n a multiple of 1024 no range cuts a chunk.)
+    // draws it: no range starts inside a chunk.
     g0 = per_index * first_sample;
     g1 = g0 + num_samples;
     const long long first_chunk = g0 / kChunkSize, all_chunks = (g1 + kChunkSize - 1) / kChunkSize - first_chunk;
@@ -132,14 +134,15 @@ struct ChunkPlan {
     chunks = first_chunk + all_chunks * (part + 1) / parts - c0;
     if (primary.empty() || num_samples <= 0) chunks = 0;
   }
-  /// Runs body(j, count, chunk, cut) in parallel for chunks j in [j0, j1) of this part (default:
-  /// all): `count` samples of global chunk `chunk`, `cut` = 1 when the range's start cuts it.
+  /// Runs body(j, count, chunk) in parallel for chunks j in [j0, j1) of this part (default: all):
+  /// `count` samples of global chunk `chunk` (a whole chunk: ranges start at a chunk's start).
   template <class Body>
   void run(int threads, Body&& body, long long j0 = 0, long long j1 = -1) const {
+    QSIL_DCHECK(g0 % kChunkSize == 0);
     auto one = [&](long long j) {
       const long long c = c0 + j;
       const long long begin = std::max(g0, c * kChunkSize), end = std::min(g1, (c + 1) * kChunkSize);
-      body(j, end - begin, c, begin > c * kChunkSize ? 1 : 0);
+      body(j, end - begin, c);
     };
     auto all = [&] { tbb::parallel_for(j0, j1 < 0 ? chunks : j1, one); };
     if (threads > 0)
@@ -154,26 +157,18 @@ struct ChunkPlan {
 namespace {
 
 /// Whether the point of `pe` at s is visible from o: the boundary term's own visibility test
-/// (edge_jump_with: a ray to the point, ignoring the edge's faces, stopping 1/4096 short of it).
+/// (point_visible, ignoring the edge's faces).
 bool primary_point_visible(const RayTracer& tracer, const Vec3& o, const PrimaryEdge& pe, double s) {
-  const edgetree::ForestEdge& e = *pe.edge;
-  IgnoreSet ignore;
-  ignore.prims[0] = {e.shape, e.f0};
-  ignore.prims[1] = {e.f1 >= 0 ? e.shape : -1, e.f1};
-  const Vec3 to = pe.point_at(s) - o;
-  const double dist = to.norm();
-  if (!(dist > 0)) return true;
-  return !tracer.occluded(o, to / dist, dist * (1.0 - 1.0 / 4096.0), ignore);
+  return point_visible(tracer, o, pe.point_at(s), edge_faces(*pe.edge, false));
 }
 
 }  // namespace
 
 long long primary_samples_per_index(int width, int height, double ratio) {
-  if (!(ratio > 0) || !std::isfinite(ratio))
-    throw Error("primary samples per pixel sample must be positive and finite (got " + std::to_string(ratio) + ")");
+  if (!(ratio > 0 && ratio <= 1024))
+    throw Error("primary samples per pixel sample must be in (0, 1024] (got " + std::to_string(ratio) + ")");
   constexpr long long kChunk = ChunkPlan::kChunkSize;
   const double n = std::ceil(ratio * double(width) * double(height) / double(kChunk));
-  if (!(n < 1e12)) throw Error("too many primary samples per pixel sample (" + std::to_string(ratio) + ")");
   return std::max(1LL, (long long)n) * kChunk;
 }
 
@@ -190,6 +185,7 @@ double PrimaryEdges::density(int edge, double s) const {
 
 PrimaryEdges find_primary_edges(const Scene& scene, const edgetree::EdgeSet& edges, const std::vector<bool>& moving,
                                 const RayTracer& tracer, double hidden_share) {
+  QSIL_CHECK(hidden_share > 0 && hidden_share <= 1);
   const Camera& cam = scene.camera;
   const Vec3 o = cam.origin();
   const Vec2 tf = cam.tan_half_fov();
@@ -252,10 +248,10 @@ void add_primary_boundary(Film& film, const PathContext& ctx, const SceneVelocit
   std::vector<std::vector<FilmSplat>> splats{static_cast<size_t>(plan.chunks)};
   std::vector<PathStats> chunk_stats{static_cast<size_t>(plan.chunks)};
   const int K = velocities.num_params;
-  plan.run(threads, [&](long long j, long long count, long long c, int cut) {
+  plan.run(threads, [&](long long j, long long count, long long c) {
     with_dual_size(K, [&](auto n) {
-      run_chunk<decltype(n)::value>(ctx, velocities, edges, count, plan.per_sample, seed, c, cut ? first_sample : 0,
-                                    splats[size_t(j)], chunk_stats[size_t(j)]);
+      run_chunk<decltype(n)::value>(ctx, velocities, edges, count, plan.per_sample, seed, c, splats[size_t(j)],
+                                    chunk_stats[size_t(j)]);
     });
   });
   // Merge in chunk order: the same sums whatever the thread count (or hand them on in that order).
@@ -283,12 +279,12 @@ void for_each_primary_sample(const PathContext& ctx, const PrimaryEdges& edges, 
     const long long j1 = std::min(plan.chunks, j0 + batch);
     plan.run(
         threads,
-        [&](long long j, long long count, long long c, int cut) {
+        [&](long long j, long long count, long long c) {
           auto& out = samples[size_t(j - j0)];
           out.clear();
           chunk_stats[size_t(j - j0)] = PathStats{};
           sample_chunk(
-              ctx, edges, count, plan.per_sample, seed, c, cut ? first_sample : 0, chunk_stats[size_t(j - j0)],
+              ctx, edges, count, plan.per_sample, seed, c, chunk_stats[size_t(j - j0)],
               [](const edgetree::ForestEdge&, double, const Vec3&) { return true; },
               [&](int px, int py, const edgetree::ForestEdge& e, double t, const Color& weight, const Vec3& g) {
                 out.push_back({px, py, &e, t, weight, g});

@@ -74,10 +74,11 @@ struct PrimaryEdges {
   std::vector<PrimaryEdge> edges;
   std::vector<PrimaryPiece> pieces;  ///< every edge's pieces, edge by edge, in order of s
   std::vector<double> cdf;           ///< cumulative piece weights (size pieces + 1, cdf[0] = 0)
-  int hidden_pieces = 0;             ///< pieces found hidden (for the set-up report and tests)
+  int hidden_pieces = 0;             ///< pieces found hidden (tests)
   bool empty() const { return pieces.empty(); }
-  /// The density of s on edge `edge` at `s` (per unit s): sum of the weights of its pieces that
-  /// contain s, each over its length, divided by the total weight (0 where no piece is).
+  /// The density of s on edge `edge` at `s` (per unit s): the weight of its piece that contains s
+  /// (the larger one at an end two pieces share) over the piece's length, divided by the total
+  /// weight of all pieces (0 for an edge index out of range).
   double density(int edge, double s) const;
 };
 
@@ -88,14 +89,16 @@ struct PrimaryEdges {
 /// ignores the edge's own faces). A hidden piece keeps kPrimaryHiddenShare of its weight: about
 /// 40 % of primary samples fell on hidden contour edges before (shadow-quad, direct, the stability
 /// scenes), each a visibility ray for nothing. The camera is fixed, so this is done once per set-up.
-/// `hidden_share` replaces kPrimaryHiddenShare (tests; 1 weighs every piece by its length alone).
+/// `hidden_share` in (0, 1] replaces kPrimaryHiddenShare (tests; 1 weighs every piece by its length
+/// alone).
 PrimaryEdges find_primary_edges(const Scene& scene, const edgetree::EdgeSet& edges, const std::vector<bool>& moving,
                                 const RayTracer& tracer, double hidden_share = kPrimaryHiddenShare);
 
 /// Primary edge samples per sample index for a W x H image at `ratio` samples per pixel sample:
 /// ratio W H rounded up to a whole chunk of 1024 (at least one chunk), so that runs over ranges
-/// that partition [0, spp) draw exactly the samples of the run over [0, spp) for every image size.
-/// Throws qsil::Error unless ratio is positive and finite.
+/// that partition [0, spp) draw exactly the samples of the run over [0, spp) for every image size
+/// (so below 1024 / (W H) samples per pixel sample the ratio is that: 0.44 at 48 x 48 for 0.25).
+/// Throws qsil::Error unless ratio is in (0, 1024].
 long long primary_samples_per_index(int width, int height, double ratio);
 
 /// Adds the primary boundary term of the sample range [first_sample, first_sample + spp) to the

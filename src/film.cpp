@@ -34,25 +34,26 @@ std::vector<std::string> FilmLayout::standard_error_names() const {
   return names;
 }
 
-Film::Film(int width, int height, const FilmLayout& layout, bool stratified)
+Film::Film(int width, int height, const FilmLayout& layout, double stratum_fraction)
     : width_(width),
       height_(height),
       channels_(layout.channels()),
       layout_(layout),
-      stratified_(stratified),
+      stratum_fraction_(stratum_fraction),
       sum_(size_t(width) * height * channels_, 0.0),
       sum_sq_(size_t(width) * height * channels_, 0.0),
       splat_sum_(size_t(width) * height * channels_, 0.0),
       splat_sq_(size_t(width) * height * channels_, 0.0),
-      sum1_(stratified ? size_t(width) * height * channels_ : 0, 0.0),
-      sum_sq1_(stratified ? size_t(width) * height * channels_ : 0, 0.0),
+      sum1_(stratum_fraction > 0 ? size_t(width) * height * channels_ : 0, 0.0),
+      sum_sq1_(stratum_fraction > 0 ? size_t(width) * height * channels_ : 0, 0.0),
       count_(size_t(width) * height, 0),
-      count1_(stratified ? size_t(width) * height : 0, 0) {
+      count1_(stratum_fraction > 0 ? size_t(width) * height : 0, 0) {
   QSIL_CHECK(width > 0 && height > 0);
+  QSIL_CHECK(stratum_fraction >= 0 && stratum_fraction < 1);
 }
 
 void Film::add_sample(int x, int y, const double* values, int stratum) {
-  QSIL_DCHECK(x >= 0 && x < width_ && y >= 0 && y < height_ && (stratum == 0 || (stratum == 1 && stratified_)));
+  QSIL_DCHECK(x >= 0 && x < width_ && y >= 0 && y < height_ && (stratum == 0 || (stratum == 1 && stratified())));
   const size_t p = size_t(y) * width_ + x;
   double* s = &sum_[p * channels_];
   double* q = &sum_sq_[p * channels_];
@@ -61,7 +62,7 @@ void Film::add_sample(int x, int y, const double* values, int stratum) {
     q[c] += values[c] * values[c];
   }
   ++count_[p];
-  if (stratum == 1 && stratified_) {
+  if (stratum == 1 && stratified()) {
     double* s1 = &sum1_[p * channels_];
     double* q1 = &sum_sq1_[p * channels_];
     for (int c = 0; c < channels_; ++c) {
@@ -102,12 +103,15 @@ double Film::standard_error(int c, int x, int y) const {
   const size_t i = p * channels_ + c;
   const double n = double(count_[p]);
   if (n < 2) return 0.0;
-  const double n1 = stratified_ ? double(count1_[p]) : 0.0, n0 = n - n1;
+  const double n1 = stratified() ? double(count1_[p]) : 0.0, n0 = n - n1;
   double var_of_sum;  // the variance of the sum of the n samples
   if (n0 >= 2 && n1 >= 2) {
-    // Stratified: each stratum's own variance (the strata's means differ).
-    var_of_sum = n0 * sample_variance(sum_[i] - sum1_[i], sum_sq_[i] - sum_sq1_[i], n0) +
-                 n1 * sample_variance(sum1_[i], sum_sq1_[i], n1);
+    // Stratified: each stratum's own variance (the strata's means differ), and the variance of
+    // the pick's count, floor or ceil of f n, times the squared gap between the strata's means.
+    const double s0 = sum_[i] - sum1_[i], m0 = s0 / n0, m1 = sum1_[i] / n1;
+    const double fn = stratum_fraction_ * n, g = fn - std::floor(fn);
+    var_of_sum = n0 * sample_variance(s0, sum_sq_[i] - sum_sq1_[i], n0) +
+                 n1 * sample_variance(sum1_[i], sum_sq1_[i], n1) + g * (1 - g) * (m1 - m0) * (m1 - m0);
   } else {
     var_of_sum = n * sample_variance(sum_[i], sum_sq_[i], n);
   }
@@ -116,7 +120,7 @@ double Film::standard_error(int c, int x, int y) const {
 
 void Film::merge(const Film& other) {
   QSIL_CHECK(other.width_ == width_ && other.height_ == height_ && other.channels_ == channels_ &&
-             other.stratified_ == stratified_);
+             other.stratum_fraction_ == stratum_fraction_);
   for (size_t i = 0; i < sum_.size(); ++i) {
     sum_[i] += other.sum_[i];
     sum_sq_[i] += other.sum_sq_[i];
@@ -133,14 +137,14 @@ void Film::merge(const Film& other) {
 
 void Film::copy_part(const Film& other, int part, int parts) {
   QSIL_CHECK(other.width_ == width_ && other.height_ == height_ && other.channels_ == channels_ &&
-             other.stratified_ == stratified_);
+             other.stratum_fraction_ == stratum_fraction_);
   QSIL_CHECK(parts >= 1 && part >= 0 && part < parts);
   const size_t C = size_t(channels_);
   for (size_t p = size_t(part); p < count_.size(); p += size_t(parts)) {
     std::copy_n(&other.sum_[p * C], C, &sum_[p * C]);
     std::copy_n(&other.sum_sq_[p * C], C, &sum_sq_[p * C]);
     count_[p] = other.count_[p];
-    if (stratified_) {
+    if (stratified()) {
       std::copy_n(&other.sum1_[p * C], C, &sum1_[p * C]);
       std::copy_n(&other.sum_sq1_[p * C], C, &sum_sq1_[p * C]);
       count1_[p] = other.count1_[p];

@@ -1,9 +1,10 @@
 // The film layout (qsil/film.h): channel indices, names, hidden channels and standard-error
 // channels, and the film's merge and image sums; the standard error of a pixel whose samples come
-// in two strata of different means (every other sample shifted by 10, as an estimator that makes
-// one more boundary traversal every other sample), checked against the spread of the pixel's mean
-// over 2000 independent pixels (within 5 %; the pooled estimate is 5x too large there); and the
-// state round trip with strata.
+// in two strata of different means (the samples a stratified pick selects shifted by 10, as an
+// estimator that makes one more boundary traversal on them), checked against the spread of the
+// pixel's mean over 4000 independent pixels (within 6 %, about 3 standard errors of that spread;
+// the pooled estimate is 5x too large there), for a whole count of picks (16 samples at 1/2) and a
+// varying one (15 samples at 0.3: 4 or 5 picks); and the state round trip with strata.
 #include "qsil/film.h"
 #include "qsil/rng.h"
 
@@ -71,37 +72,57 @@ TEST(Film, ImagesMergeAndSums) {
   EXPECT_FLOAT_EQ(img.at(img.channel_index("dtheta0.B"), 1, 0), float((1 + 2 + 3 + 4) / 4.0 + 2));
 }
 
-TEST(Film, StandardErrorWeighsEachStratumsOwnVariance) {
+/// The spread of 4000 pixel means and the mean squared standard errors of the stratified and the
+/// pooled film, for n samples per pixel of unit-variance noise, those a stratified pick of
+/// fraction f selects (a rotation phi per pixel) shifted by 10.
+struct StrataCase {
+  double spread2 = 0, se2 = 0, pooled_se2 = 0;
+};
+StrataCase strata_case(int n, double f) {
   const FilmLayout layout(0);
-  const int pixels = 2000, n = 16;
-  Film film(pixels, 1, layout, /*stratified=*/true), pooled(pixels, 1, layout);
+  const int pixels = 4000;
+  Film film(pixels, 1, layout, f), pooled(pixels, 1, layout);
   std::vector<double> v(size_t(layout.channels()), 0.0);
   Sampler rng(1, 2, 3);
-  for (int x = 0; x < pixels; ++x)
+  for (int x = 0; x < pixels; ++x) {
+    const double phi = rng.next();
     for (int s = 0; s < n; ++s) {
-      // Uniform noise of variance 1 (sqrt 12 (u - 1/2)) plus 10 in stratum 1.
-      v[0] = std::sqrt(12.0) * (rng.next() - 0.5) + (s % 2 ? 10.0 : 0.0);
-      film.add_sample(x, 0, v.data(), s % 2);
+      const int picked = int(std::floor(f * (s + 1) + phi) - std::floor(f * s + phi));
+      // Uniform noise of variance 1 (sqrt 12 (u - 1/2)), plus 10 where picked.
+      v[0] = std::sqrt(12.0) * (rng.next() - 0.5) + 10.0 * picked;
+      film.add_sample(x, 0, v.data(), picked);
       pooled.add_sample(x, 0, v.data());
     }
-  // The spread of the pixels' means (all pixels alike): sqrt(1 / n) for the stratified sampling.
-  double m = 0, m2 = 0, se2 = 0, pooled_se2 = 0;
+  }
+  StrataCase c;
+  double m = 0, m2 = 0;
   for (int x = 0; x < pixels; ++x) {
     m += film.mean(0, x, 0);
     m2 += film.mean(0, x, 0) * film.mean(0, x, 0);
-    se2 += std::pow(film.standard_error(0, x, 0), 2);
-    pooled_se2 += std::pow(pooled.standard_error(0, x, 0), 2);
+    c.se2 += std::pow(film.standard_error(0, x, 0), 2) / pixels;
+    c.pooled_se2 += std::pow(pooled.standard_error(0, x, 0), 2) / pixels;
   }
   m /= pixels;
-  const double spread2 = (m2 / pixels - m * m) * pixels / (pixels - 1);
-  EXPECT_NEAR(spread2, 1.0 / n, 0.1 / n);  // the sampling (2000 pixels: ~3 % s.e.)
-  EXPECT_NEAR(se2 / pixels, spread2, 0.05 * spread2) << "the stratified standard error";
-  EXPECT_GT(pooled_se2 / pixels, 20 * spread2) << "the pooled one over-estimates it (26 / n)";
+  c.spread2 = (m2 / pixels - m * m) * pixels / (pixels - 1);
   // The state round trip keeps the strata.
-  Film copy(pixels, 1, layout, true);
+  Film copy(pixels, 1, layout, f);
   copy.set_state(film.state());
   EXPECT_EQ(copy.standard_error(0, 7, 0), film.standard_error(0, 7, 0));
   EXPECT_EQ(film.state_size(), film.state().size());
+  return c;
+}
+
+TEST(Film, StandardErrorWeighsEachStratumsOwnVariance) {
+  // 16 samples at 1/2: 8 picks in every pixel, the mean's variance 1/16.
+  const StrataCase whole = strata_case(16, 0.5);
+  EXPECT_NEAR(whole.spread2, 1.0 / 16, 0.1 / 16);
+  EXPECT_NEAR(whole.se2, whole.spread2, 0.06 * whole.spread2) << "the stratified standard error";
+  EXPECT_GT(whole.pooled_se2, 20 * whole.spread2) << "the pooled one over-estimates it (26 / n)";
+  // 15 samples at 0.3: 4 or 5 picks (probabilities 0.5 each), which adds 0.25 x 10² / 15² = 0.111
+  // to the mean's variance 1/15 = 0.067.
+  const StrataCase varying = strata_case(15, 0.3);
+  EXPECT_NEAR(varying.spread2, 1.0 / 15 + 25.0 / 225, 0.1 * varying.spread2);
+  EXPECT_NEAR(varying.se2, varying.spread2, 0.06 * varying.spread2) << "with the variance of the pick's count";
 }
 
 }  // namespace

@@ -53,7 +53,8 @@ void add_scene_options(CLI::App& app, std::string& scene, std::vector<std::strin
 /// Adds the repeatable --param SPEC (1 to 8), required.
 void add_param_option(CLI::App& app, std::vector<std::string>& params);
 
-/// Adds --boundary-spp N (discontinuity samples per shading point).
+/// Adds --boundary-spp R (secondary boundary-term samples per shading point on average over a
+/// pixel's samples; 0: the method's default; EstimatorConfig::boundary_spp).
 void add_boundary_spp_option(CLI::App& app, double& boundary_spp);
 
 /// Adds --primary-samples R (primary boundary-term edge samples per pixel sample,

@@ -79,14 +79,17 @@ struct ImageSum {
 /// A width x height film of FilmLayout::channels() channels.
 class Film {
  public:
-  /// A film of width x height pixels; `stratified`: its pixels' samples come in two strata
-  /// (add_sample), whose sums it keeps apart (W H (2 channels() + 1) more numbers).
-  Film(int width, int height, const FilmLayout& layout, bool stratified = false);
+  /// A film of width x height pixels. `stratum_fraction` in (0, 1): its pixels' samples come in
+  /// two strata (add_sample), stratum 1 picked by a stratified pick of that fraction of a pixel's
+  /// samples (boundary_traversals in qsil/integrators/boundary_term.h), whose sums it keeps apart
+  /// (W H (2 channels() + 1) more numbers); 0: one stratum.
+  Film(int width, int height, const FilmLayout& layout, double stratum_fraction = 0.0);
   int width() const { return width_; }
   int height() const { return height_; }
   int channels() const { return channels_; }
   const FilmLayout& layout() const { return layout_; }
-  bool stratified() const { return stratified_; }
+  bool stratified() const { return stratum_fraction_ > 0; }
+  double stratum_fraction() const { return stratum_fraction_; }
 
   /// Adds one sample (channels() values) to pixel (x, y), of stratum 0 or 1 (1 only on a
   /// stratified film): an estimator whose samples of a pixel are not all drawn alike marks the
@@ -107,9 +110,13 @@ class Film {
   /// Sample mean of channel c at (x, y), splats included (divided by the pixel's sample count).
   double mean(int c, int x, int y) const;
   /// Standard error of the mean of channel c at (x, y): sqrt(sample variance / n); when the pixel
-  /// has samples of both strata (add_sample), the stratified estimate sqrt((n0 s0² + n1 s1²) / n²)
-  /// with s_i² the sample variance within stratum i (the pooled one where a stratum has fewer than
-  /// two samples: conservative). Splats add their squared sum / n².
+  /// has samples of both strata (add_sample), the stratified estimate
+  ///   sqrt((n0 s0² + n1 s1²) / n² + g (1 - g) (m1 - m0)² / n²),
+  /// s_i² and m_i the sample variance and mean within stratum i, g the fractional part of
+  /// stratum_fraction() × n: the pick's count of stratum-1 samples is floor or ceil of that
+  /// product (the second term is its variance over the pick's random rotation; 0 when the product
+  /// is whole, e.g. an even spp at 1/2). Where a stratum has fewer than two samples, the pooled
+  /// variance (conservative). Splats add their squared sum / n².
   double standard_error(int c, int x, int y) const;
   /// Adds another film's sums (same size, layout and stratification): the films of disjoint sample ranges of the
   /// same estimator merge into the film of their union (sums add, so the result equals one run
@@ -131,7 +138,7 @@ class Film {
   std::vector<double> state() const;
   /// Size of state(): W H (4 channels() + 1), W H (6 channels() + 2) when stratified.
   size_t state_size() const {
-    return size_t(width_) * height_ * (stratified_ ? 6 * size_t(channels_) + 2 : 4 * size_t(channels_) + 1);
+    return size_t(width_) * height_ * (stratified() ? 6 * size_t(channels_) + 2 : 4 * size_t(channels_) + 1);
   }
   /// Restores a state() of a film of the same size and layout (a wrong size is a bug: checked).
   void set_state(const std::vector<double>& state);
@@ -146,7 +153,7 @@ class Film {
  private:
   int width_, height_, channels_;
   FilmLayout layout_;
-  bool stratified_ = false;
+  double stratum_fraction_ = 0;
   std::vector<double> sum_, sum_sq_;
   std::vector<double> splat_sum_, splat_sq_;
   std::vector<double> sum1_, sum_sq1_;  ///< the sums of the samples of stratum 1 (stratified films)

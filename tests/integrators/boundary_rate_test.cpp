@@ -8,9 +8,10 @@
 //   splits draw the same picks;
 // - the estimator stays unbiased at rates 0.5 and 2.5: image sums of a scene whose derivative is
 //   the secondary boundary term alone (a floor moving toward a small light: the interior term is
-//   exactly zero) agree with rate 1 within 3 combined standard errors (fixed seeds; the rate-0.5
-//   film's standard errors are conservative, see the header), and the method's default is 0.5
-//   for the quadric forest and 1 for the baselines.
+//   exactly zero) agree with rate 1 within 3 combined standard errors (fixed seeds; the films'
+//   standard errors weigh the two strata of a fractional rate apart, Film::standard_error), and
+//   the method's default is 0.5 for the quadric forest and 1 for the baselines;
+// - rates outside 0 or [1/1024, 1024] and primary ratios outside (0, 1024] are refused.
 #include "qsil/error.h"
 #include "qsil/integrators/boundary_term.h"
 #include "qsil/integrators/estimator.h"
@@ -90,9 +91,9 @@ TEST(BoundaryRate, FractionalRatesStayUnbiased) {
 TEST(BoundaryRate, BadRatesAreRefused) {
   const Scene scene = load_scene(test::data_file("tests/data/gradient/plane-light.xml"), {{"res", "8"}});
   const auto params = parse_parameters({"floor:translate:0,1,0"}, scene);
-  for (double rate : {-0.5, double(NAN), double(INFINITY)})
+  for (double rate : {-0.5, 1e-4, 2000.0, double(NAN), double(INFINITY)})
     EXPECT_THROW(Estimator(scene, EstimatorConfig::gradient(params, Method::Quadric, rate)), Error) << rate;
-  for (double primary : {0.0, -1.0, double(NAN)})
+  for (double primary : {0.0, -1.0, 2000.0, double(NAN)})
     EXPECT_THROW(Estimator(scene, EstimatorConfig::gradient(params, Method::Quadric, 0, primary)), Error) << primary;
 }
 

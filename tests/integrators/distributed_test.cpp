@@ -109,13 +109,13 @@ TEST(Distributed, SummingPartialFilmsWouldNotBeBitIdentical) {
   const Estimator e(scene, EstimatorConfig::gradient(params, Method::Quadric));
   const RenderResult whole = e.run(options(0, 8, 2));
   RenderResult summed;
-  summed.film = Film(32, 32, e.layout(), whole.film.stratified());
+  summed.film = Film(32, 32, e.layout(), whole.film.stratum_fraction());
   for (int part = 0; part < 2; ++part) {
     RenderOptions o = options(0, 8, 2);
     o.part = part;
     o.parts = 2;
     const RenderResult r = e.run(o);
-    Film partial(32, 32, e.layout(), r.film.stratified());
+    Film partial(32, 32, e.layout(), r.film.stratum_fraction());
     partial.copy_part(r.film, part, 2);
     for (const FilmSplat& s : r.splats) partial.splat(s.x, s.y, s.channel, s.value);
     summed.film.merge(partial);

@@ -94,6 +94,28 @@ struct OwnFace {
   Vec3 up = Vec3::Zero();  ///< T's unit geometric normal turned toward p's viewer (world)
 };
 
+/// The rays of the boundary term ignore the sampled edge's own two faces (an Embree filter on
+/// their primitive ids: no absolute epsilon). `through_back_faces` as for every ray of the path
+/// tracer (leaves_below).
+inline IgnoreSet edge_faces(const edgetree::ForestEdge& e, bool through_back_faces) {
+  IgnoreSet ignore;
+  ignore.prims[0] = {e.shape, e.f0};
+  ignore.prims[1] = {e.f1 >= 0 ? e.shape : -1, e.f1};
+  ignore.through_back_faces = through_back_faces;
+  return ignore;
+}
+
+/// Whether `point` (world) is visible from `origin`: nothing but what `ignore` ignores is hit by
+/// the ray from origin aimed at the point itself, which stops 1/4096 of the distance short of it
+/// (the boundary term's visibility test, shared by edge_jump_with and the primary term's
+/// pieces). A point at the origin is visible.
+inline bool point_visible(const RayTracer& tracer, const Vec3& origin, const Vec3& point, const IgnoreSet& ignore) {
+  const Vec3 to = point - origin;
+  const double dist = to.norm();
+  if (!(dist > 0)) return true;
+  return !tracer.occluded(origin, to / dist, dist * (1.0 - 1.0 / 4096.0), ignore);
+}
+
 /// The radiance jump and the Jacobian at a point of a discontinuity edge seen from p (shared by
 /// the secondary and the primary boundary terms). On success (returns true):
 /// - jump = s (L_bg - L_fg): the occluder-side sign times background minus foreground radiance
@@ -131,19 +153,15 @@ bool edge_jump_with(const PathContext& ctx, const edgetree::ForestEdge& e, doubl
   if (!accept(Vec3(n01 / (dist * dist * dist)))) return false;
   // ---- Visibility of the edge point from p (ignoring the edge's own faces).
   const TriangleMesh& mesh = scene.shapes[e.shape].mesh;
-  IgnoreSet ignore;
-  ignore.prims[0] = {e.shape, e.f0};
-  ignore.prims[1] = {e.f1 >= 0 ? e.shape : -1, e.f1};
-  ignore.through_back_faces = through_back_faces;
+  IgnoreSet ignore = edge_faces(e, through_back_faces);
   // The ray aims from vis_origin at the edge point itself. Along w, from an origin offset off
   // p's surface, it would pass the edge point at the offset's distance (2^-20 of the coordinate
   // magnitude: 0.01 for a unit-size object 1e4 from the origin), inside the occluder's outline
   // for about half of the grazing directions, and meet the faces next to the edge.
-  const Vec3 to_edge = e.p0 + t * (e.p1 - e.p0) - vis_origin;
-  const double vis_dist = to_edge.norm();
-  if (!(vis_dist > 0)) return false;
+  const Vec3 edge_point = e.p0 + t * (e.p1 - e.p0);
+  if (!((edge_point - vis_origin).norm() > 0)) return false;
   ++stats.rays;
-  if (ctx.tracer->occluded(vis_origin, to_edge / vis_dist, vis_dist * (1.0 - 1.0 / 4096.0), ignore)) return false;
+  if (!point_visible(*ctx.tracer, vis_origin, edge_point, ignore)) return false;
   // The side of the plane (p, edge) on which a face lies: the sign of (w0 x w1).(x_opp - p) for
   // the face's third vertex.
   auto opposite = [&](int face) -> const Vec3& {  // the face's vertex off the edge
@@ -286,7 +304,7 @@ edgetree::ContourProbe contour_probe(const PathContext& ctx, const edgetree::Con
 /// where a stratified pick over the pixel's samples selects it: with f the fraction of the rate
 /// and phi uniform in [0, 1) drawn once per pixel (Sampler(seed, pixel, 0, 3): the same for every
 /// sample range and process split), sample s is picked iff floor(f (s + 1) + phi) > floor(f s +
-/// phi). Every sample is picked with probability exactly f (phi is uniform), so weighting each
+/// phi). Every sample is picked with probability f (phi is uniform, to its 32 bits), so weighting each
 /// traversal by 1 / rate is unbiased; and any n consecutive samples hold floor(f n) or ceil(f n)
 /// picks, so unlike Russian roulette per sample the term's own mean adds no variance (a rate of
 /// 1/2 is one boundary estimate every other sample, the sppi of Mitsuba 3's projective

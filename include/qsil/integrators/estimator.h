@@ -12,17 +12,16 @@
 /// `reference`, `compare`), the progressive passes and the tools drive an Estimator.
 ///
 /// Sample ranges: run() renders samples [first_sample, first_sample + spp) of every pixel. Sample
-/// s of pixel p draws from the streams (seed, p, s) (docs/architecture.md §3 "Randomness"), and
-/// the primary boundary term numbers its W x H samples per sample index globally
-/// (add_primary_boundary in integrators/primary_boundary.h), so that
-/// - a run over [0, spp) draws exactly what a single run of spp samples drew before sample ranges
-///   existed (bit-identical images);
+/// s of pixel p draws from the streams (seed, p, s) (docs/architecture.md §3 "Randomness"; which
+/// samples make a fractional boundary traversal depends on (seed, p, s) too, through a rotation
+/// drawn from (seed, p, 0, 3)), and the primary boundary term numbers its samples globally, a
+/// whole number of chunks per sample index (add_primary_boundary in
+/// integrators/primary_boundary.h), so that
+/// - a run over [0, spp) draws the same samples however it is split into passes;
 /// - runs over disjoint ranges draw independent samples, and their films merge
 ///   (RenderResult::merge) into a film of the union;
-/// - for images whose pixel count is a multiple of 1024 (32 x 32, 64 x 64, ...), runs over ranges
-///   that partition [0, spp) draw exactly the samples of the run over [0, spp): the merged film
-///   equals its film up to the rounding of the sums (for the primal image, finite differences and
-///   the interior term this holds for every image size).
+/// - runs over ranges that partition [0, spp) draw exactly the samples of the run over [0, spp):
+///   the merged film equals its film up to the rounding of the sums.
 
 #include "qsil/film.h"
 #include "qsil/method.h"
@@ -50,11 +49,11 @@ struct EstimatorConfig {
   Method method = Method::Quadric;
   /// Secondary boundary-term traversals per shading point (edge-sampling methods), on average over
   /// a pixel's samples: a fraction is taken by a stratified pick of samples (boundary_traversals
-  /// in boundary_term.h). 0: the method's default (default_boundary_spp). Finite and >= 0.
+  /// in boundary_term.h). 0: the method's default (default_boundary_spp), else in [1/1024, 1024].
   double boundary_spp = 0;
   /// Primary boundary-term edge samples per pixel sample (edge-sampling methods; Mitsuba 3's
   /// `sppp` as a ratio to spp): ratio x W x H edge samples per sample index, rounded up to a whole
-  /// chunk of 1024 (integrators/primary_boundary.h). Must be positive and finite.
+  /// chunk of 1024 (integrators/primary_boundary.h). In (0, 1024].
   double primary_samples = kDefaultPrimarySamples;
   /// Finite differences: one step h per parameter (units of theta); empty: default_fd_step each.
   std::vector<double> fd_steps;
@@ -101,7 +100,8 @@ struct RenderResult {
   std::vector<FilmSplat> splats;
 
   /// Adds the film and the counters of a run over a disjoint sample range of the same estimator
-  /// (first_sample becomes the smaller one). Throws nothing; films must have the same layout.
+  /// (first_sample becomes the smaller one). Throws nothing; films must have the same layout and
+  /// stratum fraction (a QSIL_CHECK: runs of one estimator always do).
   void merge(const RenderResult& other);
 };
 
@@ -127,8 +127,7 @@ class Estimator {
  public:
   /// Sets up `config` for `scene`, which must outlive the estimator. Throws qsil::Error for a
   /// parameter count outside 1..8 (check_parameter_count), a method that cannot estimate
-  /// derivatives, primary_samples that is not positive and finite, boundary_spp that is negative or
-  /// not finite, or finite-difference steps that are not positive and finite or not one per
+  /// derivatives, primary_samples or boundary_spp out of range (above), or finite-difference steps that are not positive and finite or not one per
   /// parameter. Uses the caller's TBB arena (forest fitting is parallel).
   Estimator(const Scene& scene, EstimatorConfig config);
   ~Estimator();
