@@ -66,9 +66,9 @@ bool uses_quadrics(Method method);
 /// The secondary boundary-term traversals per path vertex a method uses by default
 /// (EstimatorConfig::boundary_spp = 0): 0.5 for quadric and quadric-box, one traversal every
 /// other pixel sample (their boundary term is cheap in variance and dear in time against the
-/// interior term: measured 1.15-1.5x the efficiency of 1 on the bundled and stability scenes,
-/// docs/architecture.md §5 "How many traversals"); 1 for the baselines, whose boundary term holds
-/// most of their variance.
+/// interior term: measured 1.13-1.36x the efficiency of 1 on the three chart scenes, 1.16-1.56x
+/// on the stability scenes, docs/architecture.md §5 "How many traversals"); 1 for the baselines,
+/// whose boundary term holds most of their variance.
 double default_boundary_spp(Method method);
 
 }  // namespace qsil

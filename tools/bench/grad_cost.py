@@ -2,24 +2,32 @@
 """Cost of a gradient against the primal image on every bundled scene (a benchmark, not a test).
 
 Usage: python3 tools/bench/grad_cost.py [--qsil build/qsil] [--res 256] [--spp 16] [--threads 2]
-       [--perf]
+       [--perf] [--flat]
 
 For each scenes/*.xml with its chart parameter: `qsil render` and `qsil grad` (quadric) at the same
 resolution and spp, run back to back (render, grad, render, grad: the machine's noise hits both),
 and prints a table: render and grad wall time (the faster of two), grad / render, grad's split into
 interior and boundary time, its traversals and their zero-contribution share. With --perf (Debian's
 linux-perf), `perf record` of one more grad run gives the share of its samples inside Embree
-(libembree3) and the five hottest qsil functions.
+(libembree3) and the five hottest qsil functions. With --flat, a second table: `grad` of each scene
+and of the stability teapot and wingnut with every obj shape smooth-shaded (as bundled) and
+flat-shaded (`face_normals`: every non-flat edge a crease, an always-candidate of the
+always-candidate trees, docs/architecture.md §3), run back to back, and flat / smooth (issue 16's
+target: at most 2).
 """
 import argparse
 import os
 import re
 import subprocess
 import sys
+import tempfile
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 SCENES = [("spot-mirror", "spot:translate:0,1,0"), ("shadow-quad", "object:translate:0,1,0"),
           ("direct", "spot:translate:1,0,0")]
+FLAT_SCENES = [(os.path.join("scenes", s + ".xml"), p) for s, p in SCENES] + [
+    (os.path.join("scenes", "stability", "teapot.xml"), "teapot:translate:0,1,0"),
+    (os.path.join("scenes", "stability", "wingnut.xml"), "wingnut:translate:1,0,0")]
 
 
 def run(cmd):
@@ -40,6 +48,40 @@ def grad_stats(qsil, xml, param, common):
     m = re.search(r"([0-9.]+) s \(set-up ([0-9.]+) s, interior ([0-9.]+) s, boundary ([0-9.]+) s\).*?"
                   r"(\d+) traversals, ([0-9.]+)% zero", out)
     return float(m.group(1)), float(m.group(3)), float(m.group(4)), int(m.group(5)), float(m.group(6))
+
+
+def flat_copy(xml, folder):
+    """Writes a copy of scene file `xml` (repository-relative) into `folder` with every obj shape
+    flat-shaded (a face_normals boolean added) and every filename made absolute; returns its path.
+    Raises SystemExit when the scene has no obj shape."""
+    src = os.path.join(ROOT, xml)
+    text = open(src).read()
+    base = os.path.dirname(src)
+    text = re.sub(r'(name="filename"\s+value=")([^"]+)"',
+                  lambda m: m.group(1) + os.path.join(base, m.group(2)) + '"', text)
+    text, n = re.subn(r'(<shape\s+type="obj"[^>]*>)', r'\1<boolean name="face_normals" value="true"/>', text)
+    if n == 0:
+        raise SystemExit(f"grad_cost: {xml} has no obj shape to flat-shade")
+    out = os.path.join(folder, os.path.basename(xml))
+    with open(out, "w") as f:
+        f.write(text)
+    return out
+
+
+def flat_table(qsil, common):
+    """Prints grad wall time smooth vs flat-shaded (the faster of two, run alternately)."""
+    print("\n| scene | grad s smooth | grad s flat | flat / smooth | traversals smooth / flat | zero % smooth / flat |")
+    print("|---|---|---|---|---|---|")
+    with tempfile.TemporaryDirectory() as folder:
+        for xml, param in FLAT_SCENES:
+            flat = flat_copy(xml, folder)
+            sm, fl = [], []
+            for _ in range(2):
+                sm.append(grad_stats(qsil, xml, param, common))
+                fl.append(grad_stats(qsil, flat, param, common))
+            a, b = min(sm), min(fl)
+            print(f"| {os.path.splitext(os.path.basename(xml))[0]} | {a[0]:.2f} | {b[0]:.2f} | {b[0] / a[0]:.2f} | "
+                  f"{a[3]} / {b[3]} | {a[4]:.1f} / {b[4]:.1f} |", flush=True)
 
 
 def embree_share(qsil, xml, param, common):
@@ -64,6 +106,7 @@ def main():
     ap.add_argument("--spp", type=int, default=16)
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--perf", action="store_true", help="also the share of grad's time inside Embree (perf)")
+    ap.add_argument("--flat", action="store_true", help="also grad of each mesh flat-shaded against smooth-shaded")
     args = ap.parse_args()
     qsil = os.path.abspath(args.qsil)
     os.makedirs(os.path.join(ROOT, "out"), exist_ok=True)
@@ -85,6 +128,8 @@ def main():
             share, top = embree_share(qsil, xml, param, common)
             row += f" {share:.1f} | {'; '.join(top)} |"
         print(row, flush=True)
+    if args.flat:
+        flat_table(qsil, common)
     return 0
 
 
