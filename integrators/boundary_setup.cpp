@@ -83,6 +83,11 @@ void check_boundary_spp(double boundary_spp) {
                 std::to_string(boundary_spp) + ")");
 }
 
+void check_sample_rates(const Camera& camera, double boundary_spp, double primary_samples) {
+  primary_samples_per_index(camera.width, camera.height, primary_samples);  // throws if invalid
+  check_boundary_spp(boundary_spp);
+}
+
 void describe_boundary_setup(const BoundarySetup& boundary, Method method, int primary_edges, SetupReport& setup) {
   setup.edge_seconds = boundary.seconds;
   setup.edges = int(boundary.edges->edges().size() + boundary.edges->always_edges().size());

@@ -48,6 +48,11 @@ void set_light_importance(const Scene& scene, const EnvironmentLight& environmen
 /// default) or in [1/1024, 1024].
 void check_boundary_spp(double boundary_spp);
 
+/// The sample rates of a gradient estimator (forward or reverse mode), checked before any set-up:
+/// throws qsil::Error unless `boundary_spp` passes check_boundary_spp and `primary_samples` is in
+/// (0, 1024] with its samples per index countable for `camera`'s image (primary_samples_per_index).
+void check_sample_rates(const Camera& camera, double boundary_spp, double primary_samples);
+
 /// Fills the set-up report's edge-structure fields from a built boundary method: build time, edge
 /// count, fitted and quadric node counts, `primary_edges`, and the structure's name ("edge forest
 /// (dual box + quadrics)", "edge forest (dual box)", "edge set + uniform tables", "edge set +

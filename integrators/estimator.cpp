@@ -294,8 +294,7 @@ Estimator::Estimator(const Scene& scene, EstimatorConfig config) {
   if (!config.params.empty() && config.method != Method::FiniteDifferences && config.method != Method::None &&
       !samples_edges(config.method))
     throw Error("method " + std::string(method_name(config.method)) + " cannot estimate derivatives");
-  primary_samples_per_index(scene.camera.width, scene.camera.height, config.primary_samples);  // throws if invalid
-  check_boundary_spp(config.boundary_spp);
+  check_sample_rates(scene.camera, config.boundary_spp, config.primary_samples);
   const auto t0 = Clock::now();
   impl_ = make_impl(scene, std::move(config));
   impl_->setup.seconds = seconds_since(t0);

@@ -166,8 +166,7 @@ bool finite(const std::vector<Contribution>& cs) {
 class ReverseEstimator::Impl {
  public:
   Impl(const Scene& s, ReverseConfig c) : scene(s), config(std::move(c)), tracer(s), lights(s) {
-    primary_samples_per_index(s.camera.width, s.camera.height, config.primary_samples);  // throws if invalid
-    check_boundary_spp(config.boundary_spp);
+    check_sample_rates(s.camera, config.boundary_spp, config.primary_samples);
     if (config.shapes.empty()) throw Error("reverse mode: no shape to differentiate");
     chosen.assign(s.shapes.size(), false);
     chosen_index.assign(s.shapes.size(), -1);

@@ -68,7 +68,7 @@ class ReverseEstimator {
   /// structures over every shape and the primary edges of the chosen shapes. Throws qsil::Error
   /// for an empty or repeated shape list, a shape index out of range, a method that is neither
   /// an edge-sampling method nor none, or a boundary_spp or primary_samples out of range
-  /// (check_boundary_spp, primary_samples_per_index).
+  /// (check_sample_rates).
   ReverseEstimator(const Scene& scene, ReverseConfig config);
   ~ReverseEstimator();
   ReverseEstimator(ReverseEstimator&&) noexcept;
