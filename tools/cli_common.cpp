@@ -86,9 +86,9 @@ void add_primary_samples_option(CLI::App& app, double& primary_samples) {
 
 void add_fd_step_option(CLI::App& app, std::vector<double>& h) {
   app.add_option("--h", h,
-                 "Finite-difference step per parameter (one value for all, or one per --param). Default: "
-                 "translate/vertex 1e-3 x scene bounding-box diagonal / |direction| (scene units of theta); "
-                 "rotate 1e-3 rad; scale 1e-3 (relative)")
+                 "Finite-difference step per parameter (one value for all, or one per --param; units of theta: "
+                 "scene units per unit direction, radians for rotate, relative for scale). Default: the step "
+                 "that moves the parameter's fastest vertex by 1e-3 x the scene's bounding-box diagonal")
       ->allow_extra_args(false);
 }
 

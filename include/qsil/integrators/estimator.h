@@ -161,9 +161,15 @@ class Estimator {
 /// index must be >= 0 (got N)" for a negative start. Every estimator's run() checks its range here.
 int sample_range_count(const RenderOptions& options, const Camera& camera);
 
-/// Default finite-difference step of a parameter: 1e-3 of the scene's bounding-box diagonal
-/// divided by |direction| for translate and vertex (so the displacement is 1e-3 diagonal),
-/// 1e-3 radians for rotate, 1e-3 (relative) for scale.
+/// Default finite-difference step h0 of a parameter (units of theta: scene units per unit
+/// direction for translate and vertex, radians for rotate, relative for scale): the step that
+/// moves the parameter's fastest vertex by 1e-3 of the scene's bounding-box diagonal, i.e. 1e-3
+/// diagonal / max over the shape's vertices of |dx/dtheta| (|direction| for translate and
+/// vertex, |axis x (x - centre)| for rotate, |x - centre| for scale). Every kind thus moves the
+/// geometry, and its silhouettes on screen, by the same amount at h0: the blur of a step and its
+/// variance where silhouettes cross pixels (both set by that motion) compare across kinds, and a
+/// step study over h0 / 2^i holds for all of them at once (tools/references.py). 1e-3 when no
+/// vertex moves (a rotation whose axis holds every vertex).
 double default_fd_step(const Scene& scene, const ParameterSpec& param);
 
 /// Finite-difference steps from a `--h` list: empty = default_fd_step per parameter, one value =
