@@ -58,8 +58,12 @@ WHY_FD_WINS = (
     "smooth in θ. Where the quadric method wins: `direct`, where FD at a step small enough not to blur Spot's "
     "outline is noisy (the quadric method's interior tails there were cut by the defensive mixture for "
     "derivative paths, `docs/design-notes.md`), and with several parameters (eight, where FD "
-    "pays 16 renders per sample: on all three scenes, though on `direct` and `spot-mirror` the k = 8 references "
-    "are too noisy to judge more than a bound). FD's weaknesses: 2k renders for k "
+    "pays 16 renders per sample): ahead on all three scenes, by 1.6× on `shadow-quad` (judged: its reference's "
+    "floor is below 1/10 of the errors), at least 6.4× on `direct` and at least 3.1× on `spot-mirror` (bounds: "
+    "floors above 1/10). Until 2026-11-24 FD's default step for rotations and scales was 10⁻³ rad / 10⁻³, which "
+    "moved the bunny 35–43× and Spot 7–12× less than a translation's h0, so FD on those parameters was that many "
+    "times noisier and the k = 8 ratios were overstated (shadow-quad 7.7× then); h0 now moves every kind's "
+    "fastest vertex by 10⁻³ of the scene's diagonal. FD's weaknesses: 2k renders for k "
     "parameters, and a step per scene (`docs/gradient-checks.md`, \"The FD step at pixel scale\").")
 FD_REF = "fd (ref. step)"  # FD at the reference's step, where the step study chose one below h0
 
