@@ -333,18 +333,10 @@ const std::vector<double>& Estimator::fd_steps() const { return impl_->steps; }
 double default_fd_step(const Scene& scene, const ParameterSpec& param) {
   const double displacement = 1e-3 * scene.bounds().diagonal();
   // The largest speed |dx/dtheta| over the shape's vertices (world units per unit of theta).
+  const std::vector<Vec3>& positions = scene.shapes[size_t(param.shape)].mesh.positions;
   double speed = 0;
-  switch (param.kind) {
-    case ParameterSpec::Kind::Translate:
-    case ParameterSpec::Kind::Vertex: speed = param.direction.norm(); break;
-    case ParameterSpec::Kind::Rotate:
-    case ParameterSpec::Kind::Scale:
-      for (const Vec3& x : scene.shapes[size_t(param.shape)].mesh.positions) {
-        const Vec3 r = x - param.center;
-        speed = std::max(speed, (param.kind == ParameterSpec::Kind::Rotate ? param.direction.cross(r) : r).norm());
-      }
-      break;
-  }
+  for (size_t i = 0; i < positions.size(); ++i)
+    speed = std::max(speed, vertex_velocity(param, int(i), positions[i]).norm());
   // A rotation or scale that moves no vertex (every vertex on the axis or at the centre): 1e-3.
   return speed > 0 && std::isfinite(displacement / speed) ? displacement / speed : 1e-3;
 }

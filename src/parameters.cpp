@@ -127,6 +127,16 @@ std::vector<ParameterSpec> parse_parameters(const std::vector<std::string>& spec
   return params;
 }
 
+Vec3 vertex_velocity(const ParameterSpec& param, int vertex, const Vec3& x) {
+  switch (param.kind) {
+    case ParameterSpec::Kind::Translate: return param.direction;
+    case ParameterSpec::Kind::Rotate: return param.direction.cross(x - param.center);
+    case ParameterSpec::Kind::Scale: return x - param.center;
+    case ParameterSpec::Kind::Vertex: return vertex == param.vertex ? param.direction : Vec3::Zero();
+  }
+  return Vec3::Zero();
+}
+
 SceneVelocities compute_velocities(const Scene& scene, const std::vector<ParameterSpec>& params) {
   check_parameter_count(params.size());
   SceneVelocities v;
@@ -143,17 +153,7 @@ SceneVelocities compute_velocities(const Scene& scene, const std::vector<Paramet
     const ParameterSpec& p = params[k];
     const TriangleMesh& mesh = scene.shapes[p.shape].mesh;
     auto& vel = v.position[p.shape];
-    for (int i = 0; i < mesh.num_vertices(); ++i) {
-      const Vec3& x = mesh.positions[i];
-      Vec3 d = Vec3::Zero();
-      switch (p.kind) {
-        case ParameterSpec::Kind::Translate: d = p.direction; break;
-        case ParameterSpec::Kind::Rotate: d = p.direction.cross(x - p.center); break;
-        case ParameterSpec::Kind::Scale: d = x - p.center; break;
-        case ParameterSpec::Kind::Vertex: d = i == p.vertex ? p.direction : Vec3::Zero(); break;
-      }
-      vel[i].col(k) = d;
-    }
+    for (int i = 0; i < mesh.num_vertices(); ++i) vel[i].col(k) = vertex_velocity(p, i, mesh.positions[i]);
     v.moving[p.shape] = true;
   }
   // Normal velocities: forward-mode derivative of the area-weighted vertex normals.

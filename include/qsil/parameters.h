@@ -55,6 +55,12 @@ struct SceneVelocities {
   bool any_moving() const;
 };
 
+/// dx/dtheta at theta = 0 of vertex `vertex` (position `x`, world) of the parameter's shape: the
+/// direction (translate; vertex, for its own vertex, else 0), axis x (x - centre) (rotate) or
+/// x - centre (scale); world units per unit of theta. Shared by compute_velocities and
+/// default_fd_step.
+Vec3 vertex_velocity(const ParameterSpec& param, int vertex, const Vec3& x);
+
 /// Velocities at theta = 0 of the given parameters (check_parameter_count). Throws qsil::Error.
 SceneVelocities compute_velocities(const Scene& scene, const std::vector<ParameterSpec>& params);
 
