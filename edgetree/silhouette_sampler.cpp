@@ -407,6 +407,34 @@ int split_indices(const TopLevel& top, std::array<int, kMaxSplitEdges>& idx) {
   return k;
 }
 
+/// Takes the split edges idx[0..n_split) out of the top-level choice: they get probability 0 and
+/// the traversal chooses among the other candidates afresh (choice_probabilities over them alone:
+/// importance and defensive weights both normalised over the rest, the defensive share eps as at
+/// every choice). Dividing the old probabilities by 1 - (the split sum) instead kept the defensive
+/// part at its old size while the split edges had taken most of the importance part: on the
+/// teapot's self-shadows the rest's choice was then ~1/3 defensive (docs/architecture.md §5
+/// "Splitting"). Returns false when no candidate is left.
+bool remove_split(TopLevel& top, const std::array<int, kMaxSplitEdges>& idx, int n_split) {
+  auto is_split = [&](int i) { return std::find(idx.begin(), idx.begin() + n_split, i) != idx.begin() + n_split; };
+  thread_local std::vector<Candidate> rest;
+  thread_local std::vector<int> where;
+  thread_local std::vector<double> prob;
+  rest.clear();
+  where.clear();
+  for (int i = 0; i < top.n; ++i) {
+    if (is_split(i)) continue;
+    rest.push_back(top.cand[size_t(i)]);
+    where.push_back(i);
+  }
+  std::fill(top.prob.begin(), top.prob.begin() + top.n, 0.0);
+  const int m = int(rest.size());
+  if (m == 0) return false;
+  prob.resize(size_t(m));
+  choice_probabilities(rest, m, prob.data());
+  for (int j = 0; j < m; ++j) top.prob[size_t(where[size_t(j)])] = prob[size_t(j)];
+  return true;
+}
+
 /// From the top-level candidate `cur` (chosen with probability pmf) down to an edge and a point.
 SilhouetteSample descend(const EdgeForest& forest, const Prepared& pq, const std::function<double()>& next,
                          Method method, Candidate cur, double pmf, int tests) {
@@ -521,17 +549,11 @@ void sample_silhouette_set(const EdgeForest& forest, const SilhouetteQuery& quer
   }
   if (top.n == 0) return;
   for (int j = 0; j < n_split; ++j) {
-    const int i = idx[size_t(j)];
-    const SilhouetteSample s = sample_on_edge(*top.cand[size_t(i)].edge, 1.0, pq, next(), 0);
+    const SilhouetteSample s = sample_on_edge(*top.cand[size_t(idx[size_t(j)])].edge, 1.0, pq, next(), 0);
     if (s.edge) out.push(s);
-    top.prob[size_t(i)] = 0;
   }
-  // The traversal chooses among the rest, its probabilities renormalised to sum to what they did.
-  double rest = 0;
-  for (int i = 0; i < top.n; ++i) rest += top.prob[size_t(i)];
-  if (!(rest > 0)) return;
-  if (n_split > 0)
-    for (int i = 0; i < top.n; ++i) top.prob[size_t(i)] /= rest;
+  // The traversal chooses among the rest.
+  if (n_split > 0 && !remove_split(top, idx, n_split)) return;
   const int i = choose(top.prob.data(), top.n, next());
   if (i < 0) return;
   push(descend(forest, pq, next, method, top.cand[size_t(i)], top.prob[size_t(i)], top.tests));
@@ -574,17 +596,18 @@ SilhouetteSample sample_on_edge(const ForestEdge& e, double pmf, const Prepared&
 
 }  // namespace
 
-double silhouette_edge_probability(const EdgeForest& forest, const SilhouetteQuery& query, const ForestEdge* edge,
-                                   Method method) {
+namespace {
+
+/// The probability with which a traversal from the top-level choice `top` reaches `edge`, by
+/// walking the same choices (silhouette_edge_probability, traversal_edge_probability).
+double walk_probability(const EdgeForest& forest, const Prepared& pq, Method method, const TopLevel& top,
+                        const ForestEdge* edge) {
   // A candidate leads to `edge` when it is that edge or a node whose edge range holds it.
   auto leads_to = [&](const Candidate& c) {
     if (c.edge) return c.edge == edge;
     const std::span<const ForestEdge> below = forest.node_edges(c.node);
     return edge >= below.data() && edge < below.data() + below.size();
   };
-  const Prepared pq = prepare(query);
-  TopLevel top;
-  top_level(forest, pq, method, top);
   int tests = top.tests;
   double pmf = 0;
   Candidate cur;
@@ -621,6 +644,27 @@ double silhouette_edge_probability(const EdgeForest& forest, const SilhouetteQue
     if (!found) return 0;
   }
   return pmf;
+}
+
+}  // namespace
+
+double silhouette_edge_probability(const EdgeForest& forest, const SilhouetteQuery& query, const ForestEdge* edge,
+                                   Method method) {
+  const Prepared pq = prepare(query);
+  TopLevel top;
+  top_level(forest, pq, method, top);
+  return walk_probability(forest, pq, method, top, edge);
+}
+
+double traversal_edge_probability(const EdgeForest& forest, const SilhouetteQuery& query, const ForestEdge* edge,
+                                  Method method) {
+  const Prepared pq = prepare(query);
+  TopLevel top;
+  top_level(forest, pq, method, top);
+  std::array<int, kMaxSplitEdges> idx;
+  const int n_split = top.n > 0 ? split_indices(top, idx) : 0;
+  if (n_split > 0 && !remove_split(top, idx, n_split)) return 0;
+  return walk_probability(forest, pq, method, top, edge);
 }
 
 }  // namespace qsil::edgetree

@@ -235,7 +235,7 @@ TEST(ReverseMode, SecondaryBoundaryTermAgreesWithForwardMode) {
   // light's outline and Spot's own silhouettes move), and its outline against the environment.
   const Scene scene =
       load_scene(test::data_file("tests/data/gradient/spot-selfshadow.xml"), {{"res", "16"}, {"spp", "192"}});
-  expect_boundary_agreement(scene, "spot:translate:1,0,0", "spot", 8, 0);
+  expect_boundary_agreement(scene, "spot:translate:1,0,0", "spot", 12, 0);
 }
 
 TEST(ReverseMode, PrimaryBoundaryTermAgreesWithForwardMode) {

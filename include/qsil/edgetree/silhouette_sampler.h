@@ -51,15 +51,20 @@
 /// Splitting (sample_silhouette_set, what the renderer uses): a loose always-candidate edge whose
 /// top-level probability is at least kSplitShare (at most kMaxSplitEdges of them, the most
 /// probable) is not chosen but estimated at every traversal with a point of its own (discrete
-/// probability 1), and the traversal chooses among the remaining candidates with their
-/// probabilities divided by 1 − (the split edges' sum). The estimate Σ_split g/pdf_t + g/pdf of
+/// probability 1), and the traversal chooses among the remaining candidates afresh (their
+/// importance and defensive weights normalised over them alone, the defensive share eps as at
+/// every choice). The estimate Σ_split g/pdf_t + g/pdf of
 /// the traversal's sample stays unbiased (every edge is covered by exactly one of the two, with
 /// a positive probability), and a bright outline seen from a moving p (an area light's, whose
 /// jump is the light's radiance) no longer takes most traversals away from the forest: on
 /// shadow-quad the light's outline held ≈ 85 % of the top-level probability at points of the
 /// moving bunny, whose self-shadow edges in front of the light got ≈ 1/7 of the probability
 /// their share of the integrand asks for. The split set depends on p alone (not on random
-/// numbers), so the partition is fixed for each query.
+/// numbers), so the partition is fixed for each query. The choice among the rest is made afresh,
+/// not by dividing the old probabilities by 1 − (the split sum): that kept the defensive part at
+/// its old size while the split edges had taken most of the importance part, so the rest's
+/// choice was up to ~40 % defensive (the teapot's self-shadow edges 3 cm from p chosen with
+/// probability ~0.25 instead of ~0.6; docs/architecture.md §5 "Splitting").
 ///
 /// Contour sets (sample_silhouette_set, at glossy vertices; contour_set.h): the edges of the
 /// query's contour set that are not split are estimated by one more point of their own, and the
@@ -187,8 +192,7 @@ void sample_silhouette_set(const EdgeForest& forest, const SilhouetteQuery& quer
                            Method method, SilhouetteSampleSet& out);
 
 /// The edges sample_silhouette_set splits for the query and the sum of their top-level
-/// probabilities (the traversal's other choices are divided by 1 minus it). For tests and
-/// `qsil candidates`.
+/// probabilities (those of sample_silhouette). For tests and `qsil candidates`.
 std::vector<const ForestEdge*> split_edges(const EdgeForest& forest, const SilhouetteQuery& query, Method method,
                                            double* split_probability = nullptr);
 
@@ -266,5 +270,12 @@ double velocity_factor(const ForestEdge& e, const SilhouetteQuery& q);
 /// tests: the sampling probabilities of all edges sum to at most 1, and match the histogram).
 double silhouette_edge_probability(const EdgeForest& forest, const SilhouetteQuery& query, const ForestEdge* edge,
                                    Method method = Method::Quadric);
+
+/// Probability with which the traversal of sample_silhouette_set (after splitting, without a
+/// contour set) picks `edge`: 0 for a split edge, otherwise the walk of
+/// silhouette_edge_probability from the top-level choice among the non-split candidates. For
+/// tests (the histogram of split_sampling_test).
+double traversal_edge_probability(const EdgeForest& forest, const SilhouetteQuery& query, const ForestEdge* edge,
+                                  Method method = Method::Quadric);
 
 }  // namespace qsil::edgetree
