@@ -63,8 +63,8 @@
 /// numbers), so the partition is fixed for each query. The choice among the rest is made afresh,
 /// not by dividing the old probabilities by 1 − (the split sum): that kept the defensive part at
 /// its old size while the split edges had taken most of the importance part, so the rest's
-/// choice was up to ~40 % defensive (the teapot's self-shadow edges 3 cm from p chosen with
-/// probability ~0.25 instead of ~0.6; docs/architecture.md §5 "Splitting").
+/// choice was up to ~40 % defensive (the forest root holding the teapot's self-shadow edges 3 cm
+/// from p chosen with probability 0.32, ~0.6 now; docs/architecture.md §5 "Splitting").
 ///
 /// Contour sets (sample_silhouette_set, at glossy vertices; contour_set.h): the edges of the
 /// query's contour set that are not split are estimated by one more point of their own, and the
