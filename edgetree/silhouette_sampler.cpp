@@ -412,7 +412,7 @@ int split_indices(const TopLevel& top, std::array<int, kMaxSplitEdges>& idx) {
 /// importance and defensive weights both normalised over the rest, the defensive share eps as at
 /// every choice). Dividing the old probabilities by 1 - (the split sum) instead kept the defensive
 /// part at its old size while the split edges had taken most of the importance part: on the
-/// teapot's self-shadows the rest's choice was then ~1/3 defensive (docs/architecture.md §5
+/// teapot's self-shadows the rest's choice was then up to ~40 % defensive (docs/architecture.md §5
 /// "Splitting"). Returns false when no candidate is left.
 bool remove_split(TopLevel& top, const std::array<int, kMaxSplitEdges>& idx, int n_split) {
   auto is_split = [&](int i) { return std::find(idx.begin(), idx.begin() + n_split, i) != idx.begin() + n_split; };
