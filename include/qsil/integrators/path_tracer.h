@@ -251,8 +251,15 @@ ColorT<typename View::Real> trace_path(const PathContext& ctx, const View& view,
     ++stats.rays;
     IgnoreSet ignore;
     ignore.through_back_faces = leaves_below(si, wo_world, wi);
-    hit = ctx.tracer->intersect(spawn_origin(si, wi), wi, kInf, ignore);
-    o = si.p;
+    const Vec3 spawned = spawn_origin(si, wi);
+    hit = ctx.tracer->intersect(spawned, wi, kInf, ignore);
+    // The next hit is recomputed from the point the ray left (o, differentiable). From an exact
+    // edge point that is the offset origin (spawn_origin), p shifted by a constant, so its
+    // derivatives are p's: the edge point lies in the plane of its edge's other face, so at a
+    // concave edge a ray recomputed from the point itself would meet that face at t = 0, on the
+    // edge, instead of where the ray from inside the face meets it (docs/design-notes.md,
+    // "Smooth shading" item 2).
+    o = si.inward == Vec3::Zero() ? si.p : Vec3T<T>(si.p + lift<T>(Vec3(spawned - p)));
     d = wi;
   }
   return L;
