@@ -40,6 +40,10 @@ std::vector<Case> cases() {
       // step: the radiance varies on the scale of the lobe's footprint on Spot (h = 0.01 is 8 %
       // off at alpha 0.01, h = 0.003 and 0.001 agree).
       {"mirror-point", "tests/data/gradient/mirror-point.xml", {}, "spot:translate:0,1,0", 2e-3},
+      // One point of the smooth-shaded, twosided open box's right wall near the back corner (a
+      // 1x1 image with a 0.02 deg field of view), depth 2: edges in the point's own plane that do
+      // not bound its triangle (face_in_plane, boundary_term.h).
+      {"open-box-point", "tests/data/gradient/open-box-point.xml", {}, "box:rotate:0,1,0", 1.2e-2},
   };
 }
 

@@ -74,9 +74,11 @@ inline edgetree::LTC bsdf_ltc(const BSDFDesc& b, Vec3 wo_local) {
   return ltc;
 }
 
-/// The shading point's own triangle, for an edge that bounds it (edge_jump_with).
+/// The shading point's own triangle, for an edge that bounds it or otherwise lies in its plane
+/// (face_in_plane; edge_jump_with).
 ///
-/// p lies in the plane of its own triangle T (up to rounding), and so does every edge of T: the
+/// p lies in the plane of its own triangle T (up to rounding), and so does every edge of T (and
+/// every edge of a coplanar neighbour: a flat wall of several triangles): the
 /// plane (p, edge) is T's plane, and the silhouette and crease predicates, which take the sign of
 /// p against T's plane, are rounding noise there. What the integrand does across T's plane in the
 /// directions toward the edge depends only on the other face T' of the edge:
@@ -90,9 +92,29 @@ inline edgetree::LTC bsdf_ltc(const BSDFDesc& b, Vec3 wo_local) {
 /// smooth shading the shading normal tilts away from T's and it does not: treating these edges as
 /// silhouettes made grad 60 % high for a vertex of a smooth bunny (docs/gradient-checks.md).
 struct OwnFace {
-  int face = -1;           ///< p's triangle (of the edge's shape) when the edge bounds it, else -1
+  int face = -1;           ///< the edge's face in p's plane (face_in_plane: p's triangle when the edge bounds it), else -1
   Vec3 up = Vec3::Zero();  ///< T's unit geometric normal turned toward p's viewer (world)
 };
+
+/// The face of edge `e` that lies in the plane of p's triangle `triangle` (unit geometric normal
+/// `ng`, p on it; world coordinates): `triangle` itself when the edge bounds it, else a face of the
+/// edge whose three vertices lie in that plane up to rounding (|ng . (x - p)| <= 2^-32 of the
+/// coordinates' magnitude: far above double rounding, far below any modelled feature), else -1.
+/// Such an edge lies in p's plane as an edge of p's own triangle does (a flat region split into
+/// several triangles: a box's wall, a floor quad), and is treated as OwnFace says.
+inline int face_in_plane(const TriangleMesh& mesh, const edgetree::ForestEdge& e, int triangle, const Vec3& ng,
+                         const Vec3& p) {
+  if (e.f0 == triangle || e.f1 == triangle) return triangle;
+  auto in_plane = [&](int face) {
+    if (face < 0) return false;
+    for (int k = 0; k < 3; ++k) {
+      const Vec3& x = mesh.positions[size_t(mesh.triangles[size_t(face)][k])];
+      if (!(std::abs(ng.dot(x - p)) <= 0x1p-32 * (x.cwiseAbs().maxCoeff() + p.cwiseAbs().maxCoeff()))) return false;
+    }
+    return true;
+  };
+  return in_plane(e.f0) ? e.f0 : (in_plane(e.f1) ? e.f1 : -1);
+}
 
 /// The rays of the boundary term ignore the sampled edge's own two faces (an Embree filter on
 /// their primitive ids: no absolute epsilon). `through_back_faces` as for every ray of the path
@@ -131,8 +153,8 @@ inline bool point_visible(const RayTracer& tracer, const Vec3& origin, const Vec
 /// opposite to p's viewer (leaves_below), so that ray and its continuation beyond the edge pass
 /// through back faces, as every such ray of the path tracer does.
 ///
-/// `own`: p's own triangle when the edge bounds it (OwnFace; face -1 otherwise, and for the
-/// camera): then the plane (p, edge) is that triangle's plane and the edge is treated as
+/// `own`: the edge's face in p's plane (OwnFace, face_in_plane; face -1 otherwise, and for the
+/// camera): then the plane (p, edge) is p's triangle's plane and the edge is treated as
 /// OwnFace says, not by the silhouette or crease rule.
 ///
 /// `accept(g)` receives g = (w0 x w1) / |w_t|^3, the Jacobian's linear form in the relative
@@ -366,9 +388,9 @@ void for_each_boundary_sample(const PathContext& ctx, const BoundaryContext& bct
       Color jump;
       Vec3 g;
       OwnFace own;
-      if (e.shape == si.shape && (e.f0 == si.triangle || e.f1 == si.triangle)) {
-        own.face = si.triangle;
-        own.up = value(si.ng).dot(wo_world) < 0 ? Vec3(-value(si.ng)) : value(si.ng);
+      if (e.shape == si.shape) {
+        own.face = face_in_plane(ctx.scene->shapes[size_t(e.shape)].mesh, e, si.triangle, value(si.ng), q.p);
+        if (own.face >= 0) own.up = value(si.ng).dot(wo_world) < 0 ? Vec3(-value(si.ng)) : value(si.ng);
       }
       if (!edge_jump_with(ctx, e, s.t, q.p, spawn_origin(si, w), leaves_below(si, wo_world, w), own, seg, sampler,
                           stats, jump,

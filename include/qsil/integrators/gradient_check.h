@@ -41,8 +41,9 @@ struct Case {
 };
 
 /// The gradient-check cases: three bundled scenes, two boundary-term scenes, a flat-shaded
-/// (face_normals) case and two smooth-shading cases: spot-mirror, shadow-quad, direct (scenes/),
-/// plane-light, spot-selfshadow, faceted-cube, smooth-cube, mirror-point (tests/data/gradient/).
+/// (face_normals) case and three smooth-shading cases: spot-mirror, shadow-quad, direct (scenes/),
+/// plane-light, spot-selfshadow, faceted-cube, smooth-cube, mirror-point, open-box-point
+/// (tests/data/gradient/).
 std::vector<Case> cases();
 
 /// The case named `name`; throws qsil::Error "no gradient case NAME" otherwise.
