@@ -76,6 +76,36 @@ Hit exact_hit(const TriangleMesh& mesh, int shape, int face, int a, int b, doubl
   return h;
 }
 
+/// The radiance leaving a point exactly on edge `e` of face `face` (parameter s from v0) toward
+/// `viewer`, against the point 1e-7 inside the face, with common random numbers: `samples` paths
+/// each from Sampler(seed, stream, k), both PrimalView paths started at segment 0. Accumulates
+/// both means and the number of samples whose radiance differs (relative 1e-6).
+struct EdgeLimit {
+  double sum_edge = 0, sum_inside = 0;
+  long differing = 0, total = 0;
+  void add(const Traceable& t, const TriangleMesh& mesh, int shape, int face, const edgetree::MeshEdge& e, double s,
+           const Vec3& viewer, uint64_t seed, uint64_t stream, int samples) {
+    const Vec3 xe = (1 - s) * mesh.positions[size_t(e.v0)] + s * mesh.positions[size_t(e.v1)];
+    const Vec3 w = (xe - viewer).normalized();
+    const Hit on_edge = exact_hit(mesh, shape, face, e.v0, e.v1, 1 - s, s);
+    const Hit inside = exact_hit(mesh, shape, face, e.v0, e.v1, (1 - s) * (1 - 1e-7), s * (1 - 1e-7));
+    const PrimalView view{&t.scene};
+    PathStats ps;
+    for (int k = 0; k < samples; ++k) {
+      Sampler sa(seed, stream, uint64_t(k)), sb(seed, stream, uint64_t(k));
+      const Color la = trace_path(t.ctx, view, viewer, w, on_edge, 0, 0.0, sa, ps);
+      const Color lb = trace_path(t.ctx, view, viewer, w, inside, 0, 0.0, sb, ps);
+      sum_edge += la.mean();
+      sum_inside += lb.mean();
+      differing += (la - lb).abs().maxCoeff() > 1e-6 * std::max(1.0, lb.abs().maxCoeff());
+      ++total;
+    }
+  }
+  double edge_mean() const { return sum_edge / double(total); }
+  double inside_mean() const { return sum_inside / double(total); }
+  double differing_share() const { return double(differing) / double(total); }
+};
+
 /// Per-edge radiance jumps of Spot's visible non-flat edges, seen from one point.
 struct JumpStats {
   int edges = 0;
@@ -160,10 +190,8 @@ TEST(SmoothShading, EdgePointRadianceIsTheLimitFromTheFaceInterior) {
   const TriangleMesh& mesh = t.scene.shapes[size_t(cube)].mesh;
   const edgetree::MeshEdgeSet set = edgetree::build_mesh_edges(mesh, cube);
   const Vec3 camera = t.scene.camera.origin();
-  const PrimalView view{&t.scene};
   int edges = 0;
-  long differing = 0, total = 0;
-  double sum_edge = 0, sum_inside = 0;
+  EdgeLimit limit;
   for (size_t i = 0; i < set.edges.size(); ++i) {
     const edgetree::MeshEdge& e = set.edges[i];
     if (e.cls != edgetree::EdgeClass::Convex) continue;
@@ -172,29 +200,14 @@ TEST(SmoothShading, EdgePointRadianceIsTheLimitFromTheFaceInterior) {
     const bool f0_front = e.q0.dot(x) > 0, f1_front = e.q1.dot(x) > 0;
     if (f0_front == f1_front) continue;
     const int face = f0_front ? e.f0 : e.f1;
-    for (double s : {0.25, 0.5, 0.75}) {
-      const Vec3 xe = (1 - s) * mesh.positions[size_t(e.v0)] + s * mesh.positions[size_t(e.v1)];
-      const Vec3 w = (xe - camera).normalized();
-      const Hit on_edge = exact_hit(mesh, cube, face, e.v0, e.v1, 1 - s, s);
-      const Hit inside = exact_hit(mesh, cube, face, e.v0, e.v1, (1 - s) * (1 - 1e-7), s * (1 - 1e-7));
-      PathStats ps;
-      for (int k = 0; k < 1024; ++k) {
-        Sampler sa(2, i, uint64_t(k)), sb(2, i, uint64_t(k));
-        const Color la = trace_path(t.ctx, view, camera, w, on_edge, 0, 0.0, sa, ps);
-        const Color lb = trace_path(t.ctx, view, camera, w, inside, 0, 0.0, sb, ps);
-        sum_edge += la.mean();
-        sum_inside += lb.mean();
-        differing += (la - lb).abs().maxCoeff() > 1e-6 * std::max(1.0, lb.abs().maxCoeff());
-        ++total;
-      }
-    }
+    for (double s : {0.25, 0.5, 0.75}) limit.add(t, mesh, cube, face, e, s, camera, 2, i, 1024);
     ++edges;
   }
   std::printf("outline edges %d: radiance on the edge %.5g, 1e-7 inside %.5g, samples differing %.3g\n", edges,
-              sum_edge / double(total), sum_inside / double(total), double(differing) / double(total));
+              limit.edge_mean(), limit.inside_mean(), limit.differing_share());
   ASSERT_GE(edges, 4);  // the front face's outline (two triangles per face: 4 convex edges)
-  EXPECT_LT(double(differing) / double(total), 1e-3);
-  EXPECT_NEAR(sum_edge / sum_inside, 1.0, 1e-3);
+  EXPECT_LT(limit.differing_share(), 1e-3);
+  EXPECT_NEAR(limit.edge_mean() / limit.inside_mean(), 1.0, 1e-3);
 }
 
 // The same limit at concave edges, where it is no sliver but half the hemisphere: from a point of
@@ -220,10 +233,8 @@ TEST(SmoothShading, EdgePointRadianceIsTheLimitFromTheFaceInteriorAtConcaveEdges
   const edgetree::MeshEdgeSet set = edgetree::build_mesh_edges(mesh, box);
   const Vec3 camera = t.scene.camera.origin();
   const Vec4 x(camera.x(), camera.y(), camera.z(), 1.0);
-  const PrimalView view{&t.scene};
   int edges = 0;
-  long differing = 0, total = 0;
-  double sum_edge = 0, sum_inside = 0;
+  EdgeLimit limit;
   for (size_t i = 0; i < set.edges.size(); ++i) {
     const edgetree::MeshEdge& e = set.edges[i];
     if (e.f1 < 0 || e.cls == edgetree::EdgeClass::Flat) continue;
@@ -238,28 +249,15 @@ TEST(SmoothShading, EdgePointRadianceIsTheLimitFromTheFaceInteriorAtConcaveEdges
       const Vec3 w = (xe - camera).normalized();
       if (t.tracer->occluded(camera, w, (xe - camera).norm() * (1 - 1e-6), faces)) continue;
       seen = true;
-      for (int face : {e.f0, e.f1}) {
-        const Hit on_edge = exact_hit(mesh, box, face, e.v0, e.v1, 1 - s, s);
-        const Hit inside = exact_hit(mesh, box, face, e.v0, e.v1, (1 - s) * (1 - 1e-7), s * (1 - 1e-7));
-        PathStats ps;
-        for (int k = 0; k < 512; ++k) {
-          Sampler sa(3, i, uint64_t(k)), sb(3, i, uint64_t(k));
-          const Color la = trace_path(t.ctx, view, camera, w, on_edge, 0, 0.0, sa, ps);
-          const Color lb = trace_path(t.ctx, view, camera, w, inside, 0, 0.0, sb, ps);
-          sum_edge += la.mean();
-          sum_inside += lb.mean();
-          differing += (la - lb).abs().maxCoeff() > 1e-6 * std::max(1.0, lb.abs().maxCoeff());
-          ++total;
-        }
-      }
+      for (int face : {e.f0, e.f1}) limit.add(t, mesh, box, face, e, s, camera, 3, i, 512);
     }
     edges += seen;
   }
   std::printf("concave edges seen from inside %d: radiance on the edge %.5g, 1e-7 inside %.5g, samples differing %.3g\n",
-              edges, sum_edge / double(total), sum_inside / double(total), double(differing) / double(total));
+              edges, limit.edge_mean(), limit.inside_mean(), limit.differing_share());
   ASSERT_GE(edges, 2);  // not vacuous: the two inner back corners (the front wall hides the floor's)
-  EXPECT_LT(double(differing) / double(total), 5e-3);
-  EXPECT_NEAR(sum_edge / sum_inside, 1.0, 1e-3);
+  EXPECT_LT(limit.differing_share(), 5e-3);
+  EXPECT_NEAR(limit.edge_mean() / limit.inside_mean(), 1.0, 1e-3);
 }
 
 // A white furnace for a vertex: a smooth-shaded icosphere (80 faces, albedo 0.8) in a constant
