@@ -342,8 +342,8 @@ INSTANTIATE_TEST_SUITE_P(Alpha, MirrorPoint, ::testing::Values("0.005", "0.01", 
 // (2^18 against 2^20 spp) -0.2177 +- 0.0017 against -0.2315 +- 0.0028: 6 % low (4 combined
 // standard errors), a remaining bias of smooth shading here that is not found yet (the same point
 // with face_normals agrees: 0.265 +- 0.003 vs 0.260 +- 0.003). Asserted: the combined standard
-// error at most 3 % of |FD|
-// and grad within 15 % of FD (the old rule, at 0.75-0.79 of FD, fails it). About 8 s.
+// error at most 3 % of |FD| and grad within 15 % of FD (the old rule, at 0.75-0.79 of FD, fails
+// it). About 8 s.
 TEST(SmoothShading, OpenBoxPointEdgesInItsPlaneFollowTheOwnTriangleRule) {
   const gradcheck::Case c = gradcheck::find_case("open-box-point").resolved(QSIL_SOURCE_DIR);
   const gradcheck::Agreement a = gradcheck::run(c, 1, 1 << 18, 1 << 20, c.h, /*with_interior=*/false);

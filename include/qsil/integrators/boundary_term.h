@@ -96,6 +96,15 @@ struct OwnFace {
   Vec3 up = Vec3::Zero();  ///< T's unit geometric normal turned toward p's viewer (world)
 };
 
+/// The vertex of face `face` (one of edge `e`'s two faces) that is not on the edge (world).
+inline const Vec3& opposite_vertex(const TriangleMesh& mesh, const edgetree::ForestEdge& e, int face) {
+  const Eigen::Vector3i& tri = mesh.triangles[size_t(face)];
+  int opp = tri[0];
+  for (int k = 0; k < 3; ++k)
+    if (tri[k] != e.v0 && tri[k] != e.v1) opp = tri[k];
+  return mesh.positions[size_t(opp)];
+}
+
 /// The face of edge `e` that lies in the plane of p's triangle `triangle` (unit geometric normal
 /// `ng`, p on it; world coordinates): `triangle` itself when the edge bounds it, else a face of the
 /// edge whose three vertices lie in that plane up to rounding (|ng . (x - p)| <= 2^-32 of the
@@ -105,15 +114,13 @@ struct OwnFace {
 inline int face_in_plane(const TriangleMesh& mesh, const edgetree::ForestEdge& e, int triangle, const Vec3& ng,
                          const Vec3& p) {
   if (e.f0 == triangle || e.f1 == triangle) return triangle;
-  auto in_plane = [&](int face) {
-    if (face < 0) return false;
-    for (int k = 0; k < 3; ++k) {
-      const Vec3& x = mesh.positions[size_t(mesh.triangles[size_t(face)][k])];
-      if (!(std::abs(ng.dot(x - p)) <= 0x1p-32 * (x.cwiseAbs().maxCoeff() + p.cwiseAbs().maxCoeff()))) return false;
-    }
-    return true;
+  auto in_plane = [&](const Vec3& x) {
+    return std::abs(ng.dot(x - p)) <= 0x1p-32 * (x.cwiseAbs().maxCoeff() + p.cwiseAbs().maxCoeff());
   };
-  return in_plane(e.f0) ? e.f0 : (in_plane(e.f1) ? e.f1 : -1);
+  if (!in_plane(e.p0) || !in_plane(e.p1)) return -1;  // the edge itself leaves the plane
+  for (int face : {e.f0, e.f1})
+    if (face >= 0 && in_plane(opposite_vertex(mesh, e, face))) return face;
+  return -1;
 }
 
 /// The rays of the boundary term ignore the sampled edge's own two faces (an Embree filter on
@@ -186,14 +193,7 @@ bool edge_jump_with(const PathContext& ctx, const edgetree::ForestEdge& e, doubl
   if (!point_visible(*ctx.tracer, vis_origin, edge_point, ignore)) return false;
   // The side of the plane (p, edge) on which a face lies: the sign of (w0 x w1).(x_opp - p) for
   // the face's third vertex.
-  auto opposite = [&](int face) -> const Vec3& {  // the face's vertex off the edge
-    const Eigen::Vector3i& tri = mesh.triangles[face];
-    int opp = tri[0];
-    for (int k = 0; k < 3; ++k)
-      if (tri[k] != e.v0 && tri[k] != e.v1) opp = tri[k];
-    return mesh.positions[opp];
-  };
-  auto side_of = [&](int face) { return n01.dot(opposite(face) - p); };
+  auto side_of = [&](int face) { return n01.dot(opposite_vertex(mesh, e, face) - p); };
   // Radiance leaving face `face` exactly at x_e toward p, continued with the remaining depth.
   // The point is known: barycentrics (1-t at v0, t at v1) in the face's vertex order (the face
   // may be seen edge-on from p, where a ray-plane intersection degenerates).
@@ -216,7 +216,7 @@ bool edge_jump_with(const PathContext& ctx, const edgetree::ForestEdge& e, doubl
     // background is a sliver ray.
     own_occluder = e.f0 == own.face ? e.f1 : e.f0;
     if (own_occluder < 0) return false;
-    if (!((opposite(own_occluder) - p).dot(own.up) > 0)) return false;  // T' below p's plane or in it
+    if (!((opposite_vertex(mesh, e, own_occluder) - p).dot(own.up) > 0)) return false;  // T' below p's plane or in it
     ignore.through_back_faces = true;
   } else if (e.crease && !edgetree::edge_is_silhouette(e, p)) {
     // ---- A crease (edgetree::CreaseSet), both faces facing p: the two faces lie on opposite
