@@ -356,10 +356,10 @@ TEST(SmoothShading, OpenBoxPointEdgesInItsPlaneFollowTheOwnTriangleRule) {
 
 // The rays of an edge in the shading point's plane: open-box-point's point under a constant sky
 // (radiance 1) at depth 2, every edge of the wall's two triangles where another wall rises toward
-// the point (the back and front corners and the floor's edge), 4096 points each. Nothing stands between the
-// point and the edges, so every point must be visible; and beyond the edge below the wall's plane
-// the sliver rays see the sky, while the rising wall's point has no light left at depth 2: the jump
-// is exactly 1 in magnitude (the sign is the side of the rising face). Before the fix the
+// the point (the back and front corners and the floor's edge), 4096 points each. Nothing stands
+// between the point and the edges, so every point must be visible; and beyond the edge below the
+// wall's plane the sliver rays see the sky, while the rising wall's point has no light left at
+// depth 2: the jump is exactly 1 in magnitude (the sign is the side of the rising face). Before the fix the
 // background ray ran along the wall's plane, where Embree's test is degenerate, and met one of the
 // wall's triangles at random (1435 of the 12288 points here, 24 % of the rendering's samples on
 // the front corner); and the visibility ray, aimed from an origin off the plane at the edge point
