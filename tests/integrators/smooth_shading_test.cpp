@@ -107,6 +107,20 @@ struct EdgeLimit {
   double differing_share() const { return double(differing) / double(total); }
 };
 
+/// open-box-point's scene (tests/data/gradient/open-box-point.xml) at 1 x 1 pixel and `spp`
+/// samples, with its environment replaced by a constant sky of radiance 1 and max_depth `depth`.
+Scene open_box_point_under_constant_sky(int spp, int depth) {
+  Scene scene = gradcheck::load_case(gradcheck::find_case("open-box-point").resolved(QSIL_SOURCE_DIR), 1, spp);
+  scene.environment = Environment{};
+  scene.environment.type = Environment::Type::Constant;
+  scene.environment.radiance = Color::Ones();
+  scene.max_depth = depth;
+  return scene;
+}
+
+/// The point of open-box-point.xml's right wall that its camera aims at (world).
+const Vec3 kOpenBoxPoint(0.37120332, 0.09936155, -0.62367285);
+
 /// Per-edge radiance jumps of Spot's visible non-flat edges, seen from one point.
 struct JumpStats {
   int edges = 0;
@@ -367,15 +381,9 @@ TEST(SmoothShading, OpenBoxPointEdgesInItsPlaneFollowTheOwnTriangleRule) {
 // triangle near the top corner (29 points here). Both rays now run parallel to the plane, below
 // it. About 0.1 s.
 TEST(SmoothShading, EdgesInTheShadingPointsPlaneSeeTheSkyBelowItAtEveryPoint) {
-  const gradcheck::Case c = gradcheck::find_case("open-box-point").resolved(QSIL_SOURCE_DIR);
-  Scene scene = gradcheck::load_case(c, 1, 1);
-  scene.environment = Environment{};
-  scene.environment.type = Environment::Type::Constant;
-  scene.environment.radiance = Color::Ones();
-  scene.max_depth = 2;
-  const Traceable tr(std::move(scene));
-  const Vec3 eye(0, 3, 4), target(0.37120332, 0.09936155, -0.62367285);
-  const Vec3 dir = (target - eye).normalized();
+  const Traceable tr(open_box_point_under_constant_sky(1, 2));
+  const Vec3 eye(0, 3, 4);  // open-box-point.xml's camera
+  const Vec3 dir = (kOpenBoxPoint - eye).normalized();
   const Hit hit = tr.tracer->intersect(eye, dir, kInf, IgnoreSet{});
   ASSERT_TRUE(hit.valid());
   const PrimalView pv{&tr.scene};
@@ -433,14 +441,11 @@ TEST(SmoothShading, EdgesInTheShadingPointsPlaneSeeTheSkyBelowItAtEveryPoint) {
 // this run gave 0.0209 +- 0.0010 (depth 2) and 0.0150 +- 0.0011 (depth 3); now 0.0018 +- 0.0010
 // and 0.0020 +- 0.0011 (at 64 x 65536 spp the depth-2 point gives 0.0004 +- 0.0003). About 2 s.
 TEST(SmoothShading, OpenBoxRotatingAboutItsShadingPointUnderAConstantSkyHasZeroDerivative) {
-  const gradcheck::Case c = gradcheck::find_case("open-box-point").resolved(QSIL_SOURCE_DIR);
-  const std::string rotation = "box:rotate:0,1,0@0.37120332,0.09936155,-0.62367285";
+  char rotation[96];
+  std::snprintf(rotation, sizeof rotation, "box:rotate:0,1,0@%.8f,%.8f,%.8f", kOpenBoxPoint.x(), kOpenBoxPoint.y(),
+                kOpenBoxPoint.z());
   for (int depth : {2, 3}) {
-    Scene scene = gradcheck::load_case(c, 1, 1 << 18);
-    scene.environment = Environment{};
-    scene.environment.type = Environment::Type::Constant;
-    scene.environment.radiance = Color::Ones();
-    scene.max_depth = depth;
+    const Scene scene = open_box_point_under_constant_sky(1 << 18, depth);
     const auto params = std::vector<ParameterSpec>{parse_parameter(rotation, scene)};
     RenderOptions o;
     o.progress = false;
