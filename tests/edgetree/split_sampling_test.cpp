@@ -11,8 +11,10 @@
 ///   query; its pdf = that probability × the edge's density of t (relative 1e-9);
 /// - the choice among the rest is made afresh: where every loose edge is split, the traversal's
 ///   probabilities are sample_silhouette's in the same world without the sheet (an oracle that
-///   walks a different top level), not sample_silhouette's divided by 1 - the split sum.
-/// The test has power only if some queries split: it requires at least 3 of the queries to.
+///   walks a different top level), not sample_silhouette's divided by 1 - the split sum;
+/// - every discontinuity edge has a traversal probability > 0, and they sum to at most 1, with
+///   Spot's concave edges left out of the forest and with them as creases (always-candidate tree).
+/// The split tests have power only if some queries split: they require at least 3 of the queries to.
 /// Fixed seeds.
 
 #include "baselines/baseline_test_util.h"
@@ -30,6 +32,7 @@
 #include <map>
 #include <memory>
 #include <random>
+#include <string>
 
 namespace qsil::edgetree {
 namespace {
@@ -44,14 +47,17 @@ struct World {
   std::vector<bool> eligible{true, true};
 };
 
-std::unique_ptr<World> make_world() {
+/// Spot with its creases as `spot_creases` says (CreaseSet::Concave: as the renderer builds a
+/// one-sided smooth shape, its 2602 concave edges creases in an always-candidate tree) and the sheet.
+std::unique_ptr<World> make_world(CreaseSet spot_creases = CreaseSet::None) {
   auto w = std::make_unique<World>();
   w->meshes.push_back(test_mesh("spot.obj"));
   TriangleMesh sheet;  // above spot, facing down: a light's outline
   sheet.positions = {{-0.4, 1.2, -0.4}, {0.4, 1.2, -0.4}, {0.4, 1.2, 0.4}, {-0.4, 1.2, 0.4}};
   sheet.triangles = {{0, 1, 2}, {0, 2, 3}};
   w->meshes.push_back(sheet);
-  w->forest = forest_over(w->meshes);
+  const std::vector<ForestShapeInput> in{{&w->meshes[0], 0, /*face_normals=*/false, spot_creases}, {&w->meshes[1], 1}};
+  w->forest = EdgeForest::build(in);
   return w;
 }
 
@@ -209,31 +215,39 @@ TEST(SplitSampling, ChoiceAmongTheRestIsMadeAfresh) {
 
 // The traversal's edge probabilities (silhouette_edge_probability, which walks the same choices,
 // the flat choice of small subtrees included) are a sub-probability over the discontinuity edges
-// that misses none: for 60 queries of the world above, every discontinuity edge of an eligible
+// that misses none: for the queries of the world above, every discontinuity edge of an eligible
 // shape has probability > 0 (a zero would be bias: that edge's boundary integral is never
 // estimated), and they sum to at most 1 (the rest: traversals that find no edge). Both methods;
-// the histogram test above checks that the sampler draws with these probabilities.
+// the histogram test above checks that the sampler draws with these probabilities. Once with Spot
+// as a silhouette forest alone (60 queries) and once with its concave edges as creases (16
+// queries: the always-candidate tree of a smooth shape, which competes with the forest's roots).
 TEST(QuadricTraversal, EveryDiscontinuityEdgeHasProbabilityAndTheySumToAtMostOne) {
-  const auto w = make_world();
-  const auto qs = queries(*w, 60, 7);
-  for (Method m : {Method::Quadric, Method::QuadricBox}) {
-    int missing = 0, over = 0, edges = 0;
-    for (const SilhouetteQuery& q : qs) {
-      double sum = 0;
-      auto check = [&](const ForestEdge& e) {
-        const double pr = silhouette_edge_probability(w->forest, q, &e, m);
-        sum += pr;
-        if (!is_discontinuity(e, q.p)) return;
-        ++edges;
-        missing += !(pr > 0);
-      };
-      for (const ForestEdge& e : w->forest.edges()) check(e);
-      for (const ForestEdge& e : w->forest.always_edges()) check(e);
-      over += sum > 1 + 1e-9;
+  for (CreaseSet creases : {CreaseSet::None, CreaseSet::Concave}) {
+    const auto w = make_world(creases);
+    const bool with_creases = creases != CreaseSet::None;
+    const auto qs = queries(*w, with_creases ? 16 : 60, with_creases ? 5 : 7);
+    for (Method m : {Method::Quadric, Method::QuadricBox}) {
+      int missing = 0, over = 0, edges = 0, crease_edges = 0;
+      for (const SilhouetteQuery& q : qs) {
+        double sum = 0;
+        auto check = [&](const ForestEdge& e) {
+          const double pr = silhouette_edge_probability(w->forest, q, &e, m);
+          sum += pr;
+          if (!is_discontinuity(e, q.p)) return;
+          ++edges;
+          crease_edges += e.crease;
+          missing += !(pr > 0);
+        };
+        for (const ForestEdge& e : w->forest.edges()) check(e);
+        for (const ForestEdge& e : w->forest.always_edges()) check(e);
+        over += sum > 1 + 1e-9;
+      }
+      const std::string what = std::string(method_name(m)) + (with_creases ? " with creases" : "");
+      EXPECT_GT(edges, 1000) << what << ": too few discontinuity edges for power";
+      if (with_creases) EXPECT_GT(crease_edges, 16 * 2000) << what << ": too few creases for power";
+      EXPECT_EQ(missing, 0) << what << ": discontinuity edges with probability 0";
+      EXPECT_EQ(over, 0) << what << ": probabilities summing to more than 1";
     }
-    EXPECT_GT(edges, 1000) << method_name(m) << ": too few discontinuity edges for power";
-    EXPECT_EQ(missing, 0) << method_name(m) << ": discontinuity edges with probability 0";
-    EXPECT_EQ(over, 0) << method_name(m) << ": probabilities summing to more than 1";
   }
 }
 
