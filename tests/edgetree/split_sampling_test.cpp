@@ -244,7 +244,9 @@ TEST(QuadricTraversal, EveryDiscontinuityEdgeHasProbabilityAndTheySumToAtMostOne
       }
       const std::string what = std::string(method_name(m)) + (with_creases ? " with creases" : "");
       EXPECT_GT(edges, 1000) << what << ": too few discontinuity edges for power";
-      if (with_creases) EXPECT_GT(crease_edges, 16 * 2000) << what << ": too few creases for power";
+      if (with_creases) {
+        EXPECT_GT(crease_edges, 16 * 2000) << what << ": too few creases for power";
+      }
       EXPECT_EQ(missing, 0) << what << ": discontinuity edges with probability 0";
       EXPECT_EQ(over, 0) << what << ": probabilities summing to more than 1";
     }
