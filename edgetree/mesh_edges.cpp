@@ -77,10 +77,7 @@ MeshEdgeSet build_mesh_edges(const TriangleMesh& mesh, int shape, const EdgeOpti
       } else {
         // Concave iff the other face's opposite vertex d is on the positive side of f0's plane
         // (meshes README). Evaluated relative to a vertex of f0 with the unnormalised normal.
-        const auto& t1 = mesh.triangles[e.f1];
-        int d = t1[0];
-        for (int k = 0; k < 3; ++k)
-          if (t1[k] != e.v0 && t1[k] != e.v1) d = t1[k];
+        const int d = opposite_vertex_index(mesh, e, e.f1);
         const Vec3 a = mesh.positions[mesh.triangles[e.f0][0]];
         const double side = mesh.face_cross(e.f0).dot(mesh.positions[d] - a);
         e.cls = side > 0.0 ? EdgeClass::Concave : EdgeClass::Convex;

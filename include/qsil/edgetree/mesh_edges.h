@@ -76,6 +76,16 @@ Vec4 face_plane(const TriangleMesh& mesh, int f);
 /// Cost O(T log T). The input mesh is not modified.
 MeshEdgeSet build_mesh_edges(const TriangleMesh& mesh, int shape = 0, const EdgeOptions& options = {});
 
+/// The index (into mesh.positions) of the vertex of face `face` (one of edge e's faces, an index
+/// into mesh.triangles) that is not on the edge.
+inline int opposite_vertex_index(const TriangleMesh& mesh, const MeshEdge& e, int face) {
+  const auto& tri = mesh.triangles[size_t(face)];
+  int opp = tri[0];
+  for (int k = 0; k < 3; ++k)
+    if (tri[k] != e.v0 && tri[k] != e.v1) opp = tri[k];
+  return opp;
+}
+
 /// Exact silhouette predicate of one edge for the shading point p (world frame) [QSS 3.1]:
 /// true iff (q0.x)(q1.x) <= 0 with x = [p, 1]; always true for boundary, non-manifold and
 /// inconsistent edges. This is the ground truth of every soundness test (docs/architecture.md §3).

@@ -99,11 +99,7 @@ struct OwnFace {
 
 /// The vertex of face `face` (one of edge `e`'s two faces) that is not on the edge (world).
 inline const Vec3& opposite_vertex(const TriangleMesh& mesh, const edgetree::ForestEdge& e, int face) {
-  const Eigen::Vector3i& tri = mesh.triangles[size_t(face)];
-  int opp = tri[0];
-  for (int k = 0; k < 3; ++k)
-    if (tri[k] != e.v0 && tri[k] != e.v1) opp = tri[k];
-  return mesh.positions[size_t(opp)];
+  return mesh.positions[size_t(edgetree::opposite_vertex_index(mesh, e, face))];
 }
 
 /// The face of edge `e` that lies in the plane of p's triangle `triangle` (unit geometric normal
