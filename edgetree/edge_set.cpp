@@ -89,6 +89,7 @@ std::vector<std::pair<int, int>> build_topology(std::vector<ForestEdge>& edges, 
       n.bp.expand(edges[k].p0);
       n.bp.expand(edges[k].p1);
       n.lw += always ? always_edge_weight(edges[k]) : edges[k].length * edges[k].angle;
+      if (edges[k].smooth_crease) n.lw_smooth += always_edge_weight(edges[k]);
     }
   });
   return levels;
@@ -131,6 +132,7 @@ EdgeSet EdgeSet::build(std::span<const ForestShapeInput> shapes, const EdgeSetOp
         is_crease[idx] = 1;
         always.push_back(make(int(idx)));
         always.back().crease = true;
+        always.back().smooth_crease = !in.face_normals;
         ++st.creases;
       }
     }

@@ -222,6 +222,12 @@ NodeWeight node_weight(const ForestNode& node, const SilhouetteQuery& q) { retur
 
 namespace {
 
+/// kSmoothCreaseWeight where it applies (see the header): a smooth crease that is no silhouette
+/// for p, under the cosine lobe.
+double crease_factor(const ForestEdge& e, const Prepared& pq) {
+  return pq.cosine_lobe && e.smooth_crease && !edge_is_silhouette(e, pq.q.p) ? kSmoothCreaseWeight : 1.0;
+}
+
 NodeWeight leaf_edge_weight(const ForestEdge& e, const Prepared& pq) {
   const SilhouetteQuery& q = pq.q;
   const EdgeGeometry g(e, q.p);  // once for the importance, its velocity factor and the defensive weight
@@ -229,11 +235,13 @@ NodeWeight leaf_edge_weight(const ForestEdge& e, const Prepared& pq) {
   const bool far = pq.cosine_lobe && half * half < kConeImportanceSin * kConeImportanceSin * g.mid2;
   const double total = far ? EdgeMixture::far_total(e, q, pq.lights, g) : EdgeMixture::total(e, q, pq.lights);
   // velocity_factor is finite, so a zero total needs no factor (below the horizon, outside every light).
-  return {total > 0 ? total * velocity_factor(e, q, g) : 0.0, edge_defensive(e.length, g.mid2)};
+  const double c = crease_factor(e, pq);
+  return {total > 0 ? c * total * velocity_factor(e, q, g) : 0.0, c * edge_defensive(e.length, g.mid2)};
 }
 
 NodeWeight loose_edge_weight(const ForestEdge& e, const Prepared& pq) {
-  return {kPi * EdgeMixture::total(e, pq.q, pq.lights), kPi * edge_defensive(e, pq.q.p)};
+  const double c = kPi * crease_factor(e, pq);
+  return {c * EdgeMixture::total(e, pq.q, pq.lights), c * edge_defensive(e, pq.q.p)};
 }
 
 /// The range [lo, hi] of n . w over the cone of unit directions w at angle at most alpha from a
@@ -330,7 +338,9 @@ NodeWeight node_weight(const ForestNode& node, const Prepared& pq) {
   const double d2 = (c - q.p).squaredNorm();
   const double h2 = std::max(d2, half_diag * half_diag);
   NodeWeight w;
-  w.defensive = h2 > 0 ? node.lw / h2 : node.lw;
+  // L_w with the smooth creases' part weighed by kSmoothCreaseWeight under the cosine lobe.
+  const double lw = pq.cosine_lobe ? node.lw - (1.0 - kSmoothCreaseWeight) * node.lw_smooth : node.lw;
+  w.defensive = h2 > 0 ? lw / h2 : lw;
   if (half_diag * half_diag < kConeImportanceSin * kConeImportanceSin * d2) {
     const double d = std::sqrt(d2);
     const Vec3 axis = q.frame.to_local((c - q.p) / d);

@@ -20,6 +20,8 @@
 ///   [0.9, 1.1], 5 % above 0.6, 95 % below 1.6. The spread is the O((half length / d)²) error of
 ///   taking |w_t| as d on the longest edges of the form.
 /// Fixed seed; 5000 random edges, 20 000 quadrature points each.
+/// - The smooth-crease factor (kSmoothCreaseWeight): exact ratios of the weights of one edge or
+///   node with and without its smooth creases, under the cosine lobe and glossy lobes.
 
 #include "qsil/edgetree/ltc.h"
 #include "qsil/edgetree/silhouette_sampler.h"
@@ -53,8 +55,8 @@ struct Case {
   double s = 0;
   bool straddle = false;
 
-  explicit Case(TestRng& rng) {
-    random_query(rng, false, q, lights);
+  explicit Case(TestRng& rng, bool glossy = false) {
+    random_query(rng, glossy, q, lights);
     emission = {rng.uniform() < 0.2 ? 5.0 * rng.uniform() : 0.0};
     q.emission = &emission;
     s = 0.01 * std::pow(0.9 / 0.01, rng.uniform());
@@ -159,6 +161,66 @@ TEST(EdgeImportanceTest, LeafEdgeWeightsFollowTheirIntegrand) {
   EXPECT_LT(squantile(0.5), 1.1);
   EXPECT_GT(squantile(0.05), 0.6);
   EXPECT_LT(squantile(0.95), 1.6);
+}
+
+/// Makes e a crease between two faces through it (f0, f1), a smooth shape's (`smooth`) or a
+/// flat-shaded shape's: both faces facing p, or with `silhouette` one facing away.
+void make_crease(ForestEdge& e, const Vec3& p, bool silhouette, bool smooth) {
+  const Vec3 mid = 0.5 * (e.p0 + e.p1), dir = (e.p1 - e.p0).normalized();
+  Vec3 toward = p - mid;
+  toward = (toward - toward.dot(dir) * dir).normalized();
+  const Vec3 side = dir.cross(toward);
+  const Vec3 n0 = (toward + 0.3 * side).normalized();
+  const Vec3 n1 = (silhouette ? -1.0 : 1.0) * (toward - 0.3 * side).normalized();
+  e.q0 << n0, -n0.dot(mid);
+  e.q1 << n1, -n1.dot(mid);
+  e.f0 = 0;
+  e.f1 = 1;
+  e.cls = EdgeClass::Concave;
+  e.crease = true;
+  e.smooth_crease = smooth;
+}
+
+/// Under the cosine lobe a smooth crease that is no silhouette for p weighs kSmoothCreaseWeight
+/// times the same edge as a flat-shaded shape's crease (importance and defensive weight, at a
+/// leaf and as a loose always-candidate), and an always-candidate node whose L_w is all smooth
+/// creases that factor times the same node without them; a smooth crease that is a silhouette,
+/// and every weight under a glossy lobe, are the full ones. 400 random edges (Case).
+TEST(EdgeImportanceTest, SmoothCreasesThatAreNoSilhouetteWeighLessUnderTheCosineLobe) {
+  TestRng rng(20261124);
+  int reduced = 0, nonzero_importance = 0;
+  for (int i = 0; i < 400; ++i) {
+    const bool glossy = i % 2 == 1;
+    Case c(rng, glossy);
+    for (const bool silhouette : {false, true}) {
+      ForestEdge flat = c.e, smooth = c.e;
+      make_crease(flat, c.q.p, silhouette, false);
+      make_crease(smooth, c.q.p, silhouette, true);
+      ASSERT_EQ(edge_is_silhouette(smooth, c.q.p), silhouette) << "case " << i;
+      const double factor = !glossy && !silhouette ? kSmoothCreaseWeight : 1.0;
+      reduced += factor < 1;
+      for (const auto weigh : {&leaf_edge_weight, &loose_edge_weight}) {
+        const NodeWeight a = weigh(flat, c.q), b = weigh(smooth, c.q);
+        ASSERT_GT(a.defensive, 0) << "case " << i;
+        nonzero_importance += factor < 1 && a.importance > 0;
+        EXPECT_NEAR(b.importance, factor * a.importance, 1e-12 * a.importance) << "case " << i;
+        EXPECT_NEAR(b.defensive, factor * a.defensive, 1e-12 * a.defensive) << "case " << i;
+      }
+    }
+    ForestNode node;
+    node.flags = kNodeAlways | kNodeLeaf;
+    node.bp.expand(c.e.p0);
+    node.bp.expand(c.e.p1);
+    node.lw = always_edge_weight(c.e);
+    ForestNode smooth_node = node;
+    smooth_node.lw_smooth = node.lw;
+    const NodeWeight a = node_weight(node, c.q), b = node_weight(smooth_node, c.q);
+    const double factor = glossy ? 1.0 : kSmoothCreaseWeight;
+    EXPECT_NEAR(b.importance, factor * a.importance, 1e-12 * a.importance) << "node, case " << i;
+    EXPECT_NEAR(b.defensive, factor * a.defensive, 1e-12 * a.defensive) << "node, case " << i;
+  }
+  EXPECT_EQ(reduced, 200);
+  EXPECT_GT(nonzero_importance, 100);  // the importance ratios were tested where they are not 0 = 0
 }
 
 }  // namespace

@@ -47,6 +47,10 @@ struct ForestEdge : MeshEdge {
   /// (every non-flat edge of a flat-shaded shape; the concave edges of a smooth-shaded one, see
   /// CreaseSet).
   bool crease = false;
+  /// A crease of a smooth-shaded shape (CreaseSet::Concave or All): seen from a point for which
+  /// it is no silhouette, its radiance jumps only in the slivers where one face's shading normal
+  /// and geometric normal disagree, which few paths find (docs/design-notes.md "Crease samples").
+  bool smooth_crease = false;
 };
 
 /// True iff the radiance seen from p can jump across edge e: a silhouette or boundary edge
@@ -67,6 +71,7 @@ struct ForestNode {
   Box3 bp;                  ///< primal box B_p of the patch's edge endpoints (world, scene units)
   double lw = 0.0;          ///< L_w = sum of edge length * exterior dihedral angle (units * rad);
                             ///< always_edge_weight() for always-candidate trees
+  double lw_smooth = 0.0;   ///< the part of lw from smooth creases (ForestEdge::smooth_crease)
   int first = 0;            ///< first child (inner) or first edge (leaf)
   int count = 0;            ///< number of children (inner) or edges (leaf)
   int edge_begin = 0;       ///< first edge of the subtree in edges() (always_edges() if kNodeAlways)

@@ -219,6 +219,20 @@ SilhouetteSample sample_on_edge(const ForestEdge& e, double pmf, const Silhouett
 /// "Importance".
 inline constexpr double kConeImportanceSin = 0.5;
 
+/// Factor on both weights (importance and defensive) of a smooth crease (ForestEdge::smooth_crease)
+/// that is no silhouette for p, under the cosine lobe: at a leaf or flat choice, as a loose
+/// always-candidate, and on its part of a node's L_w (ForestNode::lw_smooth). Such a crease's
+/// radiance jumps only in the slivers where a face's shading and geometric normals disagree, and
+/// the two paths with common random numbers that estimate the jump differ rarely: 97–98 % of the
+/// crease samples contributed nothing, and at diffuse vertices the creases held ≤ 1 % of the
+/// boundary term's second moment (docs/design-notes.md "Crease samples"). A weight below 1 keeps
+/// the choice unbiased (every probability stays positive). Not under glossy lobes: seen through
+/// a narrow lobe the sliver jumps carry more (a global factor cost the glossy-mirror reverse-mode
+/// test its power). Measured (256², 16 spp, 23 seeds, the same seeds with factor 1, relative MSE
+/// against the FD references of docs/results.md times time): efficiency shadow-quad 1.25×, direct
+/// 1.11×, spot-mirror 1.07× with 0.1; 1.20×, 1.10×, 1.04× with 0.3.
+inline constexpr double kSmoothCreaseWeight = 0.1;
+
 /// Importance I and defensive weight G of a node for the query (see the file comment).
 /// fbar is the mean of f_s cos times the radiance over the box's solid angle: exactly (LTC
 /// integrals over the box's outline, clipped by each light's pyramid) for near boxes; for a box
@@ -235,7 +249,8 @@ inline constexpr double kConeImportanceSin = 0.5;
 /// LTC's support: only where the exact fbar is zero, up to the ellipse approximation (the test
 /// below finds no exception; the defensive share covers any); within 3 % of it for boxes under
 /// sin α ≤ 0.05 wholly above the horizon and wholly in or out of each light
-/// (tests/edgetree/node_importance_test.cpp).
+/// (tests/edgetree/node_importance_test.cpp). Both weights use L_w with its smooth creases' part
+/// times kSmoothCreaseWeight under the cosine lobe.
 struct NodeWeight {
   double importance = 0;
   double defensive = 0;
@@ -250,12 +265,14 @@ NodeWeight node_weight(const ForestNode& node, const SilhouetteQuery& query);
 /// distance of its midpoint) takes EdgeMixture::far_total instead (the same components with the
 /// edge's distance taken as its midpoint's: no LTC set-up, no angles), within 3 % of the
 /// integral for edges shorter than 0.1 × their distance wholly above the horizon and wholly in
-/// or out of each light (tests/edgetree/edge_importance_test.cpp).
+/// or out of each light (tests/edgetree/edge_importance_test.cpp). Both weights times
+/// kSmoothCreaseWeight where it applies.
 NodeWeight leaf_edge_weight(const ForestEdge& e, const SilhouetteQuery& q);
 
 /// Importance of a loose always-candidate edge, which competes with the forest roots: on the
 /// roots' scale (a node's I is about π times the radiance-weighted integral over its silhouettes),
-/// π × the radiance-weighted LTC integral; defensive weight π × length / distance².
+/// π × the radiance-weighted LTC integral; defensive weight π × length / distance²; both times
+/// kSmoothCreaseWeight where it applies.
 NodeWeight loose_edge_weight(const ForestEdge& e, const SilhouetteQuery& q);
 
 /// The normal-velocity factor of an edge for the query (1 without velocities): the mean over its
