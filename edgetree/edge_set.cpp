@@ -89,7 +89,7 @@ std::vector<std::pair<int, int>> build_topology(std::vector<ForestEdge>& edges, 
       n.bp.expand(edges[k].p0);
       n.bp.expand(edges[k].p1);
       n.lw += always ? always_edge_weight(edges[k]) : edges[k].length * edges[k].angle;
-      if (edges[k].smooth_crease) n.lw_smooth += always_edge_weight(edges[k]);
+      if (edges[k].smooth_crease && edges[k].cls == EdgeClass::Concave) n.lw_smooth += always_edge_weight(edges[k]);
     }
   });
   return levels;

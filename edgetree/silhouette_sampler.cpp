@@ -338,7 +338,7 @@ NodeWeight node_weight(const ForestNode& node, const Prepared& pq) {
   const double d2 = (c - q.p).squaredNorm();
   const double h2 = std::max(d2, half_diag * half_diag);
   NodeWeight w;
-  // L_w with the smooth creases' part weighed by kSmoothCreaseWeight under the cosine lobe.
+  // L_w with its concave smooth creases' part weighed by kSmoothCreaseWeight under the cosine lobe.
   const double lw = pq.cosine_lobe ? node.lw - (1.0 - kSmoothCreaseWeight) * node.lw_smooth : node.lw;
   w.defensive = h2 > 0 ? lw / h2 : lw;
   if (half_diag * half_diag < kConeImportanceSin * kConeImportanceSin * d2) {
@@ -357,7 +357,8 @@ NodeWeight node_weight(const ForestNode& node, const Prepared& pq) {
     // environment's, and each light's over its own solid angle (its LTC integral; a light can lie
     // anywhere in the box's solid angle).
     double integral = q.env_weight;
-    for (const LocalLight& light : pq.lights) integral += light.weight * ltc_polygon_integral(q.ltc, light.corners, true);
+    for (const LocalLight& light : pq.lights)
+      integral += light.weight * ltc_polygon_integral(q.ltc, light.corners, true);
     fbar = integral * q.ltc.norm / (4.0 * kPi);
   } else if (sil.polygon.count >= 3) {
     SmallPolygon local;

@@ -21,10 +21,13 @@
 ///   taking |w_t| as d on the longest edges of the form.
 /// Fixed seed; 5000 random edges, 20 000 quadrature points each.
 /// - The smooth-crease factor (kSmoothCreaseWeight): exact ratios of the weights of one edge or
-///   node with and without its smooth creases, under the cosine lobe and glossy lobes.
+///   node with and without its smooth creases, under the cosine lobe and glossy lobes; the
+///   build's marks and sums on Spot (one-sided, twosided, flat-shaded).
 
+#include "qsil/edgetree/edge_set.h"
 #include "qsil/edgetree/ltc.h"
 #include "qsil/edgetree/silhouette_sampler.h"
+#include "baselines/baseline_test_util.h"
 #include "chi2.h"
 #include "importance_cases.h"
 
@@ -188,7 +191,7 @@ void make_crease(ForestEdge& e, const Vec3& p, bool silhouette, bool smooth) {
 /// and every weight under a glossy lobe, are the full ones. 400 random edges (Case).
 TEST(EdgeImportanceTest, SmoothCreasesThatAreNoSilhouetteWeighLessUnderTheCosineLobe) {
   TestRng rng(20261124);
-  int reduced = 0, nonzero_importance = 0;
+  int nonzero_importance = 0;
   for (int i = 0; i < 400; ++i) {
     const bool glossy = i % 2 == 1;
     Case c(rng, glossy);
@@ -198,7 +201,6 @@ TEST(EdgeImportanceTest, SmoothCreasesThatAreNoSilhouetteWeighLessUnderTheCosine
       make_crease(smooth, c.q.p, silhouette, true);
       ASSERT_EQ(edge_is_silhouette(smooth, c.q.p), silhouette) << "case " << i;
       const double factor = !glossy && !silhouette ? kSmoothCreaseWeight : 1.0;
-      reduced += factor < 1;
       for (const auto weigh : {&leaf_edge_weight, &loose_edge_weight}) {
         const NodeWeight a = weigh(flat, c.q), b = weigh(smooth, c.q);
         ASSERT_GT(a.defensive, 0) << "case " << i;
@@ -207,20 +209,59 @@ TEST(EdgeImportanceTest, SmoothCreasesThatAreNoSilhouetteWeighLessUnderTheCosine
         EXPECT_NEAR(b.defensive, factor * a.defensive, 1e-12 * a.defensive) << "case " << i;
       }
     }
+    // A node whose L_w is all smooth creases (share 1) or partly (share 0.4).
     ForestNode node;
     node.flags = kNodeAlways | kNodeLeaf;
     node.bp.expand(c.e.p0);
     node.bp.expand(c.e.p1);
     node.lw = always_edge_weight(c.e);
-    ForestNode smooth_node = node;
-    smooth_node.lw_smooth = node.lw;
-    const NodeWeight a = node_weight(node, c.q), b = node_weight(smooth_node, c.q);
-    const double factor = glossy ? 1.0 : kSmoothCreaseWeight;
-    EXPECT_NEAR(b.importance, factor * a.importance, 1e-12 * a.importance) << "node, case " << i;
-    EXPECT_NEAR(b.defensive, factor * a.defensive, 1e-12 * a.defensive) << "node, case " << i;
+    const NodeWeight a = node_weight(node, c.q);
+    for (const double share : {1.0, 0.4}) {
+      ForestNode smooth_node = node;
+      smooth_node.lw_smooth = share * node.lw;
+      const NodeWeight b = node_weight(smooth_node, c.q);
+      const double factor = glossy ? 1.0 : 1.0 - share * (1.0 - kSmoothCreaseWeight);
+      EXPECT_NEAR(b.importance, factor * a.importance, 1e-12 * a.importance) << "node, case " << i;
+      EXPECT_NEAR(b.defensive, factor * a.defensive, 1e-12 * a.defensive) << "node, case " << i;
+    }
   }
-  EXPECT_EQ(reduced, 200);
   EXPECT_GT(nonzero_importance, 100);  // the importance ratios were tested where they are not 0 = 0
+}
+
+/// The build's side: built as the renderer builds a one-sided smooth shape (CreaseSet::Concave)
+/// or a twosided one (All), Spot's creases are marked smooth_crease and every always-candidate
+/// node's lw_smooth is the always_edge_weight sum of its concave creases (its convex ones, in
+/// the twosided build, not); flat-shaded (face_normals), no crease is marked and lw_smooth is 0.
+TEST(EdgeImportanceTest, SmoothCreasesAreMarkedAndTheirNodesSumTheConcaveOnes) {
+  const TriangleMesh spot = baselines_test::test_mesh("spot.obj");
+  for (const int build : {0, 1, 2}) {
+    ForestShapeInput in{&spot, 0, /*face_normals=*/build == 2, build == 1 ? CreaseSet::All : CreaseSet::Concave};
+    const EdgeSet set = EdgeSet::build(std::span<const ForestShapeInput>(&in, 1));
+    int creases = 0, convex = 0, always_nodes = 0;
+    for (const ForestEdge& e : set.always_edges()) {
+      creases += e.crease;
+      convex += e.crease && e.cls == EdgeClass::Convex;
+      EXPECT_EQ(e.smooth_crease, e.crease && build != 2);
+    }
+    EXPECT_GT(creases, 2000) << "build " << build;
+    if (build > 0) {
+      EXPECT_GT(convex, 2000) << "build " << build;
+    }
+    for (const ForestNode& n : set.nodes()) {
+      if (!(n.flags & kNodeAlways)) continue;
+      ++always_nodes;
+      double sum = 0;
+      for (int k = n.edge_begin; k < n.edge_end; ++k) {
+        const ForestEdge& e = set.always_edges()[size_t(k)];
+        if (e.smooth_crease && e.cls == EdgeClass::Concave) sum += always_edge_weight(e);
+      }
+      EXPECT_NEAR(n.lw_smooth, sum, 1e-9 * n.lw) << "build " << build;
+      if (build == 2) {
+        EXPECT_EQ(n.lw_smooth, 0.0);
+      }
+    }
+    EXPECT_GT(always_nodes, 100) << "build " << build;
+  }
 }
 
 }  // namespace

@@ -71,7 +71,8 @@ struct ForestNode {
   Box3 bp;                  ///< primal box B_p of the patch's edge endpoints (world, scene units)
   double lw = 0.0;          ///< L_w = sum of edge length * exterior dihedral angle (units * rad);
                             ///< always_edge_weight() for always-candidate trees
-  double lw_smooth = 0.0;   ///< the part of lw from smooth creases (ForestEdge::smooth_crease)
+  double lw_smooth = 0.0;   ///< the part of lw from concave smooth creases (ForestEdge::smooth_crease;
+                            ///< a twosided smooth shape's convex creases, often its silhouettes, not)
   int first = 0;            ///< first child (inner) or first edge (leaf)
   int count = 0;            ///< number of children (inner) or edges (leaf)
   int edge_begin = 0;       ///< first edge of the subtree in edges() (always_edges() if kNodeAlways)
