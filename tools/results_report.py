@@ -41,13 +41,13 @@ METHODS = ["quadric", "vsphere", "uniform", "fd"]
 WHY_FD_WINS = (
     "FD at the reference's own step (column `fd (ref. step)`) shares the reference's step bias, which no other "
     "method does, so its error is understated by up to that bias. Why FD at a good step still wins on "
-    "`shadow-quad` (and ties on `spot-mirror`), measured on 2026-11-24 after the sample allocation (secondary "
-    "boundary term at 0.5 traversals and primary at 0.25 samples per pixel sample; `python3 "
-    "tools/bench/grad_cost.py --perf`, 256², 16 spp, 2 threads): `grad` costs 6.5× (spot-mirror), 7.1× "
-    "(shadow-quad) and 5.4× (direct) `render` per sample (9.6×, 15.6× and 8.6× before), the boundary term "
-    "71–77 % of it, mostly importance (of nodes: LTC integrals over box outlines and bounding cones; of edges: "
-    "LTC line integrals) and the rejection tests, 36–44 % of its traversals contributing nothing; Embree takes "
-    "9 %, 18 % and 16 % of the samples. And its per-pixel samples are heavy-tailed: on `shadow-quad` the secondary boundary term at points on "
+    "`shadow-quad` (by 1.8×, within the target's 2×) and ties on `spot-mirror`, measured on 2026-11-24 after the "
+    "smooth-crease weight (`python3 tools/bench/grad_cost.py --perf`, 256², 16 spp, 2 threads): `grad` costs "
+    "6.0× (spot-mirror), 6.7× (shadow-quad) and 4.9× (direct) `render` per sample (9.6×, 15.6× and 8.6× before "
+    "the sample allocation: secondary boundary term at 0.5 traversals and primary at 0.25 samples per pixel "
+    "sample), the boundary term 68–76 % of it, mostly importance (of nodes: LTC integrals over box outlines and "
+    "bounding cones; of edges: LTC line integrals) and the rejection tests, 31–36 % of its traversals "
+    "contributing nothing; Embree takes 10 %, 17 % and 16 % of the samples. And its per-pixel samples are heavy-tailed: on `shadow-quad` the secondary boundary term at points on "
     "the bunny, where a bunny edge millimetres away cuts the area light (a self-shadow penumbra far narrower "
     "than a pixel) and p, reached by a fixed direction at a grazing angle, slides fast (one such sample held 32 % "
     "of the per-pixel variance of 16 runs of 16 spp at 128², `docs/design-notes.md`, \"Narrow self-shadow "
@@ -58,10 +58,10 @@ WHY_FD_WINS = (
     "smooth in θ. Where the quadric method wins: `direct`, where FD at a step small enough not to blur Spot's "
     "outline is noisy (the quadric method's interior tails there were cut by the defensive mixture for "
     "derivative paths, `docs/design-notes.md`), and with several parameters (eight, where FD "
-    "pays 16 renders per sample): ahead on all three scenes, by at least 2.0× on `shadow-quad` (est. 2.2; 1.6× "
-    "before the choice among the non-split candidates was made afresh, `docs/architecture.md` §5 "
-    "\"Splitting\"), at least 6.4× on `direct` and at least 3.1× on `spot-mirror` (bounds: the references' "
-    "floors are above 1/10 of quadric's errors). Until 2026-11-24 FD's default step for rotations and scales was 10⁻³ rad / 10⁻³, which "
+    "pays 16 renders per sample): ahead on all three scenes, by at least 3.1× on `shadow-quad` (est. 3.4; 2.0× "
+    "before the smooth-crease weight, 1.6× before the choice among the non-split candidates was made afresh, "
+    "`docs/architecture.md` §5 \"Splitting\"), at least 6.7× on `direct` and at least 3.2× on `spot-mirror` "
+    "(bounds: the references' floors are above 1/10 of quadric's errors). Until 2026-11-24 FD's default step for rotations and scales was 10⁻³ rad / 10⁻³, which "
     "moved the bunny 35–43× and Spot 7–12× less than a translation's h0, so FD on those parameters was that many "
     "times noisier and the k = 8 ratios were overstated (shadow-quad 7.7× then); h0 now moves every kind's "
     "fastest vertex by 10⁻³ of the scene's diagonal. FD's weaknesses: 2k renders for k "
@@ -89,24 +89,30 @@ def cpu_model():
 def compare_run(args, d, entry, budgets, cmd):
     """Runs `qsil compare` (`cmd`, writing into `d`), or with --reuse keeps d's earlier results.json when
     it was made against the same reference (file, spp and steps, kept in d/reference.json) and budgets.
-    Returns (results.json, whether it was reused)."""
+    Returns (results.json, whether it was reused, the commit and date of the qsil that made it: git_commit()
+    when the run starts, kept in d/made_by.json; "unknown" for a reused comparison without that file)."""
     done = os.path.join(ROOT, d, "results.json")
     key_path = os.path.join(ROOT, d, "reference.json")
+    made_by_path = os.path.join(ROOT, d, "made_by.json")
     key = {"file": entry["file"], "spp": entry["spp"], "steps": entry["steps"]}
     if args.reuse and os.path.exists(done) and os.path.exists(key_path):
         old = json.load(open(done))
         if json.load(open(key_path)) == key and old["targets"] == [float(b) for b in budgets.split(",")]:
             print(f"results_report: reusing {d}/results.json", flush=True)
-            return old, True
+            made_by = (json.load(open(made_by_path)) if os.path.exists(made_by_path)
+                       else {"commit": "unknown", "date": "unknown"})
+            return old, True, made_by
+    made_by = {"commit": git_commit(), "date": time.strftime("%Y-%m-%d")}
     run(cmd)
-    with open(key_path, "w") as f:
-        json.dump(key, f)
-    return json.load(open(done)), False
+    for path, data in ((key_path, key), (made_by_path, made_by)):
+        with open(path, "w") as f:
+            json.dump(data, f)
+    return json.load(open(done)), False, made_by
 
 
 def compare(args, scene, kset, res, budgets, entry):
     """Runs `qsil compare` for one scene and parameter set against its reference (or reuses it,
-    compare_run); returns results.json."""
+    compare_run); returns results.json and the commit and date of the qsil that made it."""
     xml = os.path.join("scenes", scene + ".xml")
     name = f"{scene}-{kset}"
     d = os.path.join("out", "results", name)
@@ -114,11 +120,11 @@ def compare(args, scene, kset, res, budgets, entry):
            "--threads", str(args.threads), "--methods", ",".join(METHODS), "--budgets", budgets,
            "--reference", entry["file"], "-q", "--out", d]
     os.environ.setdefault("QSIL_PYTHON", sys.executable)  # compare draws its charts with this python
-    result, reused = compare_run(args, d, entry, budgets, cmd)
+    result, reused, made_by = compare_run(args, d, entry, budgets, cmd)
     if reused and not os.path.exists(os.path.join(ROOT, d, "grid.png")):
         run([sys.executable, os.path.join("tools", "plot_compare.py"), d])
     copy_charts(d, name)
-    return result
+    return result, made_by
 
 
 def compare_fd_at_reference_step(args, scene, kset, res, budgets, entry):
@@ -165,13 +171,13 @@ def copy_charts(d, name):
         shutil.copy(os.path.join(ROOT, d, f), os.path.join(dst, f))
 
 
-def write_record(name, entry, fd_ref_rows):
+def write_record(name, entry, fd_ref_rows, made_by):
     """Writes docs/images/compare/NAME/reference.json: the section's reference record (the index entry
     of tools/references.py), the rows of FD at the reference's step (not in results.json: a comparison
-    of its own) and the commit and date of the qsil that made the comparisons. Returns the record."""
+    of its own) and `made_by`, the commit and date of the qsil that made the comparisons (compare_run).
+    Returns the record."""
     dst = record_dir(name)
-    record = dict(entry, fd_ref_step_rows=fd_ref_rows,
-                  comparison={"commit": git_commit(), "date": time.strftime("%Y-%m-%d")})
+    record = dict(entry, fd_ref_step_rows=fd_ref_rows, comparison=made_by)
     with open(os.path.join(dst, "reference.json.tmp"), "w") as f:
         json.dump(record, f, indent=1)
     os.replace(os.path.join(dst, "reference.json.tmp"), os.path.join(dst, "reference.json"))
@@ -357,10 +363,10 @@ def main():
         if not entry:
             raise SystemExit(f"results_report: no reference {scene}-{kset}-{res} in {index_path}; run "
                              f"python3 tools/references.py --scenes {scene} --params {kset} --res {res}")
-        res_json = compare(args, scene, kset, res, budgets, entry)
+        res_json, made_by = compare(args, scene, kset, res, budgets, entry)
         fd_ref_rows = compare_fd_at_reference_step(args, scene, kset, res, budgets, entry)
         res_json["rows"] += fd_ref_rows
-        results[(scene, kset)] = (write_record(f"{scene}-{kset}", entry, fd_ref_rows), res_json)
+        results[(scene, kset)] = (write_record(f"{scene}-{kset}", entry, fd_ref_rows, made_by), res_json)
     elapsed = time.time() - started
     render_seconds = sum(r["wall_seconds"] for key, (_, res) in results.items() if key not in kept
                          for r in res["rows"])

@@ -45,6 +45,7 @@ def test_the_floor_is_judged_against_the_smaller_error():
 # report rebuilds a section it does not re-run (--only) from them, so they must say what the
 # committed docs/results.md says.
 
+import argparse  # noqa: E402
 import json  # noqa: E402
 import re  # noqa: E402
 
@@ -92,3 +93,28 @@ def test_a_kept_section_is_refused_when_its_record_is_missing_or_made_otherwise(
         results_report.kept_section(name, res, budgets + ",120")
     with pytest.raises(SystemExit, match="budgets"):
         results_report.kept_section(name, res * 2, budgets)
+
+
+def test_a_reused_comparison_keeps_the_commit_that_made_it(tmp_path, monkeypatch):
+    # compare_run records the commit when it runs qsil; --reuse returns that record, not the current HEAD
+    # (which had moved on, or was dirty, when a report was re-made from its cached comparisons).
+    monkeypatch.setattr(results_report, "ROOT", str(tmp_path))
+    entry = {"file": "ref.exr", "spp": 100, "steps": [0.001]}
+    commits = iter(["aaaaaaa", "bbbbbbb+"])
+    monkeypatch.setattr(results_report, "git_commit", lambda: next(commits))
+    runs = []
+
+    def fake_run(cmd):
+        runs.append(cmd)
+        (tmp_path / "d").mkdir(exist_ok=True)
+        (tmp_path / "d" / "results.json").write_text(json.dumps({"targets": [4.0, 15.0], "rows": []}))
+
+    monkeypatch.setattr(results_report, "run", fake_run)
+    args = argparse.Namespace(reuse=True)
+    _, reused, made_by = results_report.compare_run(args, "d", entry, "4,15", ["qsil"])
+    assert not reused and made_by["commit"] == "aaaaaaa" and len(runs) == 1
+    _, reused, made_by = results_report.compare_run(args, "d", entry, "4,15", ["qsil"])
+    assert reused and made_by["commit"] == "aaaaaaa" and len(runs) == 1
+    # Other budgets: run again, recorded with the commit of that run.
+    _, reused, made_by = results_report.compare_run(args, "d", entry, "4,30", ["qsil"])
+    assert not reused and made_by["commit"] == "bbbbbbb+" and len(runs) == 2
