@@ -186,9 +186,10 @@ void make_crease(ForestEdge& e, const Vec3& p, bool silhouette, bool smooth) {
 
 /// Under the cosine lobe a smooth crease that is no silhouette for p weighs kSmoothCreaseWeight
 /// times the same edge as a flat-shaded shape's crease (importance and defensive weight, at a
-/// leaf and as a loose always-candidate), and an always-candidate node whose L_w is all smooth
-/// creases that factor times the same node without them; a smooth crease that is a silhouette,
-/// and every weight under a glossy lobe, are the full ones. 400 random edges (Case).
+/// leaf and as a loose always-candidate), and an always-candidate node whose L_w is a share s of
+/// smooth creases (lw_smooth; s = 1 and 0.4) 1 − s (1 − kSmoothCreaseWeight) times the same node
+/// without them; a smooth crease that is a silhouette, and every weight under a glossy lobe, are
+/// the full ones. 400 random edges (Case).
 TEST(EdgeImportanceTest, SmoothCreasesThatAreNoSilhouetteWeighLessUnderTheCosineLobe) {
   TestRng rng(20261124);
   int nonzero_importance = 0;
