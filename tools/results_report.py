@@ -60,7 +60,7 @@ WHY_FD_WINS = (
     "derivative paths, `docs/design-notes.md`), and with several parameters (eight, where FD "
     "pays 16 renders per sample): ahead on all three scenes, by at least 3.1× on `shadow-quad` (est. 3.4; 2.0× "
     "before the smooth-crease weight, 1.6× before the choice among the non-split candidates was made afresh, "
-    "`docs/architecture.md` §5 \"Splitting\"), at least 6.7× on `direct` and at least 3.2× on `spot-mirror` "
+    "`docs/architecture.md` §5 \"Splitting\"), at least 6.6× on `direct` and at least 3.1× on `spot-mirror` "
     "(bounds: the references' floors are above 1/10 of quadric's errors). Until 2026-11-24 FD's default step for rotations and scales was 10⁻³ rad / 10⁻³, which "
     "moved the bunny 35–43× and Spot 7–12× less than a translation's h0, so FD on those parameters was that many "
     "times noisier and the k = 8 ratios were overstated (shadow-quad 7.7× then); h0 now moves every kind's "
