@@ -4,6 +4,7 @@ methods are known or expected to fail; writes docs/stability.md and docs/images/
 
 Usage: python3 tools/stability_study.py [--qsil PATH] [--budget 2] [--res 48]
        [--ref-spp 32768] [--ref-step-factor 0.25] [--threads 2] [--only NAME,...]
+       [--force-references]
 
 Per scene (scenes/stability/params.txt lists name, parameter, question): an FD reference
 (`qsil reference --method fd`, per-pixel standard errors) at --ref-step-factor times qsil's
@@ -15,6 +16,12 @@ others. Reported: non-finite pixels (must be 0), agreement of the image sum with
 (z = error / combined standard error; |z| < 3 passes; FD is biased by O(h^2)), relative MSE, and
 the zero-contribution rate of the boundary samples. qsil runs in the repository root with
 repository-relative paths, so the results.json files carry no absolute paths.
+
+References are cached (most of the study's time): out/stability/<name>-ref.exr is reused when its
+record (<name>-ref.json) holds the same scene files (references.scene_digest: the XML and every mesh
+and map it names), parameter, resolution, spp, steps and threads; --force-references re-renders
+them. FD references use the primal renderer alone, so an estimator change leaves them valid; after
+a change to the primal renderer, force them. The record keeps the commit that rendered it.
 """
 import argparse
 import json
@@ -24,10 +31,46 @@ import subprocess
 import sys
 import time
 
-from references import JUDGE_FLOOR_SHARE, default_steps
+from references import JUDGE_FLOOR_SHARE, default_steps, scene_digest
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 METHODS = ["quadric", "quadric-box", "vsphere", "uniform", "fd"]
+
+
+def git_commit():
+    """The repository's HEAD commit (short), "unknown" outside a git checkout."""
+    r = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True, cwd=ROOT)
+    return r.stdout.strip() if r.returncode == 0 else "unknown"
+
+
+def reference_key(args, xml, param, steps):
+    """What a cached reference must have been made from (see the module docstring)."""
+    return {"scene": scene_digest(xml), "param": param, "res": args.res, "spp": args.ref_spp,
+            "steps": [f"{h:.9g}" for h in steps], "threads": args.threads}
+
+
+def make_reference(args, xml, common, param, steps, ref):
+    """Renders the FD reference `ref` (relative to ROOT), or reuses it when its record matches
+    (reference_key) and --force-references is not given; writes the record after a render, so a
+    failed or interrupted one leaves none. Returns None, or the error to record for every method."""
+    key = reference_key(args, xml, param, steps)
+    record = ref[:-len(".exr")] + ".json"
+    if not args.force_references and os.path.exists(ref) and os.path.exists(record):
+        made = json.load(open(record))
+        if made.get("key") == key:
+            print(f"{ref}: reused (rendered by {made.get('commit', 'unknown')})", flush=True)
+            return None
+    if os.path.exists(record):
+        os.remove(record)
+    commit = git_commit()
+    r = subprocess.run([args.qsil, "reference", xml, *common, "--method", "fd", "--spp", str(args.ref_spp), "-q",
+                        "-o", ref, *sum((["--h", f"{h:.9g}"] for h in steps), [])], capture_output=True, text=True)
+    if r.returncode != 0:
+        print(f"{ref}: reference failed: {r.stderr.strip()[-300:]}", flush=True)
+        return f"reference failed ({r.returncode})"
+    with open(record, "w") as f:
+        json.dump({"key": key, "commit": commit}, f)
+    return None
 
 
 def run_methods(args, xml, common, ref, work, img_root, name):
@@ -139,6 +182,8 @@ def main():
                     help="the reference's FD step over qsil's default step h0 (FD in the table uses h0)")
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--only", default="")
+    ap.add_argument("--force-references", action="store_true",
+                    help="re-render the FD references even where a cached one matches")
     args = ap.parse_args()
     args.qsil = os.path.abspath(args.qsil)
     os.chdir(ROOT)  # qsil gets repository-relative paths
@@ -163,11 +208,9 @@ def main():
             table.append((name, param, question, {m: {"error": "reference step failed"} for m in METHODS}))
             print(f"{name}: {e}", flush=True)
             continue
-        r = subprocess.run([args.qsil, "reference", xml, *common, "--method", "fd", "--spp", str(args.ref_spp), "-q",
-                            "-o", ref, *sum((["--h", f"{h:.9g}"] for h in steps), [])], capture_output=True, text=True)
-        if r.returncode != 0:
-            table.append((name, param, question, {m: {"error": f"reference failed ({r.returncode})"} for m in METHODS}))
-            print(f"{name}: reference failed: {r.stderr.strip()[-300:]}", flush=True)
+        error = make_reference(args, xml, common, param, steps, ref)
+        if error:
+            table.append((name, param, question, {m: {"error": error} for m in METHODS}))
             continue
         per = run_methods(args, xml, common, ref, work, img_root, name)
         table.append((name, param, question, per))

@@ -1,0 +1,61 @@
+"""tools/stability_study.py's reference cache: a cached FD reference is reused only when it was made from the
+same scene files, parameter, resolution, spp, steps and threads, and a failed render leaves no record.
+
+Run by ctest with the bindings' suite (tests/CMakeLists.txt, QSIL_SOURCE_DIR=<repository>). qsil and git are
+replaced by a fake subprocess.run that counts renders and writes the reference file a render would.
+"""
+import argparse
+import os
+import subprocess
+import sys
+
+ROOT = os.environ.get("QSIL_SOURCE_DIR", os.path.join(os.path.dirname(__file__), "..", ".."))
+sys.path.insert(0, os.path.join(ROOT, "tools"))
+
+import references  # noqa: E402
+import stability_study  # noqa: E402
+
+
+def test_a_reference_is_reused_only_when_everything_it_was_made_from_matches(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(references, "ROOT", str(tmp_path))
+    (tmp_path / "scene.xml").write_text('<scene><string name="filename" value="mesh.obj"/></scene>')
+    (tmp_path / "mesh.obj").write_text("v 0 0 0\n")
+    renders = []
+    fail = {"next": False}
+
+    def fake_run(cmd, **kwargs):
+        if cmd[0] == "git":
+            return subprocess.CompletedProcess(cmd, 0, "abc1234\n", "")
+        renders.append(cmd)
+        if fail["next"]:
+            fail["next"] = False
+            return subprocess.CompletedProcess(cmd, 1, "", "qsil: error")
+        open(cmd[cmd.index("-o") + 1], "w").write("exr")
+        return subprocess.CompletedProcess(cmd, 0, "", "")
+
+    monkeypatch.setattr(stability_study.subprocess, "run", fake_run)
+    args = argparse.Namespace(qsil="qsil", res=48, ref_spp=100, threads=2, force_references=False)
+
+    def make(steps=(0.001,)):
+        return stability_study.make_reference(args, "scene.xml", ["-D", "res=48"], "s:translate:0,1,0", list(steps),
+                                              "ref.exr")
+
+    assert make() is None and len(renders) == 1
+    assert make() is None and len(renders) == 1  # reused
+    assert make(steps=(0.0005,)) is None and len(renders) == 2  # another step
+    assert make(steps=(0.0005,)) is None and len(renders) == 2
+    args.ref_spp = 200
+    assert make(steps=(0.0005,)) is None and len(renders) == 3  # more spp
+    (tmp_path / "mesh.obj").write_text("v 0 0 1\n")
+    assert make(steps=(0.0005,)) is None and len(renders) == 4  # a mesh the scene names changed
+    args.force_references = True
+    assert make(steps=(0.0005,)) is None and len(renders) == 5
+    args.force_references = False
+    # A failed render returns its error and leaves no record: the next run renders again.
+    args.threads = 1
+    fail["next"] = True
+    assert make(steps=(0.0005,)) == "reference failed (1)" and len(renders) == 6
+    assert not os.path.exists("ref.json")
+    assert make(steps=(0.0005,)) is None and len(renders) == 7
+    assert make(steps=(0.0005,)) is None and len(renders) == 7
