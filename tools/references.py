@@ -82,6 +82,15 @@ def run(cmd, check=True):
     return p.returncode, p.stdout, time.time() - t
 
 
+def git_commit():
+    """The repository's HEAD commit (short; "unknown" outside a git checkout), with "+" when a tracked
+    file outside docs/ (what the reports write) differs from it: the commit of the qsil that renders."""
+    head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True, text=True)
+    dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no", "--", ".", ":!docs"], cwd=ROOT,
+                           capture_output=True, text=True)
+    return (head.stdout.strip() or "unknown") + ("+" if dirty.stdout.strip() else "")
+
+
 def scene_digest(xml):
     """sha256 of the scene file and of every file it names (meshes, env maps)."""
     h = hashlib.sha256()

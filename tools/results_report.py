@@ -31,7 +31,7 @@ import subprocess
 import sys
 import time
 
-from references import bias_upper_bound, floor_can_judge
+from references import bias_upper_bound, floor_can_judge, git_commit
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SCENES = [("spot-mirror", "spot:translate:0,1,0"), ("shadow-quad", "object:translate:0,1,0"),
@@ -147,15 +147,6 @@ def largest_budget_rows(res_json):
     """A comparison's rows at its largest budget that have a relative MSE, by method."""
     last = max(res_json["targets"])
     return {r["method"]: r for r in res_json["rows"] if r["target"] == last and r["rel_mse"] is not None}
-
-
-def git_commit():
-    """The repository's HEAD commit (short), with "+" when a tracked file outside docs/ (what the report
-    writes) differs from it."""
-    head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True, text=True)
-    dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no", "--", ".", ":!docs"], cwd=ROOT,
-                           capture_output=True, text=True)
-    return (head.stdout.strip() or "unknown") + ("+" if dirty.stdout.strip() else "")
 
 
 def record_dir(name):

@@ -31,16 +31,10 @@ import subprocess
 import sys
 import time
 
-from references import JUDGE_FLOOR_SHARE, default_steps, scene_digest
+from references import JUDGE_FLOOR_SHARE, default_steps, git_commit, scene_digest
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 METHODS = ["quadric", "quadric-box", "vsphere", "uniform", "fd"]
-
-
-def git_commit():
-    """The repository's HEAD commit (short), "unknown" outside a git checkout."""
-    r = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True, cwd=ROOT)
-    return r.stdout.strip() if r.returncode == 0 else "unknown"
 
 
 def reference_key(args, xml, param, steps):
