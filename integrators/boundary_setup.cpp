@@ -15,6 +15,12 @@
 #include <string>
 
 namespace qsil {
+namespace {
+
+/// Whether shape s is a quad area light of the light-aware importance (an emitting rectangle).
+bool is_quad_light(const Shape& s) { return s.is_emitter && s.type == "rectangle" && s.mesh.positions.size() == 4; }
+
+}  // namespace
 
 BoundarySetup build_boundary_setup(const Scene& scene, Method method) {
   QSIL_CHECK_MSG(samples_edges(method), "no edge sampler for method " << method_name(method));
@@ -28,12 +34,16 @@ BoundarySetup build_boundary_setup(const Scene& scene, Method method) {
     options.fit.fit_quadrics = uses_quadrics(method);
     auto forest = std::make_unique<edgetree::EdgeForest>(edgetree::EdgeForest::build(inputs, options));
     out.forest = forest.get();
-    // Contour sets for narrow lobes: the quadric method only (quadric-box is the paper's
-    // ablation, kept as the paper traverses), in scenes with a glossy BSDF on some shape.
+    // Contour sets for narrow lobes and small quad lights: the quadric method only (quadric-box
+    // is the paper's ablation, kept as the paper traverses), in scenes with a glossy BSDF on some
+    // shape or a quad light (set_light_importance's).
     const bool glossy = std::any_of(scene.shapes.begin(), scene.shapes.end(), [&](const Shape& s) {
       return s.bsdf >= 0 && scene.bsdfs[size_t(s.bsdf)].type == BSDFDesc::Type::RoughConductor;
     });
-    if (method == Method::Quadric && glossy)
+    const bool quad_light = std::any_of(scene.shapes.begin(), scene.shapes.end(), [](const Shape& s) {
+      return is_quad_light(s);
+    });
+    if (method == Method::Quadric && (glossy || quad_light))
       out.contours = std::make_unique<edgetree::ContourIndex>(edgetree::ContourIndex::build(inputs, *forest));
     out.sampler = std::make_unique<edgetree::QuadricEdgeSampler>(*forest, method);
     out.edges = std::move(forest);
@@ -53,11 +63,12 @@ BoundarySetup build_boundary_setup(const Scene& scene, Method method) {
 void set_light_importance(const Scene& scene, const EnvironmentLight& environment, BoundaryContext& context) {
   context.lights.clear();
   for (const Shape& s : scene.shapes) {
-    if (!s.is_emitter || s.type != "rectangle" || s.mesh.positions.size() != 4) continue;
+    if (!is_quad_light(s)) continue;
     edgetree::LightPolygon light;
     for (int i = 0; i < 4; ++i) light.corners[size_t(i)] = s.mesh.positions[size_t(i)];
     light.normal = s.mesh.face_cross(0).normalized();
     light.weight = luminance(s.radiance);
+    light.shape = int(&s - scene.shapes.data());
     context.lights.push_back(light);
   }
   context.emission.clear();

@@ -13,14 +13,19 @@
 // - the traversal alone (no contour index).
 // Each must agree with the reference within 4 standard errors (two-sided, ~99.99 % for a correct
 // estimator) with a standard error below 1 % of it: a 5 % bias is caught.
-// Occluders:
+// Cases (each a point p whose contour set's core the occluder's outline crosses):
+// - at the mirror's p (the lobe's core), occluders:
 // - a smooth-shaded icosphere (1280 faces, radius 0.5): its contour set must carry at least half
 //   the reference (so dropping the traversal's points on it, or not, is a difference of that
 //   size), and the contour estimator's variance must be at least 2x lower;
 // - an open quad, whose four outline edges are loose always-candidates, split (estimated at every
 //   traversal with probability 1): the contour set holds split edges, which must stay the
 //   splitting's (counting them in both strategies is a bias of their share of the reference,
-//   asserted above 50 %).
+//   asserted above 50 %);
+// - at a diffuse p on a static floor under a small quad light (0.4 x 0.4 at height 2.5, half-angle
+//   0.11 rad from p; the light's core, boundary_term.h light_core), the icosphere half across the
+//   light's cone from p (a penumbra): its contour set must carry at least half the reference and
+//   cut the variance at least 2x.
 #include "integrators/boundary_oracle.h"
 #include "integrators/boundary_setup.h"
 #include "integrators/light_setup.h"
@@ -60,6 +65,28 @@ Scene glossy_scene(Shape occluder) {
   return s;
 }
 
+/// A static diffuse floor (z = 0, white) under a small square light (0.4 x 0.4 at z = 2.5,
+/// facing down, radiance 10), `occluder` (black, id "occluder") and no environment; the camera
+/// as in glossy_scene (p on the floor).
+Scene light_scene(Shape occluder) {
+  Scene s;
+  BSDFDesc white, black;
+  white.reflectance = Color::Constant(0.8);
+  black.reflectance = Color::Zero();
+  s.bsdfs = {white, black};
+  s.shapes.push_back(oracle::square("floor", -5, 5, -5, 5, 0, false, 0));
+  Shape light = oracle::square("light", -0.2, 0.2, -0.2, 0.2, 2.5, true, 1);
+  light.is_emitter = true;
+  light.radiance = Color::Constant(10.0);
+  s.shapes.push_back(light);
+  occluder.id = "occluder";
+  occluder.bsdf = 1;
+  s.shapes.push_back(occluder);
+  s.camera = test::look_at(kP + 3.0 * kWo, kP, 40, 16, 16, 1);
+  s.max_depth = 2;  // camera -> p -> edge point -> light
+  return s;
+}
+
 struct Mean {
   double mean = 0, se = 0, var = 0;
 };
@@ -85,7 +112,7 @@ OracleResult run_oracle(const Scene& scene) {
   SetupReport setup;
   set_up_boundary_term(scene, tracer, Method::Quadric, &vel, vel.moving, 1, lights.environment, boundary, bctx, primary,
                        setup);
-  EXPECT_TRUE(boundary.contours && bctx.contours == boundary.contours.get()) << "a glossy scene has contour sets";
+  EXPECT_TRUE(boundary.contours && bctx.contours == boundary.contours.get()) << "a scene with a glossy BSDF or a quad light has contour sets";
   if (!bctx.contours) return r;
 
   // ---- The shading point: the camera ray's hit on the mirror at p.
@@ -107,7 +134,7 @@ OracleResult run_oracle(const Scene& scene) {
   // ---- The contour set at p (the probe as the renderer makes it) and the split edges.
   int rays = 0;
   const edgetree::ContourProbe probe = contour_probe(ctx, *boundary.contours, si, Vec3(-dir), q, rays);
-  EXPECT_GT(probe.count, 0) << "the lobe's axis must meet the occluder";
+  EXPECT_GT(probe.count, 0) << "the core's axis or ring must meet the occluder";
   std::vector<const edgetree::ForestEdge*> contour;
   boundary.contours->contour_edges(probe, p, q.eligible, contour);
   EXPECT_FALSE(contour.empty());
@@ -220,6 +247,17 @@ TEST(ContourOracle, SplitEdgesInTheContourSetStayTheSplittings) {
   const OracleResult r = run_oracle(glossy_scene(quad));
   EXPECT_TRUE(r.contour_has_split_edge) << "the test needs a split edge in the contour set";
   EXPECT_GT(r.contour_share, 0.5) << "counting it twice must be a bias larger than the noise";
+}
+
+TEST(ContourOracle, PointUnderASmallLightMatchesBruteForceOverAllEdges) {
+  // The light's cone from p is about the +z axis (half-angle 0.11 rad); the sphere (radius 0.3,
+  // centre 0.25 off the axis at height 1.2) covers the axis, its outline 0.04 rad beyond it.
+  Shape sphere;
+  sphere.type = "obj";
+  sphere.mesh = test::icosphere(3, Vec3(0, 0.25, 1.2), 0.3);
+  const OracleResult r = run_oracle(light_scene(sphere));
+  EXPECT_GT(r.contour_share, 0.5) << "the contour set must carry most of the integral for the test to have power";
+  EXPECT_GT(r.without.var / r.with.var, 2.0);
 }
 
 }  // namespace

@@ -1,8 +1,8 @@
 #pragma once
 /// @file contour_set.h
-/// The contour set of a narrow BSDF lobe (docs/architecture.md §5 "Contour set"): the silhouette
-/// edges of the surface that a ray along the lobe's axis meets, found by walking over that mesh,
-/// within the lobe's core.
+/// The contour set of a narrow BSDF lobe or of a small quad light (docs/architecture.md §5
+/// "Contour sets"): the silhouette edges of the surface that a ray along the lobe's axis (or
+/// toward the light) meets, found by walking over that mesh, within the lobe's (the light's) core.
 ///
 /// Why: at a glossy vertex (GGX alpha 0.01, the mirror of scenes/spot-mirror.xml) the boundary
 /// integral is carried by a few visible silhouette edges where the lobe crosses the outline of
@@ -37,6 +37,17 @@
 /// The set is a deterministic function of p, the core and the hits; it holds only edges that
 /// are discontinuities for p.
 ///
+/// Light contour sets (docs/design-notes.md "Narrow self-shadow penumbrae"): where the lobe gives
+/// no core (a diffuse vertex, or a lobe wider than kContourMaxHalfAngle), the core is the cone
+/// from p that bounds a small quad light instead (boundary_term.h light_core: the light facing p
+/// with the largest radiance × solid angle, a circular cone of half-angle at most
+/// kContourMaxHalfAngle), and the probe rays go toward the light. In a penumbra the boundary
+/// integral is carried by the outline of the occluder in front of the light, an edge that may be
+/// millimetres from p (a self-shadow) while the traversal weighs its box by the light spread over
+/// the box's whole sphere of directions (on the teapot an edge holding 99.7 % of the importance
+/// was chosen with probability 0.023). The walks from the probe's hit find that outline the same
+/// way.
+///
 /// Unbiasedness does not depend on how well the set is chosen: the boundary term is the sum over
 /// the set (estimated by a choice among its edges, each with positive probability) plus the sum
 /// over every other edge (the traversal, whose samples of edges in the set are dropped); see
@@ -68,8 +79,9 @@ inline constexpr int kMaxContourVisits = 512;
 /// whole gradient relative to its mean square, and grad's time, against 3.51 without contour
 /// sets): 0.9: 1.75, +25 % time; 0.95: 1.60, +12 %; 0.97: 1.60, +17 %; 0.99: 1.62, +35 %.
 inline constexpr double kContourConeMass = 0.95;
-/// Lobes whose core cone is wider than this half-angle (radians) get no contour set: their
-/// visible outline is too long for one set of at most kMaxContourEdges edges to matter.
+/// Lobes (and lights, seen from p) whose core cone is wider than this half-angle (radians) get no
+/// contour set: their visible outline is too long for one set of at most kMaxContourEdges edges to
+/// matter.
 inline constexpr double kContourMaxHalfAngle = 0.3;
 
 /// Rays a probe may trace: the cone's axis, and where that does not meet an eligible shape, a

@@ -67,9 +67,10 @@
 /// choice was up to ~40 % defensive (the forest root holding the teapot's self-shadow edges 3 cm
 /// from p chosen with probability 0.32, ~0.6 now; docs/architecture.md §5 "Splitting").
 ///
-/// Contour sets (sample_silhouette_set, at glossy vertices; contour_set.h): the edges of the
-/// query's contour set that are not split are estimated by one more point of their own, and the
-/// traversal's points on them are dropped; another partition, fixed for each query.
+/// Contour sets (sample_silhouette_set, at glossy vertices and under small quad lights;
+/// contour_set.h): the edges of the query's contour set that are not split are estimated by one
+/// more point of their own, and the traversal's points on them are dropped; another partition,
+/// fixed for each query.
 
 #include "qsil/edgetree/contour_set.h"
 #include "qsil/edgetree/edge_forest.h"
@@ -90,6 +91,7 @@ struct LightPolygon {
   std::array<Vec3, 4> corners;  ///< world positions, in order around the quad
   Vec3 normal = Vec3::Zero();   ///< emitting side (unit, world)
   double weight = 0;            ///< its radiance (luminance)
+  int shape = -1;               ///< its shape in the scene (-1: none; a light contour probe passes through it)
 };
 
 /// Everything the traversal needs to know about the shading point.

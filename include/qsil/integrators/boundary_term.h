@@ -5,9 +5,10 @@
 ///   J(t) = det(w0, w1, v_t) / |w_t|^3,  v_t = d(edge point)/dtheta - dp/dtheta,
 /// estimated with the edge points of one traversal per vertex (EdgeSampler::sample_set: the
 /// traversal's point, and for the edge forest the split bright loose edges' and, at a glossy
-/// vertex, one on its contour set's edges, qsil/edgetree/contour_set.h). The velocity is
-/// relative to the shading point p, which moves when it lies on a moving shape or an earlier
-/// vertex of its path moved (p carries that derivative as a dual): then the edges of static
+/// vertex or under a small quad light, one on its contour set's edges,
+/// qsil/edgetree/contour_set.h). The velocity is relative to the shading point p, which moves
+/// when it lies on a moving shape or an earlier vertex of its path moved (p carries that
+/// derivative as a dual): then the edges of static
 /// shapes (occluders, a mirror's outline, a light's outline) contribute too, so every shape's
 /// edges are eligible; at a static p only moving shapes' edges are.
 ///
@@ -42,8 +43,9 @@ namespace qsil {
 /// What the boundary term needs besides the path context.
 struct BoundaryContext {
   const edgetree::EdgeSampler* sampler = nullptr;  ///< the --boundary method's secondary edge sampler
-  /// The mesh adjacency for contour sets at glossy vertices (contour_probe; the quadric method in
-  /// a scene with a glossy BSDF), or null for none.
+  /// The mesh adjacency for contour sets at glossy vertices and under small quad lights
+  /// (contour_probe; the quadric method in a scene with a glossy BSDF or a quad light), or null
+  /// for none.
   const edgetree::ContourIndex* contours = nullptr;
   const SceneVelocities* velocities = nullptr;
   std::vector<bool> moving;  ///< shapes with non-zero velocity (eligible at a static p)
@@ -285,52 +287,110 @@ bool edge_jump(const PathContext& ctx, const SceneVelocities& vel, const edgetre
                         });
 }
 
-/// The contour probe of a boundary query (qsil/edgetree/contour_set.h): where q's LTC is glossy
-/// and the cone that bounds its core (ltc_core_cone with kContourConeMass) has a half-angle of at
-/// most kContourMaxHalfAngle and meets an eligible shape's bounding sphere
-/// (ContourIndex::cone_meets_shapes), the core in world coordinates and the first hit of the ray
-/// from the shading point along the cone's axis, kept when it is on an eligible shape; where it
-/// is not (a miss, or a static shape in front), the first hits of kContourRingRays rays around
-/// the axis, at kContourRingAngle times the core's extent (a ring in the LTC's cosine domain
-/// mapped to the lobe, so it stays inside a stretched core), those on eligible shapes kept. Each
-/// ray passes through back faces where its direction leaves below the surface, as every ray of
-/// the path tracer does. `rays` receives the number of rays traced. A probe with no hit (count 0)
-/// gives no contour set.
+/// The core of a light contour set (qsil/edgetree/contour_set.h "Light contour sets") for query
+/// q, written into `probe` (axis, cos_half_angle, to_cosine, cos_core): of the quad lights of q
+/// whose emitting side faces p and that reach above p's shading horizon, the one with the largest
+/// radiance × area × |cos at the light| / distance² (from its centre), bounded by the circular
+/// cone about the direction to its centre through its farthest corner (a cap under π/2 holds the
+/// spherical quad of its corners); to_cosine a rotation taking the axis to +z, so the core is that
+/// cone. Returns false (probe untouched) where no light qualifies or the cone's half-angle is above
+/// kContourMaxHalfAngle. `shape` receives the light's shape (its probe rays pass through it).
+inline bool light_core(const edgetree::SilhouetteQuery& q, edgetree::ContourProbe& probe, int& shape) {
+  if (!q.lights) return false;
+  const edgetree::LightPolygon* best = nullptr;
+  double best_weight = 0;
+  Vec3 best_centre = Vec3::Zero();
+  for (const edgetree::LightPolygon& l : *q.lights) {
+    const Vec3 centre = 0.25 * (l.corners[0] + l.corners[1] + l.corners[2] + l.corners[3]);
+    const Vec3 d = centre - q.p;
+    const double d2 = d.squaredNorm();
+    const double cos_light = -l.normal.dot(d) / std::sqrt(d2);
+    if (!(cos_light > 0) || !(l.weight > 0)) continue;
+    bool above = false;
+    for (const Vec3& c : l.corners) above |= q.frame.n.dot(c - q.p) > 0;
+    if (!above) continue;
+    const double area = 0.5 * ((l.corners[2] - l.corners[0]).cross(l.corners[3] - l.corners[1])).norm();
+    const double w = l.weight * area * cos_light / d2;
+    if (w > best_weight) {
+      best_weight = w;
+      best = &l;
+      best_centre = centre;
+    }
+  }
+  if (!best) return false;
+  const Vec3 axis = (best_centre - q.p).normalized();
+  double cos_half = 1;
+  for (const Vec3& c : best->corners) cos_half = std::min(cos_half, axis.dot((c - q.p).normalized()));
+  if (!(cos_half >= std::cos(edgetree::kContourMaxHalfAngle))) return false;
+  const Vec3 s = axis.unitOrthogonal(), t = axis.cross(s);
+  probe.axis = axis;
+  probe.cos_half_angle = cos_half;
+  probe.to_cosine << s.transpose(), t.transpose(), axis.transpose();
+  probe.cos_core = cos_half;
+  shape = best->shape;
+  return true;
+}
+
+/// The contour probe of a boundary query (qsil/edgetree/contour_set.h). Its core: where q's LTC is
+/// glossy and the cone that bounds its core (ltc_core_cone with kContourConeMass) has a half-angle
+/// of at most kContourMaxHalfAngle, the lobe's core in world coordinates; elsewhere (a cosine or
+/// wide lobe) the cone of a small quad light (light_core). The probe is made where that cone meets
+/// an eligible shape's bounding sphere (ContourIndex::cone_meets_shapes): the first hit of the ray
+/// from the shading point along the cone's axis, kept when it is on an eligible shape other than
+/// the probed light (a ray that reaches the light met nothing in front of it); where it is not (a
+/// miss, the light, or a static shape in front), the first hits of kContourRingRays rays around
+/// the axis, at kContourRingAngle times the core's extent (a ring in the core's cosine domain
+/// mapped back, so it stays inside a stretched core), those kept by the same rule. Each ray passes
+/// through back faces where its direction leaves below the surface, as every ray of the path
+/// tracer does. `rays` receives the number of rays traced. A probe with no hit (count 0) gives no
+/// contour set.
 template <class T>
 edgetree::ContourProbe contour_probe(const PathContext& ctx, const edgetree::ContourIndex& contours,
                                      const SurfaceInteraction<T>& si, const Vec3& wo_world,
                                      const edgetree::SilhouetteQuery& q, int& rays) {
   rays = 0;
   edgetree::ContourProbe probe;
-  if (edgetree::is_cosine_lobe(q.ltc) || !(q.ltc.norm > 0)) return probe;
-  const edgetree::LTCCone cone = edgetree::ltc_core_cone(q.ltc, edgetree::kContourConeMass);
-  if (!(cone.cos_half_angle >= std::cos(edgetree::kContourMaxHalfAngle))) return probe;
-  probe.axis = q.frame.to_world(cone.axis).normalized();
-  probe.cos_half_angle = cone.cos_half_angle;
+  Mat3 M = Mat3::Identity();  // the lobe's LTC matrix (M_inv^-1): its cosine domain back to local directions
+  int light = -1;             // the probed light's shape: its hits are misses
+  bool lobe = false;
+  if (!edgetree::is_cosine_lobe(q.ltc) && q.ltc.norm > 0) {
+    const edgetree::LTCCone cone = edgetree::ltc_core_cone(q.ltc, edgetree::kContourConeMass);
+    if (cone.cos_half_angle >= std::cos(edgetree::kContourMaxHalfAngle)) {
+      lobe = true;
+      probe.axis = q.frame.to_world(cone.axis).normalized();
+      probe.cos_half_angle = cone.cos_half_angle;
+      Mat3 to_local;
+      to_local << q.frame.s.transpose(), q.frame.t.transpose(), q.frame.n.transpose();
+      probe.to_cosine = q.ltc.M_inv * to_local;
+      probe.cos_core = std::sqrt(1.0 - edgetree::kContourConeMass);
+      M = q.ltc.M_inv.inverse();
+    }
+  }
+  if (!lobe && !light_core(q, probe, light)) return probe;
   if (!contours.cone_meets_shapes(q.p, probe.axis, probe.cos_half_angle, q.eligible)) return probe;
-  Mat3 to_local;
-  to_local << q.frame.s.transpose(), q.frame.t.transpose(), q.frame.n.transpose();
-  probe.to_cosine = q.ltc.M_inv * to_local;
-  probe.cos_core = std::sqrt(1.0 - edgetree::kContourConeMass);
   auto trace = [&](const Vec3& dir) {
     IgnoreSet ignore;
     ignore.through_back_faces = leaves_below(si, wo_world, dir);
     const Vec3 origin = spawn_origin(si, dir);
     ++rays;
     const Hit h = ctx.tracer->intersect(origin, dir, kInf, ignore);
-    if (!h.valid() || !q.is_eligible(h.shape)) return;
+    if (!h.valid() || h.shape == light || !q.is_eligible(h.shape)) return;
     probe.hits[size_t(probe.count++)] = {h.shape, h.triangle, Vec3(origin + h.t * dir), dir};
   };
   trace(probe.axis);
   if (probe.count == 0) {
     // The ring: directions (k tan(gamma) cos(phi), k tan(gamma) sin(phi), 1) of the cosine domain,
-    // gamma the core's angle there (sin^2 gamma = kContourConeMass), mapped by M = M_inv^-1.
-    const Mat3 M = q.ltc.M_inv.inverse();
-    const double r =
-        edgetree::kContourRingAngle * std::sqrt(edgetree::kContourConeMass / (1.0 - edgetree::kContourConeMass));
+    // gamma the core's half-angle there (a lobe's: sin^2 gamma = kContourConeMass; a light's: cos
+    // gamma = cos_core).
+    const double tan_core =
+        lobe ? std::sqrt(edgetree::kContourConeMass / (1.0 - edgetree::kContourConeMass))
+             : std::sqrt(std::max(0.0, 1.0 - probe.cos_core * probe.cos_core)) / probe.cos_core;
+    const double r = edgetree::kContourRingAngle * tan_core;
     for (int k = 0; k < edgetree::kContourRingRays; ++k) {
-      const Vec3 local = M * Vec3(r * edgetree::kContourRingCos[k], r * edgetree::kContourRingSin[k], 1.0);
-      if (local.allFinite() && local.squaredNorm() > 0) trace(q.frame.to_world(local.normalized()));
+      const Vec3 c(r * edgetree::kContourRingCos[k], r * edgetree::kContourRingSin[k], 1.0);
+      // A lobe's ring through its LTC to the local frame; a light's through the core's rotation.
+      const Vec3 d = lobe ? Vec3(M * c) : Vec3(probe.to_cosine.transpose() * c);
+      if (d.allFinite() && d.squaredNorm() > 0) trace(lobe ? q.frame.to_world(d.normalized()) : Vec3(d.normalized()));
     }
   }
   return probe;
