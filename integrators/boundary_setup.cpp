@@ -40,9 +40,8 @@ BoundarySetup build_boundary_setup(const Scene& scene, Method method) {
     const bool glossy = std::any_of(scene.shapes.begin(), scene.shapes.end(), [&](const Shape& s) {
       return s.bsdf >= 0 && scene.bsdfs[size_t(s.bsdf)].type == BSDFDesc::Type::RoughConductor;
     });
-    const bool quad_light = std::any_of(scene.shapes.begin(), scene.shapes.end(), [](const Shape& s) {
-      return is_quad_light(s);
-    });
+    const bool quad_light =
+        std::any_of(scene.shapes.begin(), scene.shapes.end(), [](const Shape& s) { return is_quad_light(s); });
     if (method == Method::Quadric && (glossy || quad_light))
       out.contours = std::make_unique<edgetree::ContourIndex>(edgetree::ContourIndex::build(inputs, *forest));
     out.sampler = std::make_unique<edgetree::QuadricEdgeSampler>(*forest, method);

@@ -14,14 +14,14 @@
 // Each must agree with the reference within 4 standard errors (two-sided, ~99.99 % for a correct
 // estimator) with a standard error below 1 % of it: a 5 % bias is caught.
 // Cases (each a point p whose contour set's core the occluder's outline crosses):
-// - at the mirror's p (the lobe's core), occluders:
-// - a smooth-shaded icosphere (1280 faces, radius 0.5): its contour set must carry at least half
-//   the reference (so dropping the traversal's points on it, or not, is a difference of that
-//   size), and the contour estimator's variance must be at least 2x lower;
-// - an open quad, whose four outline edges are loose always-candidates, split (estimated at every
-//   traversal with probability 1): the contour set holds split edges, which must stay the
-//   splitting's (counting them in both strategies is a bias of their share of the reference,
-//   asserted above 50 %);
+// - at the mirror's p (the lobe's core):
+//   - a smooth-shaded icosphere (1280 faces, radius 0.5): its contour set must carry at least
+//     half the reference (so dropping the traversal's points on it, or not, is a difference of
+//     that size), and the contour estimator's variance must be at least 2x lower;
+//   - an open quad, whose four outline edges are loose always-candidates, split (estimated at
+//     every traversal with probability 1): the contour set holds split edges, which must stay the
+//     splitting's (counting them in both strategies is a bias of their share of the reference,
+//     asserted above 50 %);
 // - at a diffuse p on a static floor under a small quad light (0.4 x 0.4 at height 2.5, half-angle
 //   0.11 rad from p; the light's core, boundary_term.h light_core), the icosphere half across the
 //   light's cone from p (a penumbra): its contour set must carry at least half the reference and
@@ -112,7 +112,8 @@ OracleResult run_oracle(const Scene& scene) {
   SetupReport setup;
   set_up_boundary_term(scene, tracer, Method::Quadric, &vel, vel.moving, 1, lights.environment, boundary, bctx, primary,
                        setup);
-  EXPECT_TRUE(boundary.contours && bctx.contours == boundary.contours.get()) << "a scene with a glossy BSDF or a quad light has contour sets";
+  EXPECT_TRUE(boundary.contours && bctx.contours == boundary.contours.get())
+      << "a scene with a glossy BSDF or a quad light has contour sets";
   if (!bctx.contours) return r;
 
   // ---- The shading point: the camera ray's hit on the mirror at p.

@@ -91,7 +91,7 @@ struct LightPolygon {
   std::array<Vec3, 4> corners;  ///< world positions, in order around the quad
   Vec3 normal = Vec3::Zero();   ///< emitting side (unit, world)
   double weight = 0;            ///< its radiance (luminance)
-  int shape = -1;               ///< its shape in the scene (-1: none; a light contour probe passes through it)
+  int shape = -1;               ///< its shape in the scene (-1: none); a light probe's ray that hits it is a miss
 };
 
 /// Everything the traversal needs to know about the shading point.

@@ -382,9 +382,8 @@ edgetree::ContourProbe contour_probe(const PathContext& ctx, const edgetree::Con
     // The ring: directions (k tan(gamma) cos(phi), k tan(gamma) sin(phi), 1) of the cosine domain,
     // gamma the core's half-angle there (a lobe's: sin^2 gamma = kContourConeMass; a light's: cos
     // gamma = cos_core).
-    const double tan_core =
-        lobe ? std::sqrt(edgetree::kContourConeMass / (1.0 - edgetree::kContourConeMass))
-             : std::sqrt(std::max(0.0, 1.0 - probe.cos_core * probe.cos_core)) / probe.cos_core;
+    const double tan_core = lobe ? std::sqrt(edgetree::kContourConeMass / (1.0 - edgetree::kContourConeMass))
+                                 : std::sqrt(std::max(0.0, 1.0 - probe.cos_core * probe.cos_core)) / probe.cos_core;
     const double r = edgetree::kContourRingAngle * tan_core;
     for (int k = 0; k < edgetree::kContourRingRays; ++k) {
       const Vec3 c(r * edgetree::kContourRingCos[k], r * edgetree::kContourRingSin[k], 1.0);
