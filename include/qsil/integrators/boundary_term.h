@@ -289,11 +289,11 @@ bool edge_jump(const PathContext& ctx, const SceneVelocities& vel, const edgetre
 
 /// The core of a light contour set (qsil/edgetree/contour_set.h "Light contour sets") for query
 /// q, written into `probe` (axis, cos_half_angle, to_cosine, cos_core): of the quad lights of q
-/// whose emitting side faces p and that reach above p's shading horizon, the one with the largest
-/// radiance × area × |cos at the light| / distance² (from its centre), bounded by the circular
-/// cone about the direction to its centre through its farthest corner (a cap under π/2 holds the
-/// spherical quad of its corners); to_cosine a rotation taking the axis to +z, so the core is that
-/// cone. Returns false (probe untouched) where no light qualifies or the cone's half-angle is above
+/// that emit toward p (edgetree::light_toward) and reach above p's shading horizon, the one with
+/// the largest radiance × area × |cos at the light| / distance² (from its centre), bounded by the
+/// circular cone about the direction to its centre through its farthest corner (a cap under π/2
+/// holds the spherical quad of its corners); to_cosine a rotation taking the axis to +z, so the
+/// core is that cone. Returns false (probe untouched) where no light qualifies or the cone's half-angle is above
 /// kContourMaxHalfAngle. `shape` receives the light's shape (its probe rays pass through it).
 inline bool light_core(const edgetree::SilhouetteQuery& q, edgetree::ContourProbe& probe, int& shape) {
   if (!q.lights) return false;
@@ -301,14 +301,15 @@ inline bool light_core(const edgetree::SilhouetteQuery& q, edgetree::ContourProb
   double best_weight = 0;
   Vec3 best_centre = Vec3::Zero();
   for (const edgetree::LightPolygon& l : *q.lights) {
+    std::array<Vec3, 4> local;  // the corners relative to p in the shading frame
+    if (!edgetree::light_toward(l, q, local)) continue;
+    bool above = false;
+    for (const Vec3& c : local) above |= c.z() > 0;
+    if (!above) continue;
     const Vec3 centre = 0.25 * (l.corners[0] + l.corners[1] + l.corners[2] + l.corners[3]);
     const Vec3 d = centre - q.p;
     const double d2 = d.squaredNorm();
     const double cos_light = -l.normal.dot(d) / std::sqrt(d2);
-    if (!(cos_light > 0) || !(l.weight > 0)) continue;
-    bool above = false;
-    for (const Vec3& c : l.corners) above |= q.frame.n.dot(c - q.p) > 0;
-    if (!above) continue;
     const double area = 0.5 * ((l.corners[2] - l.corners[0]).cross(l.corners[3] - l.corners[1])).norm();
     const double w = l.weight * area * cos_light / d2;
     if (w > best_weight) {
