@@ -123,6 +123,7 @@ void set_up_boundary_term(const Scene& scene, const RayTracer& tracer, Method me
   bctx.moving = moving;
   bctx.all.assign(scene.shapes.size(), true);
   bctx.samples_per_vertex = boundary_spp > 0 ? boundary_spp : default_boundary_spp(method);
+  bctx.split_speed = default_split_speed(method);
   set_light_importance(scene, environment, bctx);
   primary = find_primary_edges(scene, *boundary.edges, moving, tracer);
   describe_boundary_setup(boundary, method, int(primary.edges.size()), setup);

@@ -45,4 +45,6 @@ bool uses_quadrics(Method method) { return method == Method::Quadric; }
 
 double default_boundary_spp(Method method) { return uses_edge_forest(method) ? 0.5 : 1.0; }
 
+double default_split_speed(Method method) { return uses_edge_forest(method) ? 4.0 : 0.0; }
+
 }  // namespace qsil

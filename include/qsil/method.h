@@ -71,4 +71,12 @@ bool uses_quadrics(Method method);
 /// whose boundary term holds most of their variance.
 double default_boundary_spp(Method method);
 
+/// The shading-point speed per extra secondary traversal a method uses (BoundaryContext::
+/// split_speed, boundary_split): 4 for quadric and quadric-box, whose rate above is tuned for
+/// points moving no faster than the mesh (a point a camera ray meets at a grazing angle slides
+/// along the ray at about 1/cos that speed, and its boundary term's variance grows with it;
+/// docs/architecture.md §5 "Splitting at fast shading points"); 0 (no splitting) for the
+/// baselines, which keep one traversal per vertex as published.
+double default_split_speed(Method method);
+
 }  // namespace qsil

@@ -54,6 +54,10 @@ struct BoundaryContext {
   /// (EstimatorConfig::boundary_spp; positive and finite): boundary_traversals() of them at every
   /// vertex of a sample's path, each weighted 1 / samples_per_vertex.
   double samples_per_vertex = 1.0;
+  /// Splitting at fast shading points (boundary_split): a vertex whose shading point moves at
+  /// speed s makes ceil(s / split_speed) traversals, at most kMaxBoundarySplit, for each one
+  /// boundary_traversals schedules. 0: no splitting. Set from default_split_speed(method).
+  double split_speed = 0;
   std::vector<edgetree::LightPolygon> lights;  ///< quad area lights for I_light [QSS 3.6]
   double env_weight = 1.0;                     ///< environment intensity (luminance of its mean)
   std::vector<double> emission;                ///< per shape: luminance of its emission (0: none)
@@ -417,22 +421,53 @@ inline int boundary_traversals(double rate, uint64_t seed, uint64_t pixel, uint6
   return whole + int(std::floor(f * (s + 1.0) + phi) - std::floor(f * s + phi));
 }
 
+/// The most traversals boundary_split makes of one.
+inline constexpr int kMaxBoundarySplit = 16;
+
+/// How many traversals stand for each one boundary_traversals schedules at the vertex of query `q`
+/// (splitting, as in adjoint-driven Russian roulette and splitting, Vorba & Křivánek 2016, with the
+/// shading point's speed as the driver): with s = max_k |dp/dtheta_k| velocity_scale[k], the speed
+/// of p in units of the fastest mesh vertex of each parameter (q.dp, q.velocity_scale; 0 without
+/// q.velocities, e.g. reverse mode), ceil(s / bctx.split_speed) clamped to [1,
+/// kMaxBoundarySplit]; 1 when bctx.split_speed is 0.
+/// Why: with directions fixed, a point a ray meets on a moving surface at an angle of incidence
+/// with cosine c slides along the ray at about 1/c the surface's speed, so J = n . (v - dp) of
+/// every edge seen from p grows with s, and so does the variance of one traversal's estimate
+/// (the choice of edge; the variance across pixel samples of the exact value is another matter).
+/// Splitting a traversal into m, each weighted 1/m, keeps the estimate unbiased for any m that
+/// depends only on the vertex (p, dp), and divides that variance by m at m times the cost; m
+/// proportional to s is the allocation that minimises variance x cost when the variance grows
+/// as s^2 (the rate's own argument, docs/design-notes.md "How many boundary samples per pixel
+/// sample", per vertex). Such points are rare (grazing hits), so the cost stays small: measured
+/// in docs/architecture.md §5 "Splitting at fast shading points".
+inline int boundary_split(const BoundaryContext& bctx, const edgetree::SilhouetteQuery& q) {
+  if (!(bctx.split_speed > 0) || !q.velocities) return 1;
+  double speed = 0;
+  for (int k = 0; k < q.velocities->num_params; ++k)
+    speed = std::max(speed, q.dp.col(k).norm() * q.velocity_scale[size_t(k)]);
+  // The clamp before the conversion keeps a non-finite speed from becoming an undefined int.
+  return int(std::clamp(std::ceil(speed / bctx.split_speed), 1.0, double(kMaxBoundarySplit)));
+}
+
 /// The secondary boundary term's samples at one path vertex (shared by forward mode, BoundaryHook,
 /// and reverse mode, integrators/reverse.cpp): `traversals` traversals of bctx.sampler
 /// (boundary_traversals) for query `q` (set up by the caller: eligibility, velocities; its
 /// contour set is made here when bctx.contours is set: contour_probe,
-/// ContourIndex::contour_edges), drawing from `sampler`; for each edge point with f_s != 0,
-/// `accept(edge, t, g)` decides before any ray whether it can contribute (edge_jump_with), and
-/// each contributing one is handed to `visit(edge, t, weight, g)` with weight = T f_s jump / (pdf
-/// r), r = bctx.samples_per_vertex and T the detached throughput (the vertex's derivative gains
-/// weight (g . v_t)). Counts traversals, zero traversals and thread time.
+/// ContourIndex::contour_edges), each split into m = boundary_split(bctx, q), drawing from
+/// `sampler`; for each edge point with f_s != 0, `accept(edge, t, g)` decides before any ray
+/// whether it can contribute (edge_jump_with), and each contributing one is handed to
+/// `visit(edge, t, weight, g)` with weight = T f_s jump / (pdf r m), r = bctx.samples_per_vertex
+/// and T the detached throughput (the vertex's derivative gains weight (g . v_t)). Counts
+/// traversals (the split ones each), zero traversals and thread time.
 template <class T, class Accept, class Visit>
 void for_each_boundary_sample(const PathContext& ctx, const BoundaryContext& bctx, Sampler& sampler,
                               const SurfaceInteraction<T>& si, const ShadingPoint<T>& sp, edgetree::SilhouetteQuery q,
                               const Vec3& wo_local, const Color& throughput, int seg, int traversals, PathStats& stats,
                               Accept&& accept, Visit&& visit) {
   if (traversals <= 0) return;
-  const double rate = bctx.samples_per_vertex;
+  const int split = boundary_split(bctx, q);
+  traversals *= split;
+  const double rate = bctx.samples_per_vertex * double(split);
   const auto t0 = std::chrono::steady_clock::now();
   const Vec3 wo_world = q.frame.to_world(wo_local);
   // ---- The contour set of a glossy vertex: made once, used by every traversal here. The
