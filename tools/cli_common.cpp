@@ -70,7 +70,9 @@ void add_boundary_spp_option(CLI::App& app, double& boundary_spp) {
   app.add_option("--boundary-spp", boundary_spp,
                  "Secondary boundary-term samples per shading point, on average over a pixel's samples (a fraction "
                  "is a stratified pick of samples: 0.5 = every other sample, weighted 2); 0 = the method's default "
-                 "(quadric, quadric-box: 0.5; the others: 1)")
+                 "(quadric, quadric-box: 0.5; the others: 1). Quadric and quadric-box split each into ceil(s / 4), at "
+                 "most 16, at a shading point moving s times as fast as the mesh's fastest vertex (grazing hits; "
+                 "docs/architecture.md §5)")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
 }
