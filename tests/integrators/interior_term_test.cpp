@@ -97,6 +97,59 @@ TEST(InteriorTerm, DifferentiableHitMatchesCentralDifferences) {
   }
 }
 
+// make_interaction works in doubles at a constant hit (DualView::constant_hit: a shape that does
+// not move, an origin without derivatives). A hit on that unmoving shape from a moving origin (an
+// earlier vertex moved) still carries the origin's motion along the fixed direction (central
+// differences, as above); from a fixed origin it is the primal interaction exactly, with zero
+// derivatives.
+TEST(InteriorTerm, AHitOnUnmovingGeometryMovesWithItsOriginOnly) {
+  std::mt19937 rng(8);
+  std::uniform_real_distribution<double> U(-1, 1);
+  TriangleMesh mesh = test::icosphere(1);
+  mesh.normals = vertex_normals(mesh);
+  Scene scene = one_shape_scene(mesh);
+  Shape other = scene.shapes[0];
+  other.id = "other";
+  for (auto& p : other.mesh.positions) p += Vec3(5, 0, 0);
+  scene.shapes.push_back(other);
+  const std::vector<ParameterSpec> params = {parse_parameter("other:translate:0,1,0", scene)};
+  const SceneVelocities vel = compute_velocities(scene, params);
+  ASSERT_FALSE(vel.moving[0]);
+  const DualView<1> view{&scene, &vel};
+  const PrimalView pv{&scene};
+  for (int trial = 0; trial < 10; ++trial) {
+    const int tri = int(rng() % mesh.triangles.size());
+    const auto& t = mesh.triangles[size_t(tri)];
+    const Vec3 target = (mesh.positions[t[0]] + mesh.positions[t[1]] + mesh.positions[t[2]]) / 3.0;
+    const Vec3 o = target + 3.0 * Vec3(U(rng), U(rng), 2.0).normalized();
+    const Vec3 d = (target - o).normalized();
+    Hit hit;
+    hit.shape = 0;
+    hit.triangle = tri;
+    const Vec3 o_vel(U(rng), U(rng), U(rng));
+    Vec3T<Dual<1>> oD;
+    for (int i = 0; i < 3; ++i) oD[i] = Dual<1>(o[i], Eigen::Matrix<double, 1, 1>(o_vel[i]));
+    const auto si = make_interaction(view, hit, oD, d);
+    const auto at = [&](double h) { return Vec3(make_interaction(pv, hit, Vec3(o + h * o_vel), d).p); };
+    const Vec3 fd = central(at, 1e-6);
+    Vec3 ad;
+    for (int i = 0; i < 3; ++i) ad[i] = si.p[i].derivatives()[0];
+    EXPECT_GT(fd.norm(), 0.1);
+    EXPECT_LT((ad - fd).norm(), 1e-6 * (1 + fd.norm())) << "ad " << ad.transpose() << "\nfd " << fd.transpose();
+
+    const auto fixed = make_interaction(view, hit, lift<Dual<1>>(o), d);
+    const auto primal = make_interaction(pv, hit, o, d);
+    EXPECT_EQ(value(fixed.p), primal.p);
+    EXPECT_EQ(value(fixed.ns), primal.ns);
+    EXPECT_EQ(value(fixed.t), primal.t);
+    for (int i = 0; i < 3; ++i) {
+      EXPECT_EQ(fixed.p[i].derivatives()[0], 0.0);
+      EXPECT_EQ(fixed.ng[i].derivatives()[0], 0.0);
+      EXPECT_EQ(fixed.ns[i].derivatives()[0], 0.0);
+    }
+  }
+}
+
 // GGX and diffuse cosine-weighted values and the cosine, as functions of a moving shading normal
 // with fixed world directions, against central differences (double, step 1e-6).
 TEST(InteriorTerm, BSDFValuesAndCosinesUnderAMovingFrameMatchCentralDifferences) {

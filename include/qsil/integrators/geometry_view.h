@@ -33,6 +33,14 @@ struct DualView {
     return lift<N>(scene->shapes[shape].mesh.normals[v], velocities->normal[shape][v].template leftCols<N>().eval());
   }
   bool moving(int shape) const { return velocities->moving[shape]; }
+  /// Whether a ray from origin `o` that hits shape `shape` has a hit with zero derivatives: the
+  /// shape does not move and o's derivatives are all zero (make_interaction then works in doubles).
+  bool constant_hit(int shape, const Vec3T<Real>& o) const {
+    if (moving(shape)) return false;
+    for (int i = 0; i < 3; ++i)
+      if (!(o[i].derivatives().array() == 0).all()) return false;
+    return true;
+  }
 };
 
 }  // namespace qsil

@@ -6,6 +6,7 @@
 /// detached double: directions are fixed in qsil's parametrization.
 
 #include "qsil/dual.h"
+#include "qsil/integrators/geometry_view.h"
 #include "qsil/ray_tracer.h"
 #include "qsil/scene.h"
 
@@ -32,16 +33,43 @@ struct SurfaceInteraction {
   Vec3 inward = Vec3::Zero();
 };
 
+/// `si` over scalar type T with zero derivatives (the same values).
+template <class T>
+SurfaceInteraction<T> lift_interaction(const SurfaceInteraction<double>& si) {
+  SurfaceInteraction<T> r;
+  r.shape = si.shape;
+  r.triangle = si.triangle;
+  r.t = T(si.t);
+  r.b1 = T(si.b1);
+  r.b2 = T(si.b2);
+  r.p = lift<T>(si.p);
+  r.ng = lift<T>(si.ng);
+  r.ns = lift<T>(si.ns);
+  r.scale = si.scale;
+  r.local_origin = si.local_origin;
+  r.inward = si.inward;
+  return r;
+}
+
 /// Ray-triangle intersection (Moller-Trumbore 1997) over scalar T with origin o (T) and fixed unit
 /// direction d, for the triangle Embree reported in `hit`. Works outside the triangle too (the
 /// barycentrics are then extrapolated): Embree decided which triangle is hit. With hit.exact the
 /// point is interpolated from hit.u, hit.v instead (a known point; no ray-plane intersection).
 /// `local_origin`: the ray tracer's (RayTracer::local_origin), which the ray offsets are relative to.
+///
+/// A view that can tell a constant hit (`view.constant_hit(shape, o)`: a shape that does not move
+/// and an origin with zero derivatives, DualView) gets it computed in doubles and lifted (zero
+/// derivatives, the same values): the dual arithmetic would only carry zeros. On shadow-quad with
+/// eight parameters that is every camera ray that meets the floor or the light.
 template <class View>
 SurfaceInteraction<typename View::Real> make_interaction(const View& view, const Hit& hit,
                                                          const Vec3T<typename View::Real>& o, const Vec3& d,
                                                          const Vec3& local_origin = Vec3::Zero()) {
   using T = typename View::Real;
+  if constexpr (requires { view.constant_hit(hit.shape, o); }) {
+    if (view.constant_hit(hit.shape, o))
+      return lift_interaction<T>(make_interaction(PrimalView{view.scene}, hit, value(o), d, local_origin));
+  }
   SurfaceInteraction<T> si;
   si.shape = hit.shape;
   si.triangle = hit.triangle;
