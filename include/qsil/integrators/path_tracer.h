@@ -93,8 +93,23 @@ inline constexpr double kShadingNormalMinCos = 1e-3;
 /// the geometric surface faces the viewer (ng.wo > 0): a one-sided surface seen from behind stays
 /// black, and that changes only at silhouettes. A twosided BSDF seen from the back flips the
 /// shading normal first (and the test uses |ng.wo|).
+/// At a constant interaction (si.constant) the frame is computed in doubles and lifted.
 template <class T>
 ShadingPoint<T> make_shading_point(const PathContext& ctx, const SurfaceInteraction<T>& si, const Vec3& wo_world) {
+  if constexpr (!std::is_same_v<T, double>) {
+    if (si.constant) {
+      SurfaceInteraction<double> s;
+      s.shape = si.shape;
+      s.ng = value(si.ng);
+      s.ns = value(si.ns);
+      const ShadingPoint<double> sp = make_shading_point(ctx, s, wo_world);
+      FrameT<T> frame;
+      frame.s = lift<T>(sp.frame.s);
+      frame.t = lift<T>(sp.frame.t);
+      frame.n = lift<T>(sp.frame.n);
+      return ShadingPoint<T>{sp.bsdf, frame, sp.frame_value};
+    }
+  }
   const Shape& shape = ctx.scene->shapes[si.shape];
   const BSDFDesc* bsdf = &ctx.scene->bsdfs[shape.bsdf];
   Vec3T<T> ns = si.ns;
@@ -187,8 +202,14 @@ ColorT<typename View::Real> trace_path(const PathContext& ctx, const View& view,
     if (seg >= ctx.max_depth) break;
 
     const ShadingPoint<T> sp = make_shading_point(ctx, si, wo_world);
-    const Vec3T<T> wo = sp.frame.to_local(lift<T>(wo_world));
+    const Vec3T<T> wo = si.constant ? lift<T>(sp.frame_value.to_local(wo_world)) : sp.frame.to_local(lift<T>(wo_world));
     const Vec3 wo_value = value(wo);
+    // f_s cos toward world direction w (over T; in doubles, lifted, at a constant interaction).
+    const auto bsdf_toward = [&](const Vec3& w) -> ColorT<T> {
+      if constexpr (!std::is_same_v<T, double>)
+        if (si.constant) return lift<T>(bsdf_eval<double>(*sp.bsdf, sp.frame_value.to_local(w), wo_value));
+      return bsdf_eval<T>(*sp.bsdf, sp.frame.to_local(lift<T>(w)), wo);
+    };
     hook(si, sp, wo_value, beta, seg, sampler, stats, L);
 
     // ---- Next-event estimation: keep only the sampled direction; re-evaluate along it.
@@ -221,8 +242,7 @@ ColorT<typename View::Real> trace_path(const PathContext& ctx, const View& view,
         }
       }
       if (pdf_light > 0 && (Le > 0).any()) {
-        const Vec3T<T> wi_local = sp.frame.to_local(lift<T>(wi));
-        const ColorT<T> f = bsdf_eval<T>(*sp.bsdf, wi_local, wo);
+        const ColorT<T> f = bsdf_toward(wi);
         if ((value(f) != 0).any()) {
           ++stats.rays;
           // The shadow ray starts at the offset origin and stops short of the light's own
@@ -233,7 +253,8 @@ ColorT<typename View::Real> trace_path(const PathContext& ctx, const View& view,
           IgnoreSet ignore;
           ignore.through_back_faces = leaves_below(si, wo_world, wi);
           if (!ctx.tracer->occluded(origin, wi, tmax, ignore)) {
-            const double w = power_heuristic(pdf_light, bsdf_pdf(*sp.bsdf, value(wi_local), wo_value, uniform_share));
+            const double w =
+                power_heuristic(pdf_light, bsdf_pdf(*sp.bsdf, sp.frame_value.to_local(wi), wo_value, uniform_share));
             L += beta * f * lift<T>(Color(Le * (w / pdf_light)));
           }
         }
@@ -244,7 +265,7 @@ ColorT<typename View::Real> trace_path(const PathContext& ctx, const View& view,
     const BSDFSample bs = bsdf_sample(*sp.bsdf, wo_value, sampler.next2(), uniform_share);
     if (!bs.valid || !(bs.pdf > 0)) break;
     const Vec3 wi = sp.frame_value.to_world(bs.wi).normalized();
-    const ColorT<T> f = bsdf_eval<T>(*sp.bsdf, sp.frame.to_local(lift<T>(wi)), wo);
+    const ColorT<T> f = bsdf_toward(wi);
     beta = beta * f / T(bs.pdf);
     if ((value(beta) == 0).all()) break;
     bsdf_pdf_prev = bs.pdf;

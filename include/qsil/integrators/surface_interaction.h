@@ -31,6 +31,9 @@ struct SurfaceInteraction {
   /// such a point start a relative offset inside the triangle (spawn_origin), so that what they
   /// see is the limit from the face's interior, not from the edge itself.
   Vec3 inward = Vec3::Zero();
+  /// Every derivative is zero (a constant hit, lift_interaction): what depends on this point
+  /// alone (its shading frame, BSDF values) may be computed in doubles and lifted.
+  bool constant = false;
 };
 
 /// `si` over scalar type T with zero derivatives (the same values).
@@ -48,6 +51,7 @@ SurfaceInteraction<T> lift_interaction(const SurfaceInteraction<double>& si) {
   r.scale = si.scale;
   r.local_origin = si.local_origin;
   r.inward = si.inward;
+  r.constant = true;
   return r;
 }
 
