@@ -101,7 +101,7 @@ TEST(InteriorTerm, DifferentiableHitMatchesCentralDifferences) {
 // not move, an origin without derivatives). A hit on that unmoving shape from a moving origin (an
 // earlier vertex moved) still carries the origin's motion along the fixed direction (central
 // differences, as above); from a fixed origin it is the primal interaction exactly, with zero
-// derivatives.
+// derivatives, and its shading frame (made in doubles) is the dual computation's up to rounding.
 TEST(InteriorTerm, AHitOnUnmovingGeometryMovesWithItsOriginOnly) {
   std::mt19937 rng(8);
   std::uniform_real_distribution<double> U(-1, 1);
@@ -146,6 +146,23 @@ TEST(InteriorTerm, AHitOnUnmovingGeometryMovesWithItsOriginOnly) {
       EXPECT_EQ(fixed.p[i].derivatives()[0], 0.0);
       EXPECT_EQ(fixed.ng[i].derivatives()[0], 0.0);
       EXPECT_EQ(fixed.ns[i].derivatives()[0], 0.0);
+    }
+    // Its shading frame, made in doubles (fixed.constant), is the dual computation's, seen from
+    // the ray's viewer and from a grazing one (the shading-normal adaptation bends it).
+    ASSERT_TRUE(fixed.constant);
+    auto as_dual = fixed;
+    as_dual.constant = false;
+    PathContext ctx;
+    ctx.scene = &scene;
+    const Vec3 ng = value(fixed.ng);
+    for (const Vec3& wo : {Vec3(-d), Vec3((ng.unitOrthogonal() + 1e-4 * ng).normalized())}) {
+      const auto a = make_shading_point(ctx, fixed, wo), b = make_shading_point(ctx, as_dual, wo);
+      // Equal up to rounding: Eigen sums a double vector's squared norm in SIMD order.
+      EXPECT_LT((value(a.frame.n) - value(b.frame.n)).norm(), 1e-14);
+      EXPECT_LT((value(a.frame.s) - value(b.frame.s)).norm(), 1e-14);
+      EXPECT_LT((value(a.frame.t) - value(b.frame.t)).norm(), 1e-14);
+      EXPECT_LT((a.frame_value.n - b.frame_value.n).norm(), 1e-14);
+      for (int i = 0; i < 3; ++i) EXPECT_EQ(a.frame.n[i].derivatives()[0], 0.0);
     }
   }
 }
