@@ -35,6 +35,7 @@ struct DualView {
   bool moving(int shape) const { return velocities->moving[shape]; }
   /// Whether a ray from origin `o` that hits shape `shape` has a hit with zero derivatives: the
   /// shape does not move and o's derivatives are all zero (make_interaction then works in doubles).
+  /// Parameters move geometry only; parameters of materials or the camera would have to count here.
   bool constant_hit(int shape, const Vec3T<Real>& o) const {
     if (moving(shape)) return false;
     for (int i = 0; i < 3; ++i)

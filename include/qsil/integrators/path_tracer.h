@@ -183,8 +183,10 @@ ColorT<typename View::Real> trace_path(const PathContext& ctx, const View& view,
     SurfaceInteraction<T> si = make_interaction(view, hit, o, d, ctx.tracer->local_origin());
     // A view with a tape (reverse mode, qsil/integrators/reverse.h) records the hit and gives its
     // point and shading normal derivative slots of their own; the other views have no attach().
-    if constexpr (requires { view.attach(si, hit, value(o), d, true); })
+    if constexpr (requires { view.attach(si, hit, value(o), d, true); }) {
       view.attach(si, hit, value(o), d, seg < ctx.max_depth);
+      si.constant = false;  // attach() gives the point derivative slots of its own
+    }
     // A ray grazing a triangle's plane has no well-defined intersection: end the path rather than
     // propagate a NaN (never reached with Embree's own hits in practice).
     if (!value(si.p).allFinite() || !value(si.ns).allFinite()) break;
@@ -202,6 +204,7 @@ ColorT<typename View::Real> trace_path(const PathContext& ctx, const View& view,
     if (seg >= ctx.max_depth) break;
 
     const ShadingPoint<T> sp = make_shading_point(ctx, si, wo_world);
+    // wo in the shading frame (in doubles, lifted, at a constant interaction).
     const Vec3T<T> wo = si.constant ? lift<T>(sp.frame_value.to_local(wo_world)) : sp.frame.to_local(lift<T>(wo_world));
     const Vec3 wo_value = value(wo);
     // f_s cos toward world direction w (over T; in doubles, lifted, at a constant interaction).

@@ -32,11 +32,12 @@ struct SurfaceInteraction {
   /// see is the limit from the face's interior, not from the edge itself.
   Vec3 inward = Vec3::Zero();
   /// Every derivative is zero (a constant hit, lift_interaction): what depends on this point
-  /// alone (its shading frame, BSDF values) may be computed in doubles and lifted.
+  /// alone (its shading frame, BSDF values) may be computed in doubles and lifted. Code that
+  /// gives p or the normals derivatives afterwards (a view's attach()) must clear it.
   bool constant = false;
 };
 
-/// `si` over scalar type T with zero derivatives (the same values).
+/// `si` over scalar type T with zero derivatives (the same values), marked `constant`.
 template <class T>
 SurfaceInteraction<T> lift_interaction(const SurfaceInteraction<double>& si) {
   SurfaceInteraction<T> r;
