@@ -1,6 +1,8 @@
 #!/usr/bin/env python3
 """Stability study: every gradient method at equal (small) time on scenes/stability/*.xml, where
-methods are known or expected to fail; writes docs/stability.md and docs/images/stability/.
+methods are known or expected to fail; writes docs/stability.md, the grids in
+docs/images/stability/<name>/ and, for a whole study (not --only), the table as data in
+docs/images/stability/results.json (write_record; tools/results_report.py reads it).
 
 Usage: python3 tools/stability_study.py [--qsil PATH] [--budget 2] [--res 48]
        [--ref-spp 32768] [--ref-step-factor 0.25] [--threads 2] [--only NAME,...]
@@ -165,8 +167,32 @@ def write_report(args, table, elapsed, img_root):
         f.write("\n".join(lines))
 
 
+# The fields of a method's row kept in the study's record (results.json beside the grids).
+RECORD_FIELDS = ("rel_mse", "z", "spp", "wall_seconds", "nonfinite_pixels", "zero_contribution_rate",
+                 "rel_noise_floor")
+
+
+def write_record(args, table, img_root, commit, date):
+    """Writes IMG_ROOT/results.json, the study's table as data (tools/results_report.py judges issue 16's
+    stability targets from it): the settings, the commit and date of the qsil that made it, and per scene
+    its parameter and per method the RECORD_FIELDS of its row (or its error). Written whole or not at
+    all (a temporary file renamed over it). Returns the record."""
+    record = {"commit": commit, "date": date, "budget": args.budget, "res": args.res, "ref_spp": args.ref_spp,
+              "ref_step_factor": args.ref_step_factor, "threads": args.threads,
+              "scenes": [{"name": name, "param": param,
+                          "methods": {m: ({"error": per[m]["error"]} if "error" in per[m] else
+                                          {f: per[m].get(f) for f in RECORD_FIELDS}) for m in METHODS}}
+                         for name, param, _, per in table]}
+    path = os.path.join(img_root, "results.json")
+    os.makedirs(img_root, exist_ok=True)
+    with open(path + ".tmp", "w") as f:
+        json.dump(record, f, indent=1)
+    os.replace(path + ".tmp", path)
+    return record
+
+
 def main():
-    """Runs the study and writes docs/stability.md."""
+    """Runs the study and writes docs/stability.md and its record, docs/images/stability/results.json."""
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--qsil", default=os.path.join(ROOT, "build", "qsil"))
     ap.add_argument("--budget", type=float, default=2.0)
@@ -189,6 +215,7 @@ def main():
     work = os.path.join("out", "stability")
     img_root = os.path.join("docs", "images", "stability")
     os.makedirs(work, exist_ok=True)
+    commit, date = git_commit(), time.strftime("%Y-%m-%d")  # of the qsil that renders
     started = time.time()
     table = []
     for name, param, question in cases:
@@ -211,6 +238,10 @@ def main():
         merge_images(per, work, img_root, name, param)
     elapsed = time.time() - started
     write_report(args, table, elapsed, img_root)
+    if args.only:
+        print("stability_study: --only: docs/images/stability/results.json is left as it was (it records whole studies)")
+    else:
+        write_record(args, table, img_root, commit, date)
     print(f"stability_study: docs/stability.md ({elapsed:.0f} s)")
     return 0
 

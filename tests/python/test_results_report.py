@@ -118,3 +118,58 @@ def test_a_reused_comparison_keeps_the_commit_that_made_it(tmp_path, monkeypatch
     # Other budgets: run again, recorded with the commit of that run.
     _, reused, made_by = results_report.compare_run(args, "d", entry, "4,30", ["qsil"])
     assert not reused and made_by["commit"] == "bbbbbbb+" and len(runs) == 2
+
+
+# ---- Verdicts of the targets table: a verdict other than "undecided" must be true of the methods' own
+# errors (the oracle: the synthetic own errors the measured MSEs were made from, plus a common floor).
+
+@pytest.mark.parametrize("goal", [0.5, 1.0, 5.0, 10.0])
+def test_a_decided_verdict_is_true_of_the_methods_own_errors(goal):
+    decided = undecided = 0
+    for own_a in (0.001, 0.01, 0.05, 0.2, 0.9, 3.0, 20.0):
+        for own_b in (0.001, 0.01, 0.05, 0.2, 0.9, 3.0):
+            for floor in (0.0, 1e-4, 0.003, 0.02, 0.1, 0.5):
+                j = results_report.ratio_judgement(own_a + floor, own_b + floor, floor)
+                v = results_report.ratio_verdict(j, goal)
+                truth = own_a / own_b >= goal * (1 - 1e-12)
+                if v == "undecided":
+                    undecided += 1
+                    assert not j["judged"]
+                    continue
+                decided += 1
+                assert (v == "met") == truth, (own_a, own_b, floor, goal, j, v)
+    # Both kinds occur on this grid, except for a target ratio of 1, which every bound decides (a common
+    # floor moves a ratio away from 1: raw >= 1 bounds own from below, raw < 1 from above).
+    assert decided > 0 and (undecided > 0) == (goal != 1.0)
+
+
+def test_the_spp_factor_brings_the_floor_within_a_tenth():
+    for own_a, own_b, floor in ((0.174, 1.84, 0.341), (0.0106, 0.19, 0.0169), (0.2, 0.3, 0.01), (0.5, 0.5, 0.0)):
+        f = results_report.spp_to_judge(own_a + floor, own_b + floor, floor)
+        assert f >= 1
+        new_floor = floor / f  # the floor goes as 1/spp
+        assert results_report.floor_can_judge(new_floor * (1 - 1e-9), min(own_a, own_b) + new_floor)
+        if f > 1:  # and not with much less
+            smaller = floor / (0.9 * f)
+            assert not results_report.floor_can_judge(smaller, min(own_a, own_b) + smaller)
+
+
+def test_cost_and_stability_records_are_judged_against_their_targets():
+    cost = {"commit": "abc", "date": "d", "res": 256, "spp": 16, "threads": 2,
+            "rows": [{"scene": "spot-mirror", "grad_over_render": 4.0, "embree_pct": 49.9, "render_embree_pct": 60.0},
+                     {"scene": "direct", "grad_over_render": 9.0}],
+            "flat": [{"scene": "teapot", "flat_over_smooth": 2.01}, {"scene": "wingnut", "flat_over_smooth": 1.2}]}
+    rows = {r["key"]: r["verdict"] for r in results_report.cost_rows(cost)}
+    assert rows == {"spot-mirror grad / render": "met", "spot-mirror Embree share": "missed",
+                    "teapot flat / smooth": "missed", "wingnut flat / smooth": "met"}
+    stability = {"commit": "abc", "date": "d", "budget": 2, "res": 48, "scenes": [
+        {"name": "cube", "methods": {"quadric": {"rel_mse": 0.0015, "rel_noise_floor": 0.0004},
+                                     "fd": {"rel_mse": 0.02, "rel_noise_floor": 0.0004}}},
+        {"name": "teapot", "methods": {"quadric": {"rel_mse": 0.13, "rel_noise_floor": 0.002},
+                                       "fd": {"rel_mse": 0.054, "rel_noise_floor": 0.002}}},
+        {"name": "sun", "methods": {"quadric": {"rel_mse": 0.09, "rel_noise_floor": 0.002}, "fd": {"error": "exit 2"}}}]}
+    rows = {r["key"]: r["verdict"] for r in results_report.stability_rows(stability)}
+    # cube: the floor is above 1/10 of quadric's error but the bound (>= 13) meets >= 1; sun: FD failed.
+    assert rows == {"cube FD": "met", "teapot FD": "missed", "sun FD": "no record"}
+    assert all(r["verdict"] == "no record" for r in results_report.cost_rows(None) + results_report.stability_rows(None))
+

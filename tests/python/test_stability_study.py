@@ -59,3 +59,23 @@ def test_a_reference_is_reused_only_when_everything_it_was_made_from_matches(tmp
     assert not os.path.exists("ref.json")
     assert make(steps=(0.0005,)) is None and len(renders) == 7
     assert make(steps=(0.0005,)) is None and len(renders) == 7
+
+
+def test_the_record_holds_every_scene_and_method_as_the_table_does(tmp_path):
+    # write_record keeps what results_report judges the stability targets from: per scene and method
+    # the relative MSE, z and the reference's floor, or the method's error; nothing else of the row.
+    args = argparse.Namespace(budget=2.0, res=48, ref_spp=100, ref_step_factor=0.25, threads=2)
+    row = {"rel_mse": 0.13, "z": -0.9, "spp": 358, "wall_seconds": 2.0, "nonfinite_pixels": 0,
+           "zero_contribution_rate": 0.32, "rel_noise_floor": 0.002, "sum": [1.0], "mse": 3.0}
+    per = {m: dict(row) for m in stability_study.METHODS}
+    per["vsphere"] = {"error": "exit -11 (crash)"}
+    table = [("teapot", "teapot:translate:0,1,0", "a question", per)]
+    record = stability_study.write_record(args, table, str(tmp_path), "abc1234", "2026-11-25")
+    import json
+    assert json.load(open(tmp_path / "results.json")) == record
+    assert not os.path.exists(tmp_path / "results.json.tmp")
+    scene = record["scenes"][0]
+    assert scene["name"] == "teapot" and scene["param"] == "teapot:translate:0,1,0"
+    assert scene["methods"]["vsphere"] == {"error": "exit -11 (crash)"}
+    assert scene["methods"]["quadric"] == {f: row[f] for f in stability_study.RECORD_FIELDS}
+    assert record["commit"] == "abc1234" and record["ref_spp"] == 100
