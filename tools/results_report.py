@@ -314,9 +314,10 @@ WHY_MISSED = {
         "candidate edges — against 1.5 µs evaluating it (two rays, two sub-paths) and 0.8 µs for the contour probe "
         "of the vertex. The edge choice is 43 % of `grad`'s samples (`perf record --call-graph dwarf`, 128²): with it "
         "free, `grad` would take 57 % of its time, about 3.6× `render`, so the target asks for an edge choice about "
-        "7× cheaper, not a faster sub-routine (the largest, node_weight, is 11 % of the samples). Lowering the traversal rate reaches 4× at about equal efficiency (the rate is near its optimum, "
-        "where variance × time is flat: `docs/architecture.md` §5 \"How many traversals\"), which moves cost into "
-        "variance rather than removing it, so it is not done."),
+        "7× cheaper, not a faster sub-routine (the largest, node_weight, is 11 % of the samples). A traversal rate "
+        "of about 0.25 instead of 0.5 would reach 4× by taking fewer boundary samples; the rate was measured near "
+        "its optimum (0.35 was no better than 0.5 on spot-mirror, `docs/architecture.md` §5 \"How many "
+        "traversals\"), so that would trade cost for variance, not remove it, and is not done."),
     "spot-mirror Embree share": (
         "What is not the edge choice is mostly path shading, which spends in Embree about what the primal renderer "
         "does (the share in parentheses: the environment map's sampling — 6–9 % of `grad` in "

@@ -239,7 +239,8 @@ def main():
     elapsed = time.time() - started
     write_report(args, table, elapsed, img_root)
     if args.only:
-        print("stability_study: --only: docs/images/stability/results.json is left as it was (it records whole studies)")
+        print("stability_study: --only: docs/images/stability/results.json is left as it was "
+              "(it records whole studies)")
     else:
         write_record(args, table, img_root, commit, date)
     print(f"stability_study: docs/stability.md ({elapsed:.0f} s)")

@@ -10,7 +10,7 @@ and prints a table: render and grad wall time (the faster of two), grad / render
 interior and boundary time, its traversals and their zero-contribution share. With --perf (Debian's
 linux-perf), `perf record` of one more grad run gives the share of its samples inside Embree
 (libembree3) and the five hottest qsil functions, and of one more render run the share of the primal
-renderer's samples inside Embree (what a gradient whose extra work were all rays could reach). With
+renderer's samples inside Embree (about what path shading reaches, in `grad` too). With
 --flat, a second table: `grad` of each scene
 and of the stability teapot and wingnut with every obj shape smooth-shaded (as bundled) and
 flat-shaded (`face_normals`: every non-flat edge a crease, an always-candidate of the
