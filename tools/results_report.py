@@ -430,12 +430,12 @@ def cost_rows(record):
         others = ", ".join(f"{r['scene']} {r['grad_over_render']:.1f}×" for r in record["rows"]
                            if r is not sm and r["grad_over_render"] is not None)
         if g is None:  # a render too short to time (grad_cost.py)
-            rows.append(judged_row("spot-mirror grad / render", f"grad / render ≤ {GRAD_OVER_RENDER_MAX:g} at equal "
-                                   "spp", "spot-mirror", "–", "no record", "render too short to time", source))
+            measured, verdict, why = "–", "no record", "render too short to time"
         else:
-            rows.append(judged_row("spot-mirror grad / render", f"grad / render ≤ {GRAD_OVER_RENDER_MAX:g} at equal "
-                                   "spp", "spot-mirror", f"{g:.1f}×" + (f" (other scenes: {others})" if others else ""),
-                                   "met" if g <= GRAD_OVER_RENDER_MAX else "missed", "", source))
+            measured = f"{g:.1f}×" + (f" (other scenes: {others})" if others else "")
+            verdict, why = ("met" if g <= GRAD_OVER_RENDER_MAX else "missed"), ""
+        rows.append(judged_row("spot-mirror grad / render", f"grad / render ≤ {GRAD_OVER_RENDER_MAX:g} at equal spp",
+                               "spot-mirror", measured, verdict, why, source))
         if "embree_pct" in sm:
             e = sm["embree_pct"]
             rows.append(judged_row("spot-mirror Embree share", f"≥ {EMBREE_SHARE_MIN:g} % of grad's time in Embree",
