@@ -73,7 +73,7 @@ ContourIndex ContourIndex::build(std::span<const ForestShapeInput> shapes, const
   // Link every edge of the set to its mesh edge (one pass over the set).
   for (const auto* arr : {&set.edges(), &set.always_edges()})
     for (const ForestEdge& fe : *arr) {
-      if (fe.shape < 0 || fe.shape >= int(index.meshes_.size())) continue;
+      if (fe.crossing || fe.shape < 0 || fe.shape >= int(index.meshes_.size())) continue;  // no mesh edge
       Mesh& m = index.meshes_[size_t(fe.shape)];
       if (!m.mesh) continue;
       const int i = find_edge(m, fe.v0, fe.v1);

@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <chrono>
 #include <deque>
+#include <tuple>
 
 namespace qsil::edgetree {
 
@@ -178,7 +179,60 @@ EdgeSet EdgeSet::build(std::span<const ForestShapeInput> shapes, const EdgeSetOp
     st.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     f.stats_.push_back(st);
   }
+  if (opt.intersection_curves) add_crossings(f, shapes, opt);
   return f;
+}
+
+void EdgeSet::add_crossings(EdgeSet& f, std::span<const ForestShapeInput> shapes, const EdgeSetOptions& opt) {
+  std::vector<CurveMesh> meshes;
+  int next_id = 0;
+  for (const ForestShapeInput& in : shapes) {
+    meshes.push_back({in.mesh, in.shape});
+    next_id = std::max(next_id, in.shape + 1);
+  }
+  auto segments = std::make_shared<std::vector<CrossingSegment>>(find_intersection_curves(meshes, &f.crossing_stats_));
+  // A segment's group: its two shapes, in order. Segments are sorted by group (stable: the
+  // deterministic order of find_intersection_curves within each).
+  auto key = [](const CrossingSegment& c) {
+    return std::pair(std::min(c.shape[0], c.shape[1]), std::max(c.shape[0], c.shape[1]));
+  };
+  std::stable_sort(segments->begin(), segments->end(),
+                   [&](const CrossingSegment& a, const CrossingSegment& b) { return key(a) < key(b); });
+  f.crossings_ = segments;
+  for (size_t i = 0; i < segments->size();) {
+    size_t j = i;
+    while (j < segments->size() && key((*segments)[j]) == key((*segments)[i])) ++j;
+    CrossingGroup g;
+    g.id = next_id + int(f.crossing_groups_.size());
+    std::tie(g.shape0, g.shape1) = key((*segments)[i]);
+    g.segments = int(j - i);
+    f.crossing_groups_.push_back(g);
+    const int abase = int(f.always_.size());
+    for (size_t k = i; k < j; ++k) {
+      const CrossingSegment& c = (*segments)[k];
+      ForestEdge e;
+      e.cls = EdgeClass::Intersection;
+      e.shape = g.id;
+      e.f0 = c.face[0];
+      e.f1 = c.face[1];
+      e.q0 = c.plane[0];
+      e.q1 = c.plane[1];
+      e.p0 = c.p0;
+      e.p1 = c.p1;
+      e.length = (c.p1 - c.p0).norm();
+      e.angle = kPi;  // a jump of the full radiance, as a boundary edge's (always_edge_weight)
+      e.crossing = &c;
+      f.always_.push_back(e);
+    }
+    const int aend = int(f.always_.size());
+    if (aend - abase > opt.always_tree_min_edges) {
+      int depth = 0;
+      build_topology(f.always_, abase, aend, g.id, /*always=*/true, opt, f.nodes_, f.always_roots_, depth);
+    } else {
+      for (int a = abase; a < aend; ++a) f.loose_always_.push_back(a);
+    }
+    i = j;
+  }
 }
 
 std::vector<ForestShapeInput> forest_inputs(const Scene& scene) {
@@ -199,7 +253,7 @@ std::vector<ForestShapeInput> forest_inputs(const Scene& scene) {
 
 size_t EdgeSet::memory_bytes() const {
   return nodes_.capacity() * sizeof(ForestNode) + edges_.capacity() * sizeof(ForestEdge) +
-         always_.capacity() * sizeof(ForestEdge) +
+         always_.capacity() * sizeof(ForestEdge) + (crossings_ ? crossings_->capacity() * sizeof(CrossingSegment) : 0) +
          (roots_.capacity() + always_roots_.capacity() + loose_always_.capacity()) * sizeof(int);
 }
 

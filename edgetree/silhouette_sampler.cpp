@@ -177,9 +177,8 @@ namespace {
 double velocity_factor(const ForestEdge& e, const SilhouetteQuery& q, const EdgeGeometry& g) {
   if (!q.velocities) return 1.0;
   if (!(g.normal_len > 0)) return 0.0;  // p on the edge's line: no plane, J = 0
-  const auto& V = q.velocities->position[size_t(e.shape)];
-  const SceneVelocities::Block& v0 = V[size_t(e.v0)];
-  const SceneVelocities::Block& v1 = V[size_t(e.v1)];
+  const SceneVelocities::Block v0 = edge_end_velocity(e, 0, *q.velocities);
+  const SceneVelocities::Block v1 = edge_end_velocity(e, 1, *q.velocities);
   double f = 0;
   for (int k = 0; k < q.velocities->num_params; ++k) {
     const double n_dp = g.normal.dot(q.dp.col(k));

@@ -10,8 +10,8 @@
 namespace qsil::edgetree {
 
 double UniformEdgeSampler::weight(const ForestEdge& e) {
-  const bool always =
-      e.f1 < 0 || e.cls == EdgeClass::Boundary || e.cls == EdgeClass::NonManifold || e.cls == EdgeClass::Inconsistent;
+  const bool always = e.f1 < 0 || e.cls == EdgeClass::Boundary || e.cls == EdgeClass::NonManifold ||
+                      e.cls == EdgeClass::Inconsistent || e.cls == EdgeClass::Intersection;
   return e.length * (always ? kPi : e.angle);
 }
 

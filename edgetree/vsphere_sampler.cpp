@@ -125,7 +125,7 @@ int VSphereEdgeSampler::top_candidates(const SilhouetteQuery& q, std::vector<Can
     out.push_back(c);
   }
   for (const ForestEdge& e : edges_.always_edges()) {
-    if (e.crease || !q.is_eligible(e.shape)) continue;  // creases are in the tree's plain BVH
+    if (e.crease || e.crossing || !q.is_eligible(e.shape)) continue;  // in the tree's plain BVH
     Cand c;
     c.edge = &e;
     Box3 b;

@@ -142,9 +142,10 @@ VSphereTree VSphereTree::build(const EdgeSet& set, const Vec3& o) {
   std::vector<std::vector<const ForestEdge*>> plain(static_cast<size_t>(num_shapes)),
       hough(static_cast<size_t>(num_shapes));
   for (const ForestEdge& e : set.edges()) (edge_is_silhouette(e, o) ? plain : hough)[size_t(e.shape)].push_back(&e);
-  // Creases are candidates for every point (no v-sphere test applies): the plain BVH.
+  // Creases and intersection-curve segments are candidates for every point (no v-sphere test
+  // applies): the plain BVH.
   for (const ForestEdge& e : set.always_edges())
-    if (e.crease) plain[size_t(e.shape)].push_back(&e);
+    if (e.crease || e.crossing) plain[size_t(e.shape)].push_back(&e);
   std::vector<BuildItem> items;
   for (int pass = 0; pass < 2; ++pass) {  // plain trees first: edges_[0, plain_edges_) are theirs
     for (int s = 0; s < num_shapes; ++s) {

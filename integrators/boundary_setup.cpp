@@ -22,7 +22,7 @@ bool is_quad_light(const Shape& s) { return s.is_emitter && s.type == "rectangle
 
 }  // namespace
 
-BoundarySetup build_boundary_setup(const Scene& scene, Method method) {
+BoundarySetup build_boundary_setup(const Scene& scene, Method method, bool intersection_curves) {
   QSIL_CHECK_MSG(samples_edges(method), "no edge sampler for method " << method_name(method));
   const auto t0 = std::chrono::steady_clock::now();
   BoundarySetup out;
@@ -32,6 +32,7 @@ BoundarySetup build_boundary_setup(const Scene& scene, Method method) {
     // of it, so the samples are the same).
     edgetree::ForestOptions options;
     options.fit.fit_quadrics = uses_quadrics(method);
+    options.intersection_curves = intersection_curves;
     auto forest = std::make_unique<edgetree::EdgeForest>(edgetree::EdgeForest::build(inputs, options));
     out.forest = forest.get();
     // Contour sets for narrow lobes and small quad lights: the quadric method only (quadric-box
@@ -47,7 +48,9 @@ BoundarySetup build_boundary_setup(const Scene& scene, Method method) {
     out.sampler = std::make_unique<edgetree::QuadricEdgeSampler>(*forest, method);
     out.edges = std::move(forest);
   } else {
-    out.edges = std::make_unique<edgetree::EdgeSet>(edgetree::EdgeSet::build(inputs));
+    edgetree::EdgeSetOptions options;
+    options.intersection_curves = intersection_curves;
+    out.edges = std::make_unique<edgetree::EdgeSet>(edgetree::EdgeSet::build(inputs, options));
     if (method == Method::Uniform) {
       out.sampler = std::make_unique<edgetree::UniformEdgeSampler>(*out.edges);
     } else {
@@ -102,6 +105,8 @@ void describe_boundary_setup(const BoundarySetup& boundary, Method method, int p
   setup.edge_seconds = boundary.seconds;
   setup.edges = int(boundary.edges->edges().size() + boundary.edges->always_edges().size());
   setup.primary_edges = primary_edges;
+  setup.crossing_segments = int(boundary.edges->crossings().size());
+  setup.crossing_seconds = boundary.edges->crossing_stats().seconds;
   if (boundary.forest) {
     for (const auto& st : boundary.forest->stats()) {
       setup.fitted_nodes += st.fitted;
@@ -115,17 +120,26 @@ void describe_boundary_setup(const BoundarySetup& boundary, Method method, int p
 
 void set_up_boundary_term(const Scene& scene, const RayTracer& tracer, Method method, const SceneVelocities* velocities,
                           const std::vector<bool>& moving, double boundary_spp, const EnvironmentLight& environment,
-                          BoundarySetup& boundary, BoundaryContext& bctx, PrimaryEdges& primary, SetupReport& setup) {
-  boundary = build_boundary_setup(scene, method);
+                          BoundarySetup& boundary, BoundaryContext& bctx, PrimaryEdges& primary, SetupReport& setup,
+                          bool intersection_curves) {
+  boundary = build_boundary_setup(scene, method, intersection_curves);
   bctx.sampler = boundary.sampler.get();
   bctx.contours = boundary.contours.get();
   bctx.velocities = velocities;
   bctx.moving = moving;
   bctx.all.assign(scene.shapes.size(), true);
+  // A crossing group moves where either of its shapes does.
+  for (const edgetree::CrossingGroup& g : boundary.edges->crossing_groups()) {
+    const size_t id = size_t(g.id);
+    if (bctx.moving.size() <= id) bctx.moving.resize(id + 1, false);
+    if (bctx.all.size() <= id) bctx.all.resize(id + 1, true);
+    auto moves = [&](int s) { return s >= 0 && s < int(moving.size()) && moving[size_t(s)]; };
+    bctx.moving[id] = moves(g.shape0) || moves(g.shape1);
+  }
   bctx.samples_per_vertex = boundary_spp > 0 ? boundary_spp : default_boundary_spp(method);
   bctx.split_speed = default_split_speed(method);
   set_light_importance(scene, environment, bctx);
-  primary = find_primary_edges(scene, *boundary.edges, moving, tracer);
+  primary = find_primary_edges(scene, *boundary.edges, bctx.moving, tracer);
   describe_boundary_setup(boundary, method, int(primary.edges.size()), setup);
 }
 

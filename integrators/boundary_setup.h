@@ -33,9 +33,11 @@ struct BoundarySetup {
 };
 
 /// Builds the structures of `method` (one of kEdgeSamplingMethods) over every shape of `scene`
-/// (a moving shading point sees static edges move too, docs/architecture.md §5). The v-sphere
-/// tree's Hough origin is the camera centre. The scene must outlive the result.
-BoundarySetup build_boundary_setup(const Scene& scene, Method method);
+/// (a moving shading point sees static edges move too, docs/architecture.md §5), with the
+/// segments of the intersection curves among the always-candidates unless `intersection_curves`
+/// is false. The v-sphere tree's Hough origin is the camera centre. The scene must outlive the
+/// result.
+BoundarySetup build_boundary_setup(const Scene& scene, Method method, bool intersection_curves = true);
 
 /// The importance inputs of the boundary term [QSS 3.6]: every rectangle emitter as a light
 /// polygon weighted by the luminance of its radiance, and the environment's weight (luminance
@@ -65,10 +67,13 @@ void describe_boundary_setup(const BoundarySetup& boundary, Method method, int p
 /// at a static shading point), every shape eligible at a moving one, boundary_spp traversals per
 /// vertex (0: default_boundary_spp of the method) and set_light_importance; `primary` =
 /// find_primary_edges of the `moving` shapes (their visibility from the camera tested with
-/// `tracer`); and describe_boundary_setup into `setup`. `scene`, `tracer` and `velocities` must
-/// outlive the results.
+/// `tracer`); and describe_boundary_setup into `setup`. `moving` and `bctx.all` are extended with
+/// the crossing groups of the edge set (edgetree::CrossingGroup: eligible where either of its
+/// shapes is), and `primary` takes the extended vector. `intersection_curves`: as for
+/// build_boundary_setup. `scene`, `tracer` and `velocities` must outlive the results.
 void set_up_boundary_term(const Scene& scene, const RayTracer& tracer, Method method, const SceneVelocities* velocities,
                           const std::vector<bool>& moving, double boundary_spp, const EnvironmentLight& environment,
-                          BoundarySetup& boundary, BoundaryContext& bctx, PrimaryEdges& primary, SetupReport& setup);
+                          BoundarySetup& boundary, BoundaryContext& bctx, PrimaryEdges& primary, SetupReport& setup,
+                          bool intersection_curves = true);
 
 }  // namespace qsil

@@ -95,7 +95,7 @@ class GradientEstimator final : public Estimator::Impl {
     // ---- The boundary method's structures, only when something moves.
     if (samples_edges(config.method) && vel.any_moving()) {
       set_up_boundary_term(s, tracer, config.method, &vel, vel.moving, config.boundary_spp, lights.environment,
-                           boundary, bctx, primary, setup);
+                           boundary, bctx, primary, setup, config.intersection_curves);
     }
   }
 
@@ -282,9 +282,12 @@ void RenderResult::merge(const RenderResult& other) {
 }
 
 std::string SetupReport::describe() const {
-  char buf[256];
-  std::snprintf(buf, sizeof buf, "%s: %d edges, %d fitted nodes (%d with quadrics), %d primary edges, %.3f s",
-                structure.c_str(), edges, fitted_nodes, quadric_nodes, primary_edges, seconds);
+  char buf[320], crossings[96] = "";
+  if (crossing_segments > 0)
+    std::snprintf(crossings, sizeof crossings, ", %d intersection-curve segments (%.3f s)", crossing_segments,
+                  crossing_seconds);
+  std::snprintf(buf, sizeof buf, "%s: %d edges, %d fitted nodes (%d with quadrics), %d primary edges%s, %.3f s",
+                structure.c_str(), edges, fitted_nodes, quadric_nodes, primary_edges, crossings, seconds);
   return buf;
 }
 

@@ -44,6 +44,15 @@ std::vector<Case> cases() {
       // 1x1 image with a 0.02 deg field of view), depth 2: edges in the point's own plane that do
       // not bound its triangle (face_in_plane, boundary_term.h).
       {"open-box-point", "tests/data/gradient/open-box-point.xml", {}, "box:rotate:0,1,0", 1.2e-2},
+      // Spot sunk into the ground to its belly, rising: the curve where it pierces the floor
+      // (intersection curves), primary and secondary.
+      {"sunk", "scenes/sunk.xml", {}, "spot:translate:0,1,0", 1e-2},
+      // A sphere sunk into a floor, moved up, and a wall piercing a floor under an area light, moved
+      // along its normal (intersection curves: tests/integrators/intersection_curves_test.cpp).
+      {"sunk-sphere", "tests/data/gradient/sunk-sphere.xml", {}, "sphere:translate:0,1,0", 1e-2},
+      {"wall-floor", "tests/data/gradient/wall-floor.xml", {}, "wall:translate:0,0,1", 1e-2},
+      // One OBJ of two overlapping spheres (a self-intersecting mesh) under an area light, translated.
+      {"two-spheres", "tests/data/gradient/two-spheres.xml", {}, "spheres:translate:1,0,0", 1e-2},
   };
 }
 

@@ -193,7 +193,9 @@ PrimaryEdges find_primary_edges(const Scene& scene, const edgetree::EdgeSet& edg
   // Silhouettes and boundary edges from o, and every crease of a flat-shaded shape (its two
   // faces both seen: the shading jumps across it).
   auto consider = [&](const edgetree::ForestEdge& e) {
-    if (e.shape >= int(moving.size()) || !moving[e.shape]) return;
+    // Only moving shapes' edges (and crossing groups with a moving shape); an index `moving`
+    // does not cover is kept (SilhouetteQuery::eligible's rule: never a false reject).
+    if (e.shape < 0 || (e.shape < int(moving.size()) && !moving[size_t(e.shape)])) return;
     if (!edgetree::is_discontinuity(e, o)) return;
     const Vec3 c0 = cam.to_camera(e.p0), c1 = cam.to_camera(e.p1);
     PrimaryEdge pe;

@@ -116,6 +116,35 @@ struct Accumulator {
   }
 };
 
+/// The adjoint of an edge's end velocities, `g0` and `g1` (the derivative of the loss with respect
+/// to the velocity of end 0 and end 1, world), carried to the vertices that move the ends:
+/// `add(chosen, vertex, value)` for each chosen shape's vertex (chosen_index[shape] >= 0). A mesh
+/// edge's ends are its vertices v0 and v1; an end of an intersection-curve segment moves with up
+/// to five vertices of the two crossing triangles, through its Jacobian (CrossingEnd): vertex i
+/// gets J_i^T g.
+template <class Add>
+void add_edge_adjoint(const edgetree::ForestEdge& e, const Vec3& g0, const Vec3& g1,
+                      const std::vector<int>& chosen_index, Add&& add) {
+  if (e.crossing) {
+    for (int k = 0; k < 2; ++k) {
+      const edgetree::CrossingEnd& end = e.crossing->ends[size_t(k)];
+      const Vec3& g = k == 0 ? g0 : g1;
+      for (int i = 0; i < 5; ++i) {
+        const edgetree::VertexRef& r = end.vertices[size_t(i)];
+        if (r.shape < 0 || r.shape >= int(chosen_index.size())) continue;
+        const int ci = chosen_index[size_t(r.shape)];
+        if (ci >= 0) add(ci, r.vertex, Vec3(end.jacobian.middleCols<3>(3 * i).transpose() * g));
+      }
+    }
+    return;
+  }
+  if (e.shape < 0 || e.shape >= int(chosen_index.size())) return;
+  const int ci = chosen_index[size_t(e.shape)];
+  if (ci < 0) return;
+  add(ci, e.v0, g0);
+  add(ci, e.v1, g1);
+}
+
 /// The secondary boundary term of a reverse-mode pass (the reverse of BoundaryHook): the edge's
 /// share goes to the sample's contribution list (first pass only), p's share to L's slots.
 struct ReverseBoundaryHook {
@@ -144,12 +173,13 @@ struct ReverseBoundaryHook {
           const Eigen::Matrix<double, 1, kSlots> Jp = -(g.transpose() * dp);
           if (!Jp.isZero(0.0))
             for (int c = 0; c < 3; ++c) L[c] += RDual(0.0, (weight[c] * Jp).transpose());
-          // The edge's share: its vertices' velocities, (1 - t) v0 + t v1.
-          const int ci = (*chosen_index)[size_t(e.shape)];
-          if (edges && ci >= 0) {
+          // The edge's share: its ends' velocities, (1 - t) v0 + t v1.
+          if (edges) {
             const double a = (adjoint * weight).sum();
-            out->push_back({ci, e.v0, false, Vec3(a * (1 - t) * g)});
-            out->push_back({ci, e.v1, false, Vec3(a * t * g)});
+            add_edge_adjoint(e, Vec3(a * (1 - t) * g), Vec3(a * t * g), *chosen_index,
+                             [&](int ci, int vertex, const Vec3& value) {
+                               out->push_back({ci, vertex, false, value});
+                             });
           }
         });
   }
@@ -184,7 +214,7 @@ class ReverseEstimator::Impl {
     ctx = lights.context(s, tracer);
     if (samples_edges(config.method)) {
       set_up_boundary_term(s, tracer, config.method, nullptr, chosen, config.boundary_spp, lights.environment, boundary,
-                           bctx, primary, setup);
+                           bctx, primary, setup, config.intersection_curves);
     }
   }
 
@@ -246,8 +276,8 @@ ReverseResult ReverseEstimator::run(const std::vector<double>& adjoint, const Re
   const int W = cam.width, H = cam.height;
   const size_t expected = size_t(W) * size_t(H) * 3;
   if (adjoint.size() != expected)
-    throw Error("adjoint image: expected " + std::to_string(W) + " x " + std::to_string(H) + " x 3 = " +
-                std::to_string(expected) + " values (got " + std::to_string(adjoint.size()) + ")");
+    throw Error("adjoint image: expected " + std::to_string(W) + " x " + std::to_string(H) +
+                " x 3 = " + std::to_string(expected) + " values (got " + std::to_string(adjoint.size()) + ")");
   for (size_t i = 0; i < adjoint.size(); ++i)
     if (!std::isfinite(adjoint[i]))
       throw Error("adjoint image: non-finite weight at pixel (" + std::to_string((i / 3) % size_t(W)) + ", " +
@@ -325,9 +355,7 @@ ReverseResult ReverseEstimator::run(const std::vector<double>& adjoint, const Re
         tile_loss[size_t(tile)] += (Eigen::Map<const Color>(&adjoint[3 * pixel]) * sum).sum() / count;
       }
   };
-  auto run_tiles = [&] {
-    tbb::parallel_for(0, tiles, [&](int tile) { tile_body(tile); });
-  };
+  auto run_tiles = [&] { tbb::parallel_for(0, tiles, [&](int tile) { tile_body(tile); }); };
   if (options.threads > 0)
     tbb::task_arena(options.threads).execute(run_tiles);
   else
@@ -366,9 +394,10 @@ ReverseResult ReverseEstimator::run(const std::vector<double>& adjoint, const Re
                                 ++r.nonfinite;
                                 return;
                               }
-                              const int ci = m.chosen_index[size_t(ps.edge->shape)];
-                              d_position[size_t(ci)][size_t(ps.edge->v0)] += g0;
-                              d_position[size_t(ci)][size_t(ps.edge->v1)] += g1;
+                              add_edge_adjoint(*ps.edge, g0, g1, m.chosen_index,
+                                               [&](int ci, int vertex, const Vec3& value) {
+                                                 d_position[size_t(ci)][size_t(vertex)] += value;
+                                               });
                             });
     r.rays += st.rays;
     r.traversals += st.boundary_traversals;

@@ -10,8 +10,12 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cmath>
+#include <functional>
 #include <limits>
+#include <mutex>
+#include <tuple>
 
 namespace qsil {
 
@@ -204,6 +208,118 @@ Vec3 offset_ray_origin(const Vec3& p, const Vec3& ng, const Vec3& dir, double sc
   const double d = kRayOffsetRelative * std::max(scale, (p - local_origin).cwiseAbs().maxCoeff());
   const Vec3 n = ng / len;
   return n.dot(dir) >= 0 ? Vec3(p + d * n) : Vec3(p - d * n);
+}
+
+}  // namespace qsil
+
+namespace qsil {
+
+namespace {
+
+/// One mesh of the broad phase: its triangles' boxes in double and in (outward-rounded) float.
+struct CollideMesh {
+  const TriangleMesh* mesh = nullptr;
+  std::vector<Box3> boxes;  ///< per triangle, world frame, double
+  Vec3 centre = Vec3::Zero();
+};
+
+void collide_bounds(const RTCBoundsFunctionArguments* args) {
+  const auto* m = static_cast<const CollideMesh*>(args->geometryUserPtr);
+  const Box3& b = m->boxes[args->primID];
+  RTCBounds* out = args->bounds_o;
+  // Outward rounding keeps the float box around the double one (conservative).
+  auto lo = [](double x) { return std::nextafter(float(x), -std::numeric_limits<float>::infinity()); };
+  auto hi = [](double x) { return std::nextafter(float(x), std::numeric_limits<float>::infinity()); };
+  const bool finite = b.lo.allFinite() && b.hi.allFinite() && !b.empty();
+  const Vec3 l = finite ? Vec3(b.lo - m->centre) : Vec3::Zero();
+  const Vec3 h = finite ? Vec3(b.hi - m->centre) : Vec3::Zero();
+  out->lower_x = lo(l.x());
+  out->lower_y = lo(l.y());
+  out->lower_z = lo(l.z());
+  out->upper_x = hi(h.x());
+  out->upper_y = hi(h.y());
+  out->upper_z = hi(h.z());
+}
+
+struct CollideState {
+  const std::vector<CollideMesh>* meshes = nullptr;
+  const std::function<void(const TrianglePair&)>* visit = nullptr;
+};
+
+/// Embree's callback (called from its worker threads, often with one pair): the canonical order
+/// of each reported pair, the exact box test, then the visitor.
+void collide_callback(void* user, RTCCollision* collisions, unsigned int count) {
+  const auto* state = static_cast<const CollideState*>(user);
+  const auto& meshes = *state->meshes;
+  for (unsigned i = 0; i < count; ++i) {
+    const TrianglePair p{int(collisions[i].geomID0), int(collisions[i].primID0), int(collisions[i].geomID1),
+                         int(collisions[i].primID1)};
+    if (!(std::pair(p.mesh0, p.triangle0) < std::pair(p.mesh1, p.triangle1))) continue;  // the other order, or itself
+    const Box3& a = meshes[size_t(p.mesh0)].boxes[size_t(p.triangle0)];
+    const Box3& b = meshes[size_t(p.mesh1)].boxes[size_t(p.triangle1)];
+    if ((a.lo.array() <= b.hi.array()).all() && (b.lo.array() <= a.hi.array()).all()) (*state->visit)(p);
+  }
+}
+
+}  // namespace
+
+void for_each_overlapping_triangle_pair(std::span<const TriangleMesh* const> meshes,
+                                        const std::function<void(const TrianglePair&)>& visit, double* build_seconds) {
+  const auto t0 = std::chrono::steady_clock::now();
+  if (build_seconds) *build_seconds = 0;
+  std::vector<CollideMesh> cm(meshes.size());
+  Box3 all;
+  size_t triangles = 0;
+  for (size_t i = 0; i < meshes.size(); ++i) {
+    const TriangleMesh& mesh = *meshes[i];
+    cm[i].mesh = &mesh;
+    cm[i].boxes.resize(mesh.triangles.size());
+    for (size_t f = 0; f < mesh.triangles.size(); ++f) {
+      Box3& b = cm[i].boxes[f];
+      for (int k = 0; k < 3; ++k) b.expand(mesh.positions[size_t(mesh.triangles[f][k])]);
+      if (b.lo.allFinite() && b.hi.allFinite()) all.expand(b);
+    }
+    triangles += mesh.triangles.size();
+  }
+  if (triangles < 2) return;
+  const Vec3 centre = all.empty() ? Vec3::Zero() : all.center();
+  for (CollideMesh& m : cm) m.centre = centre;
+  RTCDevice device = rtcNewDevice(nullptr);
+  if (!device) throw Error("Embree: cannot create device");
+  rtcSetDeviceErrorFunction(device, embree_error, nullptr);
+  RTCScene scene = rtcNewScene(device);
+  for (size_t i = 0; i < cm.size(); ++i) {
+    RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER);
+    rtcSetGeometryUserPrimitiveCount(geom, unsigned(cm[i].boxes.size()));
+    rtcSetGeometryUserData(geom, &cm[i]);
+    rtcSetGeometryBoundsFunction(geom, collide_bounds, nullptr);
+    rtcCommitGeometry(geom);
+    rtcAttachGeometryByID(scene, geom, unsigned(i));
+    rtcReleaseGeometry(geom);
+  }
+  rtcCommitScene(scene);
+  if (build_seconds) *build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  CollideState state;
+  state.meshes = &cm;
+  state.visit = &visit;
+  rtcCollide(scene, scene, collide_callback, &state);
+  const bool failed = rtcGetDeviceError(device) != RTC_ERROR_NONE;
+  rtcReleaseScene(scene);
+  rtcReleaseDevice(device);
+  if (failed) throw Error("Embree: collision query failed");
+}
+
+std::vector<TrianglePair> overlapping_triangle_pairs(std::span<const TriangleMesh* const> meshes) {
+  std::mutex lock;
+  std::vector<TrianglePair> pairs;
+  for_each_overlapping_triangle_pair(meshes, [&](const TrianglePair& p) {
+    std::lock_guard<std::mutex> guard(lock);
+    pairs.push_back(p);
+  });
+  std::sort(pairs.begin(), pairs.end(), [](const TrianglePair& a, const TrianglePair& b) {
+    return std::tie(a.mesh0, a.triangle0, a.mesh1, a.triangle1) < std::tie(b.mesh0, b.triangle0, b.mesh1, b.triangle1);
+  });
+  return pairs;
 }
 
 }  // namespace qsil

@@ -86,6 +86,13 @@ void add_primary_samples_option(CLI::App& app, double& primary_samples) {
       ->check(CLI::PositiveNumber);
 }
 
+void add_intersection_curves_flag(CLI::App& app, bool& intersection_curves) {
+  app.add_flag_callback(
+      "--no-intersection-curves", [&intersection_curves] { intersection_curves = false; },
+      "Do not sample the intersection curves where surfaces cross (to measure what they add: where surfaces "
+      "cross, the derivative is then biased)");
+}
+
 void add_fd_step_option(CLI::App& app, std::vector<double>& h) {
   app.add_option("--h", h,
                  "Finite-difference step per parameter (one value for all, or one per --param; units of theta: "

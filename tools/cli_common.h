@@ -61,6 +61,10 @@ void add_boundary_spp_option(CLI::App& app, double& boundary_spp);
 /// EstimatorConfig::primary_samples).
 void add_primary_samples_option(CLI::App& app, double& primary_samples);
 
+/// Adds --no-intersection-curves, which sets `intersection_curves` to false
+/// (EstimatorConfig::intersection_curves).
+void add_intersection_curves_flag(CLI::App& app, bool& intersection_curves);
+
 /// Adds --h H (finite-difference steps: one for all, or one per --param).
 void add_fd_step_option(CLI::App& app, std::vector<double>& h);
 

@@ -87,9 +87,22 @@ int run_forest(const ForestFlags& f) {
       std::printf("  build time: %.4f s\n", st.build_seconds);
     }
   }
+  for (const edgetree::CrossingGroup& g : forest.crossing_groups()) {
+    edges_total += size_t(g.segments);
+    if (f.stats)
+      std::printf("intersection curve of shapes %d (%s) and %d (%s): %d segments\n", g.shape0,
+                  names[size_t(g.shape0)].c_str(), g.shape1, names[size_t(g.shape1)].c_str(), g.segments);
+  }
+  const edgetree::IntersectionCurveStats& cs = forest.crossing_stats();
+  if (f.stats)
+    std::printf("intersection curves: %lld candidate triangle pairs, %lld crossing, %.4f s (BVH build %.4f s)\n",
+                cs.candidate_pairs, cs.crossing_pairs, cs.seconds, cs.build_seconds);
   const double bpe = edges_total ? double(forest.memory_bytes()) / double(edges_total) : 0.0;
-  std::printf("forest: %zu shapes, %zu edges, %zu nodes, %zu roots, %.4f s, %.1f bytes/edge\n", forest.stats().size(),
-              edges_total, forest.nodes().size(), forest.roots().size(), total, bpe);
+  std::printf(
+      "forest: %zu shapes, %zu edges (%zu intersection-curve segments), %zu nodes, %zu roots, %.4f s, %.1f "
+      "bytes/edge\n",
+      forest.stats().size(), edges_total, forest.crossings().size(), forest.nodes().size(), forest.roots().size(),
+      total, bpe);
   return 0;
 }
 

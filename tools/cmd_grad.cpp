@@ -21,6 +21,7 @@ const CommandRegistrar registrar{
          std::string boundary = "quadric";
          double boundary_spp = 0;
          double primary_samples = kDefaultPrimarySamples;
+         bool intersection_curves = true;
          std::string preview_dir;
        };
        auto flags = std::make_shared<Flags>();
@@ -34,6 +35,7 @@ const CommandRegistrar registrar{
            ->capture_default_str();
        add_boundary_spp_option(app, flags->boundary_spp);
        add_primary_samples_option(app, flags->primary_samples);
+       add_intersection_curves_flag(app, flags->intersection_curves);
        app.add_option("--preview-dir", flags->preview_dir, "Write primal.png and one diverging PNG per parameter here");
        return [flags]() {
          const ProcessGroup& group = process_group();
@@ -42,8 +44,10 @@ const CommandRegistrar registrar{
          group.all_or_none([&] {
            const Method method = parse_method(flags->boundary, "--boundary", kBoundaryMethods);
            scene.emplace(load_scene_with_flags(flags->scene, flags->defines));
-           estimator.emplace(*scene, EstimatorConfig::gradient(parse_parameters(flags->params, *scene), method,
-                                                               flags->boundary_spp, flags->primary_samples));
+           EstimatorConfig config = EstimatorConfig::gradient(parse_parameters(flags->params, *scene), method,
+                                                              flags->boundary_spp, flags->primary_samples);
+           config.intersection_curves = flags->intersection_curves;
+           estimator.emplace(*scene, std::move(config));
          });
          const RenderResult r = group.run(*estimator, flags->render);
          const uint64_t invalid_rays = group_invalid_rays();

@@ -54,6 +54,7 @@ const CommandRegistrar registrar{
          std::string boundary = "quadric";
          double boundary_spp = 0;
          double primary_samples = kDefaultPrimarySamples;
+         bool intersection_curves = true;
        };
        auto flags = std::make_shared<Flags>();
        add_common_flags(app, *flags, "grad.npy");
@@ -70,6 +71,7 @@ const CommandRegistrar registrar{
            ->capture_default_str();
        add_boundary_spp_option(app, flags->boundary_spp);
        add_primary_samples_option(app, flags->primary_samples);
+       add_intersection_curves_flag(app, flags->intersection_curves);
        app.add_option("--image", flags->image, "Also write the primal image of the same paths (EXR)");
        return [flags]() {
          if (process_group().size() > 1) throw Error("reverse: runs in one process (no MPI launcher)");
@@ -77,8 +79,9 @@ const CommandRegistrar registrar{
          const Method method = parse_method(flags->boundary, "--boundary", kBoundaryMethods);
          const Scene scene = load_scene_with_flags(flags->scene, flags->defines);
          const Camera& cam = scene.camera;
-         const ReverseEstimator reverse(scene, ReverseConfig{resolve_shapes(scene, flags->shapes), method,
-                                                             flags->boundary_spp, flags->primary_samples});
+         const ReverseEstimator reverse(scene,
+                                        ReverseConfig{resolve_shapes(scene, flags->shapes), method, flags->boundary_spp,
+                                                      flags->primary_samples, flags->intersection_curves});
          std::vector<double> w;
          double l2 = NAN;
          if (!flags->adjoint.empty()) {

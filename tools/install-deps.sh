@@ -8,7 +8,7 @@ packages=(
   build-essential cmake pkg-config
   libembree-dev libeigen3-dev coinor-libclp-dev libopenexr-dev libimath-dev
   libtinyobjloader-dev libtbb-dev libcli11-dev libpugixml-dev
-  libgtest-dev libgmock-dev libbenchmark-dev libstb-dev libpcg-cpp-dev nlohmann-json3-dev
+  libcgal-dev libgtest-dev libgmock-dev libbenchmark-dev libstb-dev libpcg-cpp-dev nlohmann-json3-dev
   python3 python3-dev python3-matplotlib python3-numpy python3-scipy python3-pytest pybind11-dev
   libopenmpi-dev openmpi-bin
 )

@@ -10,7 +10,10 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <memory>
+#include <span>
+#include <vector>
 
 namespace qsil {
 
@@ -24,6 +27,10 @@ struct Hit {
   /// point is interpolated from them instead of intersecting a ray with the triangle's plane
   /// (which degenerates when the ray grazes the plane).
   bool exact = false;
+  /// For an exact point: the in-plane direction (world) into the part of the triangle whose limit
+  /// the point stands for (SurfaceInteraction::inward; its length scales the offset of rays
+  /// leaving it, at least 1); zero: toward the triangle's centroid (a point on its boundary).
+  Vec3 inward = Vec3::Zero();
   bool valid() const { return shape >= 0; }
 };
 
@@ -91,6 +98,32 @@ class RayTracer {
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
+
+/// Two triangles, each named by its mesh (an index into the span given to
+/// overlapping_triangle_pairs) and its triangle index; (mesh0, triangle0) < (mesh1, triangle1).
+struct TrianglePair {
+  int mesh0 = -1, triangle0 = -1;
+  int mesh1 = -1, triangle1 = -1;
+  friend bool operator==(const TrianglePair&, const TrianglePair&) = default;
+};
+
+/// The broad phase of intersection curves (qsil/edgetree/intersection_curves.h): calls
+/// `visit(pair)` once for every pair of distinct triangles of `meshes` (between two meshes and
+/// within one) whose axis-aligned bounding boxes overlap (closed boxes, in double), from several
+/// threads at once and in no particular order. Embree's rtcCollide intersects the BVH of one
+/// user-geometry scene (a geometry per mesh, one box per triangle, rounded outward to float around
+/// the boxes' common centre) with itself; it reports each pair in both orders, and the one with
+/// (mesh0, triangle0) < (mesh1, triangle1) that passes the exact box test is visited. Nothing is
+/// stored per pair (a million-triangle mesh has tens of millions). Meshes with non-finite
+/// coordinates or degenerate triangles are accepted (a non-finite box overlaps nothing).
+/// `build_seconds` (optional) receives the time of Embree's BVH build. Throws qsil::Error if
+/// Embree cannot be initialised.
+void for_each_overlapping_triangle_pair(std::span<const TriangleMesh* const> meshes,
+                                        const std::function<void(const TrianglePair&)>& visit,
+                                        double* build_seconds = nullptr);
+
+/// for_each_overlapping_triangle_pair's pairs, sorted (for tests and small meshes).
+std::vector<TrianglePair> overlapping_triangle_pairs(std::span<const TriangleMesh* const> meshes);
 
 /// Largest magnitude Embree 3 accepts in a ray's origin and direction components (its FLT_LARGE,
 /// 1.844e18): a larger one fails Embree's `ray.valid()` assertion, which aborts the process.

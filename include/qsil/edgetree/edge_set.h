@@ -14,12 +14,14 @@
 /// Nodes live in one flat array; children of a node are contiguous.
 
 #include "qsil/check.h"
+#include "qsil/edgetree/intersection_curves.h"
 #include "qsil/edgetree/mesh_edges.h"
 #include "qsil/math.h"
 #include "qsil/scene.h"
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <utility>
 #include <vector>
@@ -39,7 +41,9 @@ enum NodeFlags : std::uint16_t {
 
 /// An edge stored in the forest: the mesh edge (vertex and face indices into its shape's mesh,
 /// world planes q0/q1, length, exterior angle, class, shape index) plus its endpoint positions
-/// (world frame, scene units).
+/// (world frame, scene units); or a segment of an intersection curve (cls
+/// EdgeClass::Intersection, `crossing` set; `shape` is then its crossing group's id, no shape of
+/// the scene: EdgeSet::crossing_groups).
 struct ForestEdge : MeshEdge {
   Vec3 p0 = Vec3::Zero();  ///< position of v0
   Vec3 p1 = Vec3::Zero();  ///< position of v1
@@ -51,7 +55,19 @@ struct ForestEdge : MeshEdge {
   /// it is no silhouette, its radiance jumps only in the slivers where one face's shading normal
   /// and geometric normal disagree, which few paths find (docs/design-notes.md "Crease samples").
   bool smooth_crease = false;
+  /// For a segment of an intersection curve: its crossing triangles, planes and how its ends
+  /// move (owned by the EdgeSet, shared by its copies); null for a mesh edge.
+  const CrossingSegment* crossing = nullptr;
 };
+
+/// The velocity of end `end` (0: p0, 1: p1) of edge e for every parameter (3 x kMaxParameters,
+/// world units per unit theta): its vertex's (v0, v1) for a mesh edge, crossing_end_velocity for
+/// a segment of an intersection curve. The velocity of the edge point at t is (1 - t) times that
+/// of end 0 plus t times that of end 1.
+inline SceneVelocities::Block edge_end_velocity(const ForestEdge& e, int end, const SceneVelocities& velocities) {
+  if (e.crossing) return crossing_end_velocity(e.crossing->ends[size_t(end)], velocities);
+  return velocities.position[size_t(e.shape)][size_t(end ? e.v1 : e.v0)];
+}
 
 /// True iff the radiance seen from p can jump across edge e: a silhouette or boundary edge
 /// (edge_is_silhouette), or a crease (its shading jumps there whether or not it is a
@@ -120,9 +136,13 @@ struct ForestShapeInput {
 /// twosided (CreaseSet::All). The inputs point into `scene`, which must outlive them.
 std::vector<ForestShapeInput> forest_inputs(const Scene& scene);
 
-/// Options of the edge set: edge culling and the hierarchy.
+/// Options of the edge set: edge culling, the hierarchy and intersection curves.
 struct EdgeSetOptions {
   EdgeOptions edges;     ///< edge culling (keep_concave)
+  /// Find the intersection curves between the shapes and within each (find_intersection_curves)
+  /// and make their segments always-candidates. Off: a scene whose surfaces cross misses those
+  /// discontinuities (the A/B switch of the tests and comparisons).
+  bool intersection_curves = true;
   int leaf_size = 4;     ///< maximum edges per leaf (1..4)
   int sah_buckets = 10;  ///< SAH buckets along the largest centroid axis [QSS 4.1]
   /// A shape's always-candidate edges get a tree of their own (box-only nodes, no rejection)
@@ -134,7 +154,7 @@ struct EdgeSetOptions {
 /// estimators' set-up reports). The fit counters stay 0 in an edge set that was not fitted.
 struct ForestShapeStats {
   int shape = 0;
-  std::array<int, 6> edge_counts{};  ///< per EdgeClass
+  std::array<int, kEdgeClassCount> edge_counts{};  ///< per EdgeClass
   int edges_total = 0;               ///< unique undirected edges of the mesh
   int edges_kept = 0;                ///< tree candidates
   int edges_always = 0;              ///< always-candidate edges (boundary, non-manifold, inconsistent, creases)
@@ -152,6 +172,17 @@ struct ForestShapeStats {
   int inherited = 0;           ///< inner nodes with the parent's Q_f
   int used_lp = 0;             ///< inner nodes whose D came from the LP
   double build_seconds = 0.0;  ///< wall time of edge extraction and topology (+ fitting in a forest)
+};
+
+/// The segments of the intersection curves between two shapes (or within one), which the edge
+/// set keeps together: always-candidates whose ForestEdge::shape (and whose always-candidate
+/// tree's ForestNode::shape) is `id`, one past the largest input shape index plus the group's
+/// position in EdgeSet::crossing_groups(). They are eligible where either shape is
+/// (SilhouetteQuery::eligible is extended with their ids by the boundary term's set-up).
+struct CrossingGroup {
+  int id = 0;                  ///< the group's index in eligibility vectors and ForestEdge::shape
+  int shape0 = 0, shape1 = 0;  ///< the two shapes, shape0 <= shape1 (equal: a self-intersection)
+  int segments = 0;            ///< number of its segments
 };
 
 /// The candidate edges of several shapes and their SAH hierarchy (see the file comment).
@@ -181,10 +212,11 @@ class EdgeSet {
   const std::vector<int>& loose_always() const { return loose_always_; }
   /// Tree edges in leaf order (a leaf's edges are contiguous), grouped by shape.
   const std::vector<ForestEdge>& edges() const { return edges_; }
-  /// Always-candidate edges (boundary, non-manifold, inconsistently oriented, creases): a
-  /// possible discontinuity for every shading point, never in a silhouette tree; those of a shape
-  /// with more than EdgeSetOptions::always_tree_min_edges are in its always-candidate tree (leaf
-  /// order), the others are loose_always().
+  /// Always-candidate edges (boundary, non-manifold, inconsistently oriented, creases, and the
+  /// segments of intersection curves, group by group after every shape's): a possible
+  /// discontinuity for every shading point, never in a silhouette tree; those of a shape (or
+  /// crossing group) with more than EdgeSetOptions::always_tree_min_edges are in its
+  /// always-candidate tree (leaf order), the others are loose_always().
   const std::vector<ForestEdge>& always_edges() const { return always_; }
   /// Children of an inner node as a node-index range [first, first+count); empty for a leaf.
   std::span<const ForestNode> children(int i) const {
@@ -206,7 +238,17 @@ class EdgeSet {
   }
   /// Per-shape statistics, in input order.
   const std::vector<ForestShapeStats>& stats() const { return stats_; }
-  /// Bytes of the arrays (nodes, edges, roots).
+  /// The crossing groups (intersection curves between a pair of shapes), by (shape0, shape1);
+  /// empty when no surfaces cross or EdgeSetOptions::intersection_curves is off.
+  const std::vector<CrossingGroup>& crossing_groups() const { return crossing_groups_; }
+  /// Every segment of the intersection curves (the always-candidate edges of the groups point
+  /// into this array), or empty.
+  std::span<const CrossingSegment> crossings() const {
+    return crossings_ ? std::span<const CrossingSegment>(*crossings_) : std::span<const CrossingSegment>();
+  }
+  /// What finding the intersection curves did (zeros when off).
+  const IntersectionCurveStats& crossing_stats() const { return crossing_stats_; }
+  /// Bytes of the arrays (nodes, edges, roots, intersection-curve segments).
   size_t memory_bytes() const;
 
  protected:
@@ -222,8 +264,15 @@ class EdgeSet {
   std::vector<int> loose_always_;
   std::vector<ForestEdge> edges_;
   std::vector<ForestEdge> always_;
+  /// Finds the intersection curves of `shapes` and appends their segments to `f` as
+  /// always-candidates, one crossing group per pair of shapes (a tree per group when it has more
+  /// than opt.always_tree_min_edges segments).
+  static void add_crossings(EdgeSet& f, std::span<const ForestShapeInput> shapes, const EdgeSetOptions& opt);
   std::vector<ForestShapeStats> stats_;
   std::vector<ShapeTree> trees_;  ///< per input shape
+  std::vector<CrossingGroup> crossing_groups_;
+  std::shared_ptr<const std::vector<CrossingSegment>> crossings_;  ///< shared by copies: edges point into it
+  IntersectionCurveStats crossing_stats_;
 };
 
 }  // namespace qsil::edgetree

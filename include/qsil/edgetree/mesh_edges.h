@@ -29,12 +29,20 @@ namespace qsil::edgetree {
 /// - NonManifold: more than two adjacent faces; reported and treated as boundary.
 /// - Inconsistent: two faces that traverse the edge in the same direction (inconsistent winding);
 ///   counted and treated as boundary (always a candidate), which is conservative.
-enum class EdgeClass : std::uint8_t { Convex, Concave, Flat, Boundary, NonManifold, Inconsistent };
+/// - Intersection: no mesh edge but a segment of an intersection curve, where triangle f0 of one
+///   shape crosses triangle f1 of another (or of the same) shape (intersection_curves.h); a
+///   discontinuity for every shading point. Never made by build_mesh_edges.
+enum class EdgeClass : std::uint8_t { Convex, Concave, Flat, Boundary, NonManifold, Inconsistent, Intersection };
+
+/// Number of EdgeClass values (the size of per-class counters).
+inline constexpr int kEdgeClassCount = 7;
 
 /// Exterior bend angle (radians) below which an interior edge is flat (meshes README criterion).
 inline constexpr double kFlatAngle = 1e-4;
 
-/// One undirected mesh edge.
+/// One undirected mesh edge (or, with cls Intersection, a segment of an intersection curve: v0 =
+/// v1 = -1, f0 and f1 the crossing triangles of two shapes, q0 and q1 their planes, `shape` the
+/// index of its crossing group; see ForestEdge::crossing).
 struct MeshEdge {
   int v0 = -1, v1 = -1;    ///< vertex indices into TriangleMesh::positions, v0 < v1
   int f0 = -1, f1 = -1;    ///< adjacent faces (indices into TriangleMesh::triangles);
@@ -63,7 +71,7 @@ struct MeshEdgeSet {
                                   ///< concave when keep_concave), in `edges` order
   std::vector<int> always;        ///< indices into `edges` of the always-candidate edges
                                   ///< (boundary, non-manifold, inconsistent)
-  std::array<int, 6> counts{};    ///< number of edges per EdgeClass (indexed by the enum value)
+  std::array<int, kEdgeClassCount> counts{};  ///< number of edges per EdgeClass (indexed by the enum value)
   int count(EdgeClass c) const { return counts[static_cast<int>(c)]; }
 };
 
@@ -88,10 +96,11 @@ inline int opposite_vertex_index(const TriangleMesh& mesh, const MeshEdge& e, in
 
 /// Exact silhouette predicate of one edge for the shading point p (world frame) [QSS 3.1]:
 /// true iff (q0.x)(q1.x) <= 0 with x = [p, 1]; always true for boundary, non-manifold and
-/// inconsistent edges. This is the ground truth of every soundness test (docs/architecture.md §3).
+/// inconsistent edges and for intersection-curve segments. This is the ground truth of every soundness test (docs/architecture.md §3).
 /// Inline: the traversal's flat choices test tens of edges per query with it.
 inline bool edge_is_silhouette(const MeshEdge& e, const Vec3& p) {
-  if (e.f1 < 0 || e.cls == EdgeClass::Boundary || e.cls == EdgeClass::NonManifold || e.cls == EdgeClass::Inconsistent)
+  if (e.f1 < 0 || e.cls == EdgeClass::Boundary || e.cls == EdgeClass::NonManifold || e.cls == EdgeClass::Inconsistent ||
+      e.cls == EdgeClass::Intersection)
     return true;
   const double g0 = e.q0.head<3>().dot(p) + e.q0[3];
   const double g1 = e.q1.head<3>().dot(p) + e.q1[3];

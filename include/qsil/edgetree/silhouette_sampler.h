@@ -100,7 +100,9 @@ struct SilhouetteQuery {
   Frame frame;            ///< local shading frame (z = shading normal), world -> local
   LTC ltc;                ///< the BSDF's LTC in that frame (norm = albedo weight)
   /// eligible[s]: edges of shape s may contribute (their velocity relative to p is non-zero).
-  /// Null: every shape is eligible.
+  /// Null: every shape is eligible. An index beyond its size (a crossing group the vector does
+  /// not cover, CrossingGroup) is eligible: eligibility only saves work, so an unknown one is
+  /// kept (a zero relative velocity gives a zero contribution, never a bias).
   const std::vector<bool>* eligible = nullptr;
   /// Light-aware importance [QSS 3.6]: fbar = env_weight * fbar(Omega(B_p)) + sum over lights of
   /// weight * (integral of f_s cos over Omega(B_p) ∩ Omega(light)) / |Omega(B_p)|, summed over
@@ -123,9 +125,9 @@ struct SilhouetteQuery {
   /// The edges must outlive the query's use.
   std::span<const ForestEdge* const> contour;
 
-  /// True when edges of shape `shape` may contribute (see `eligible`).
+  /// True when edges of shape (or crossing group) `shape` may contribute (see `eligible`).
   bool is_eligible(int shape) const {
-    return !eligible || (shape < int(eligible->size()) && (*eligible)[size_t(shape)]);
+    return !eligible || shape >= int(eligible->size()) || (*eligible)[size_t(shape)];
   }
 };
 

@@ -29,6 +29,7 @@
 #include "qsil/edgetree/edge_forest.h"
 #include "qsil/edgetree/edge_sampler.h"
 #include "qsil/edgetree/mesh_edges.h"
+#include "qsil/integrators/crossing_jump.h"
 #include "qsil/integrators/geometry_view.h"
 #include "qsil/integrators/path_tracer.h"
 
@@ -99,8 +100,9 @@ inline edgetree::LTC bsdf_ltc(const BSDFDesc& b, Vec3 wo_local) {
 /// smooth shading the shading normal tilts away from T's and it does not: treating these edges as
 /// silhouettes made grad 60 % high for a vertex of a smooth bunny (docs/gradient-checks.md).
 struct OwnFace {
-  int face = -1;           ///< the edge's face in p's plane (face_in_plane: p's triangle when the edge bounds it), else -1
-  Vec3 up = Vec3::Zero();  ///< T's unit geometric normal turned toward p's viewer (world)
+  int face = -1;  ///< the edge's face in p's plane (face_in_plane: p's triangle when the edge bounds it), else -1
+  Vec3 up = Vec3::Zero();  ///< T's unit geometric normal turned toward p's viewer (world); for a
+                           ///< segment of an intersection curve always set at a path vertex (crossing_jump)
 };
 
 /// The vertex of face `face` (one of edge `e`'s two faces) that is not on the edge (world).
@@ -131,6 +133,12 @@ inline int face_in_plane(const TriangleMesh& mesh, const edgetree::ForestEdge& e
 /// tracer (leaves_below).
 inline IgnoreSet edge_faces(const edgetree::ForestEdge& e, bool through_back_faces) {
   IgnoreSet ignore;
+  if (e.crossing) {  // a segment of an intersection curve: its two crossing triangles
+    ignore.prims[0] = {e.crossing->shape[0], e.crossing->face[0]};
+    ignore.prims[1] = {e.crossing->shape[1], e.crossing->face[1]};
+    ignore.through_back_faces = through_back_faces;
+    return ignore;
+  }
   ignore.prims[0] = {e.shape, e.f0};
   ignore.prims[1] = {e.f1 >= 0 ? e.shape : -1, e.f1};
   ignore.through_back_faces = through_back_faces;
@@ -174,10 +182,14 @@ inline bool point_visible(const RayTracer& tracer, const Vec3& origin, const Vec
 /// velocity (J = g . v_t), before any ray is traced or random number drawn; returning false ends
 /// the evaluation with a zero contribution (edge_jump: no relative velocity). Reverse mode
 /// (integrators/reverse.cpp) keeps g itself: the adjoint of v_t.
+///
+/// A segment of an intersection curve (e.crossing) is evaluated by crossing_jump, with own.up.
 template <class Accept>
 bool edge_jump_with(const PathContext& ctx, const edgetree::ForestEdge& e, double t, const Vec3& p,
                     const Vec3& vis_origin, bool through_back_faces, const OwnFace& own, int seg, Sampler& sampler,
                     PathStats& stats, Color& jump, Accept&& accept) {
+  if (e.crossing)
+    return crossing_jump(ctx, e, t, p, vis_origin, through_back_faces, own.up, seg, sampler, stats, jump, accept);
   const Scene& scene = *ctx.scene;
   const Vec3 w0 = e.p0 - p, w1 = e.p1 - p;
   const Vec3 wt = w0 + t * (w1 - w0);
@@ -188,7 +200,7 @@ bool edge_jump_with(const PathContext& ctx, const edgetree::ForestEdge& e, doubl
   if (!accept(Vec3(n01 / (dist * dist * dist)))) return false;
   const TriangleMesh& mesh = scene.shapes[e.shape].mesh;
   IgnoreSet ignore = edge_faces(e, through_back_faces);
-  int own_occluder = -1;     // for an edge in p's plane: the other face, when it occludes
+  int own_occluder = -1;      // for an edge in p's plane: the other face, when it occludes
   Vec3 below = Vec3::Zero();  // for an edge in p's plane: the offset of its rays below that plane
   if (own.face >= 0) {
     // ---- An edge in p's plane (OwnFace): a silhouette of the other face T' when T' lies on the
@@ -270,10 +282,16 @@ bool edge_jump_with(const PathContext& ctx, const edgetree::ForestEdge& e, doubl
 }
 
 /// Forward mode's Jacobian of an edge point: J[k] = g . v_t for every parameter k, v_t the velocity
-/// of the edge point (1 - t) v0 + t v1 (from `vel`) minus dp (3 x N, p's velocity).
+/// of the edge point (1 - t) v0 + t v1 (its ends' velocities, edgetree::edge_end_velocity, from
+/// `vel`) minus dp (3 x N, p's velocity).
 template <int N>
 Eigen::Matrix<double, 1, N> edge_point_jacobian(const SceneVelocities& vel, const edgetree::ForestEdge& e, double t,
                                                 const Vec3& g, const Eigen::Matrix<double, 3, N>& dp) {
+  if (e.crossing) {
+    const SceneVelocities::Block v0 = edgetree::edge_end_velocity(e, 0, vel),
+                                 v1 = edgetree::edge_end_velocity(e, 1, vel);
+    return g.transpose() * ((1 - t) * v0.template leftCols<N>() + t * v1.template leftCols<N>() - dp);
+  }
   const auto& V = vel.position[e.shape];
   return g.transpose() * ((1 - t) * V[e.v0].template leftCols<N>() + t * V[e.v1].template leftCols<N>() - dp);
 }
@@ -485,7 +503,8 @@ void for_each_boundary_sample(const PathContext& ctx, const BoundaryContext& bct
   edgetree::SilhouetteSampleSet set;
   for (int sample = 0; sample < traversals; ++sample) {
     ++stats.boundary_traversals;
-    bctx.sampler->sample_set(q, [&sampler] { return sampler.next(); }, set);
+    bctx.sampler->sample_set(
+        q, [&sampler] { return sampler.next(); }, set);
     // Counted per traversal: zero when none of its edge points contributed.
     bool contributed = false;
     for (int k = 0; k < set.count; ++k) {
@@ -498,14 +517,15 @@ void for_each_boundary_sample(const PathContext& ctx, const BoundaryContext& bct
       Color jump;
       Vec3 g;
       OwnFace own;
-      if (e.shape == si.shape) {
+      if (e.crossing) {
+        own.up = value(si.ng).dot(wo_world) < 0 ? Vec3(-value(si.ng)) : value(si.ng);  // crossing_jump
+      } else if (e.shape == si.shape) {
         own.face = face_in_plane(ctx.scene->shapes[size_t(e.shape)].mesh, e, si.triangle, value(si.ng), q.p);
         if (own.face >= 0) own.up = value(si.ng).dot(wo_world) < 0 ? Vec3(-value(si.ng)) : value(si.ng);
       }
       // An edge in p's plane takes its rays below that plane (edge_jump_with): its origin there.
       const Vec3 vis_origin = spawn_origin(si, own.face >= 0 ? Vec3(-own.up) : w);
-      if (!edge_jump_with(ctx, e, s.t, q.p, vis_origin, leaves_below(si, wo_world, w), own, seg, sampler,
-                          stats, jump,
+      if (!edge_jump_with(ctx, e, s.t, q.p, vis_origin, leaves_below(si, wo_world, w), own, seg, sampler, stats, jump,
                           [&](const Vec3& gv) {
                             g = gv;
                             return accept(e, s.t, gv);

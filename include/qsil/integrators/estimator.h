@@ -57,6 +57,10 @@ struct EstimatorConfig {
   double primary_samples = kDefaultPrimarySamples;
   /// Finite differences: one step h per parameter (units of theta); empty: default_fd_step each.
   std::vector<double> fd_steps;
+  /// Edge-sampling methods: sample the intersection curves where surfaces cross
+  /// (qsil/edgetree/intersection_curves.h) as discontinuities. Off only to measure what they add
+  /// (`--no-intersection-curves`): where surfaces cross, the derivative is then biased.
+  bool intersection_curves = true;
 
   /// The primal image.
   static EstimatorConfig primal();
@@ -117,7 +121,12 @@ struct SetupReport {
   int fitted_nodes = 0;   ///< forest nodes with a fitted dual bound (0 without a forest)
   int quadric_nodes = 0;  ///< ...of which carry a bounding quadric pair (0 unless `quadric`)
   int primary_edges = 0;  ///< discontinuity edges of moving shapes seen from the camera
-  /// One line: "STRUCTURE: E edges, F fitted nodes (Q with quadrics), P primary edges, T s".
+  /// Segments of intersection curves among the edges (EdgeSet::crossings) and the wall time of
+  /// finding them (broad and narrow phase; part of edge_seconds).
+  int crossing_segments = 0;
+  double crossing_seconds = 0;
+  /// One line: "STRUCTURE: E edges, F fitted nodes (Q with quadrics), P primary edges, T s", with
+  /// ", C intersection-curve segments (T s)" before the time when there are any.
   std::string describe() const;
 };
 

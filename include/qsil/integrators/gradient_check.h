@@ -40,9 +40,10 @@ struct Case {
   Case resolved(const std::filesystem::path& root) const;
 };
 
-/// The gradient-check cases: three bundled scenes, two boundary-term scenes, a flat-shaded
-/// (face_normals) case and three smooth-shading cases: spot-mirror, shadow-quad, direct (scenes/),
-/// plane-light, spot-selfshadow, faceted-cube, smooth-cube, mirror-point, open-box-point
+/// The gradient-check cases: four bundled scenes, two boundary-term scenes, a flat-shaded
+/// (face_normals) case, three smooth-shading cases and three intersection-curve cases:
+/// spot-mirror, shadow-quad, direct, sunk (scenes/), plane-light, spot-selfshadow, faceted-cube,
+/// smooth-cube, mirror-point, open-box-point, sunk-sphere, wall-floor, two-spheres
 /// (tests/data/gradient/).
 std::vector<Case> cases();
 

@@ -40,6 +40,8 @@ struct ReverseConfig {
   double boundary_spp = 0;          ///< EstimatorConfig::boundary_spp (0: the method's default)
   /// Primary boundary-term edge samples per pixel sample (EstimatorConfig::primary_samples).
   double primary_samples = kDefaultPrimarySamples;
+  /// Sample the intersection curves where surfaces cross (EstimatorConfig::intersection_curves).
+  bool intersection_curves = true;
 };
 
 /// One reverse-mode run.

@@ -27,9 +27,11 @@ struct SurfaceInteraction {
   /// ray offset, is relative to coordinates measured from it, not from the world origin.
   Vec3 local_origin = Vec3::Zero();
   /// For a point given exactly (Hit::exact: a sampled edge point, on the triangle's boundary):
-  /// the unit in-plane direction from p toward the triangle's centroid, else zero. Rays leaving
-  /// such a point start a relative offset inside the triangle (spawn_origin), so that what they
-  /// see is the limit from the face's interior, not from the edge itself.
+  /// the unit in-plane direction from p toward the triangle's centroid (or Hit::inward when
+  /// given: a point of an intersection curve, the limit from the part of the triangle that the
+  /// viewer sees, whose length may exceed 1), else zero. Rays leaving such a point start a
+  /// relative offset inside the triangle (spawn_origin, times the length), so that what they see
+  /// is the limit from the face's interior, not from the edge itself.
   Vec3 inward = Vec3::Zero();
   /// Every derivative is zero (a constant hit, lift_interaction): what depends on this point
   /// alone (its shading frame, BSDF values) may be computed in doubles and lifted. Code that
@@ -97,7 +99,10 @@ SurfaceInteraction<typename View::Real> make_interaction(const View& view, const
     si.p = v0 + e1 * si.b1 + e2 * si.b2;
     si.t = (si.p - o).dot(dT);
     const Vec3 to_centroid = value(Vec3T<T>((v0 + v1 + v2) / T(3.0) - si.p));
-    if (to_centroid.norm() > 0) si.inward = to_centroid.normalized();
+    if (hit.inward != Vec3::Zero())
+      si.inward = hit.inward;
+    else if (to_centroid.norm() > 0)
+      si.inward = to_centroid.normalized();
   } else {
     si.b1 = tvec.dot(pvec) * inv_det;
     si.b2 = dT.dot(qvec) * inv_det;

@@ -1,0 +1,344 @@
+/// @file intersection_curves.cpp
+/// Crossing segments of triangle meshes; see qsil/edgetree/intersection_curves.h. The only file
+/// that includes CGAL (its exact orientation predicate).
+
+#include "qsil/edgetree/intersection_curves.h"
+
+#include "qsil/ray_tracer.h"
+
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <unsupported/Eigen/AutoDiff>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <optional>
+#include <tuple>
+
+namespace qsil::edgetree {
+
+namespace {
+
+using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+
+/// Sign of det[b - a, c - a, x - a] = sign of ((b - a) x (c - a)) . (x - a): +1 where x lies on
+/// the side the counter-clockwise normal of (a, b, c) points to. Exact: a floating-point filter
+/// (Shewchuk 1997, orient3d's first stage: error bound (7 + 56 eps) eps times the permanent), and
+/// CGAL's exact predicate where the filter cannot decide.
+int orientation(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& x) {
+  const double adx = b.x() - a.x(), ady = b.y() - a.y(), adz = b.z() - a.z();
+  const double bdx = c.x() - a.x(), bdy = c.y() - a.y(), bdz = c.z() - a.z();
+  const double cdx = x.x() - a.x(), cdy = x.y() - a.y(), cdz = x.z() - a.z();
+  const double det = adx * (bdy * cdz - bdz * cdy) + bdx * (cdy * adz - cdz * ady) + cdx * (ady * bdz - adz * bdy);
+  const double permanent = std::abs(adx) * (std::abs(bdy * cdz) + std::abs(bdz * cdy)) +
+                           std::abs(bdx) * (std::abs(cdy * adz) + std::abs(cdz * ady)) +
+                           std::abs(cdx) * (std::abs(ady * bdz) + std::abs(adz * bdy));
+  constexpr double eps = std::numeric_limits<double>::epsilon() / 2;  // unit roundoff
+  const double bound = (7.0 + 56.0 * eps) * eps * permanent;
+  if (std::isfinite(det) && std::isfinite(permanent)) {
+    if (det > bound) return 1;
+    if (det < -bound) return -1;
+  }
+  const auto o = CGAL::orientation(Kernel::Point_3(a.x(), a.y(), a.z()), Kernel::Point_3(b.x(), b.y(), b.z()),
+                                   Kernel::Point_3(c.x(), c.y(), c.z()), Kernel::Point_3(x.x(), x.y(), x.z()));
+  return o == CGAL::POSITIVE ? 1 : (o == CGAL::NEGATIVE ? -1 : 0);
+}
+
+/// One triangle of a pair: its vertices and where they come from.
+struct Tri {
+  std::array<Vec3, 3> x;
+  std::array<VertexRef, 3> ref;
+};
+
+/// How an end of a triangle's interval on the planes' common line is made: the crossing of edge
+/// (i, j) of triangle `self` (0: A, 1: B) with the other's plane, or (j < 0) its vertex i, shared.
+struct EndRule {
+  int self = 0, i = 0, j = -1;
+};
+
+using AD = Eigen::AutoDiffScalar<Eigen::Matrix<double, 15, 1>>;
+using Vec3AD = Eigen::Matrix<AD, 3, 1>;
+
+Vec3AD variable(const Vec3& x, int slot) {
+  Vec3AD v;
+  for (int k = 0; k < 3; ++k) v[k] = AD(x[k], 15, 3 * slot + k);
+  return v;
+}
+
+/// The end made by `rule` with its Jacobian (see CrossingEnd); the point itself in `point`.
+CrossingEnd make_end(const EndRule& rule, const std::array<const Tri*, 2>& tri, Vec3& point) {
+  CrossingEnd end;
+  const Tri& self = *tri[size_t(rule.self)];
+  if (rule.j < 0) {  // a shared vertex
+    end.vertices[0] = self.ref[size_t(rule.i)];
+    end.jacobian.leftCols<3>().setIdentity();
+    point = self.x[size_t(rule.i)];
+    return end;
+  }
+  const Tri& other = *tri[size_t(1 - rule.self)];
+  // X = a + s (b - a), s = n.(c0 - a) / n.(b - a), n = (c1 - c0) x (c2 - c0). The edge's ends in
+  // a fixed order (by vertex), so that the two triangles of an edge make the same point to the
+  // last bit and a curve's segments meet exactly.
+  int i = rule.i, j = rule.j;
+  if (std::pair(self.ref[size_t(j)].shape, self.ref[size_t(j)].vertex) <
+      std::pair(self.ref[size_t(i)].shape, self.ref[size_t(i)].vertex))
+    std::swap(i, j);
+  const Vec3AD a = variable(self.x[size_t(i)], 0), b = variable(self.x[size_t(j)], 1);
+  const Vec3AD c0 = variable(other.x[0], 2), c1 = variable(other.x[1], 3), c2 = variable(other.x[2], 4);
+  const Vec3AD n = (c1 - c0).cross(c2 - c0);
+  AD s = n.dot(c0 - a) / n.dot(b - a);
+  // The predicates put a and b strictly on opposite sides; rounding may not: stay on the edge.
+  if (!(s.value() >= 0)) s = AD(0.0, Eigen::Matrix<double, 15, 1>::Zero());
+  if (!(s.value() <= 1)) s = AD(1.0, Eigen::Matrix<double, 15, 1>::Zero());
+  const Vec3AD X = a + (b - a) * s;
+  end.vertices = {self.ref[size_t(i)], self.ref[size_t(j)], other.ref[0], other.ref[1], other.ref[2]};
+  for (int k = 0; k < 3; ++k) {
+    point[k] = X[k].value();
+    end.jacobian.row(k) = X[k].derivatives().transpose();
+  }
+  return end;
+}
+
+/// Which vertices of A and B the two share (by position: welded meshes share positions exactly
+/// where they share vertices; two shapes may too), and how many.
+struct Sharing {
+  std::array<std::array<bool, 3>, 2> shared{};
+  int count = 0;
+};
+
+Sharing sharing(const Tri& A, const Tri& B) {
+  Sharing s;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      if (A.x[size_t(i)] == B.x[size_t(j)]) {
+        s.shared[0][size_t(i)] = s.shared[1][size_t(j)] = true;
+        ++s.count;
+      }
+  return s;
+}
+
+/// How a triangle meets the other's plane: strictly on both sides (Cross), with exactly one edge
+/// in the plane and its third vertex strictly in front of it (EdgeInPlane: a crossing only if
+/// the triangle across that edge lies strictly behind, find_intersection_curves), or neither.
+enum class Meets { None, Cross, EdgeInPlane };
+
+struct Sides {
+  std::array<std::array<int, 3>, 2> side{};  ///< per triangle and vertex: -1, 0 (in the plane), +1
+  std::array<Meets, 2> meets{Meets::None, Meets::None};
+};
+
+/// The exact sides of every vertex of A and B against the other's plane (a shared vertex: 0).
+Sides sides(const Tri& A, const Tri& B, const Sharing& sh) {
+  Sides out;
+  const std::array<const Tri*, 2> tri{&A, &B};
+  for (int t = 0; t < 2; ++t) {
+    const Tri& self = *tri[size_t(t)];
+    const Tri& other = *tri[size_t(1 - t)];
+    int plus = 0, minus = 0;
+    for (int i = 0; i < 3; ++i) {
+      const int s =
+          sh.shared[size_t(t)][size_t(i)] ? 0 : orientation(other.x[0], other.x[1], other.x[2], self.x[size_t(i)]);
+      out.side[size_t(t)][size_t(i)] = s;
+      plus += s > 0;
+      minus += s < 0;
+    }
+    if (plus > 0 && minus > 0)
+      out.meets[size_t(t)] = Meets::Cross;
+    else if (plus == 1 && minus == 0)
+      out.meets[size_t(t)] = Meets::EdgeInPlane;
+  }
+  return out;
+}
+
+/// The segment of A and B given their sides (each triangle crossing the other's plane, or lying
+/// on it with an edge: see Meets): the overlap of the two triangles' intervals on the line where
+/// the planes meet, when it is more than a point. A vertex in the other plane is an end of its
+/// triangle's interval; an edge whose ends are strictly on opposite sides gives the other end.
+std::optional<CrossingSegment> segment(const Tri& A, const Tri& B, const Sides& sd) {
+  const std::array<const Tri*, 2> tri{&A, &B};
+  // ---- Each triangle's interval on the planes' common line (direction D = nA x nB).
+  const Vec3 nA = (A.x[1] - A.x[0]).cross(A.x[2] - A.x[0]), nB = (B.x[1] - B.x[0]).cross(B.x[2] - B.x[0]);
+  const Vec3 D = nA.cross(nB);
+  if (!(D.squaredNorm() > 0) || !D.allFinite()) return std::nullopt;
+  struct Candidate {
+    EndRule rule;
+    CrossingEnd end;
+    Vec3 point;
+    double lambda;
+  };
+  std::array<std::array<Candidate, 2>, 2> ends;
+  for (int t = 0; t < 2; ++t) {
+    int k = 0;
+    const auto& s = sd.side[size_t(t)];
+    for (int i = 0; i < 3 && k < 2; ++i) {
+      if (s[size_t(i)] == 0) ends[size_t(t)][size_t(k++)].rule = {t, i, -1};
+      const int j = (i + 1) % 3;
+      if (k < 2 && s[size_t(i)] * s[size_t(j)] < 0) ends[size_t(t)][size_t(k++)].rule = {t, i, j};
+    }
+    if (k != 2) return std::nullopt;  // cannot happen for Cross or EdgeInPlane (kept for safety)
+    for (Candidate& c : ends[size_t(t)]) {
+      c.end = make_end(c.rule, tri, c.point);
+      c.lambda = D.dot(c.point);
+    }
+    if (ends[size_t(t)][1].lambda < ends[size_t(t)][0].lambda) std::swap(ends[size_t(t)][0], ends[size_t(t)][1]);
+  }
+  // ---- The overlap of the two intervals: more than a point.
+  const Candidate& lo = ends[0][0].lambda >= ends[1][0].lambda ? ends[0][0] : ends[1][0];
+  const Candidate& hi = ends[0][1].lambda <= ends[1][1].lambda ? ends[0][1] : ends[1][1];
+  if (!(lo.lambda < hi.lambda) || lo.point == hi.point || !lo.point.allFinite() || !hi.point.allFinite())
+    return std::nullopt;
+  CrossingSegment seg;
+  seg.p0 = lo.point;
+  seg.p1 = hi.point;
+  seg.ends = {lo.end, hi.end};
+  const std::array<Vec3, 2> n{nA.normalized(), nB.normalized()};
+  for (int t = 0; t < 2; ++t) {
+    const Tri& self = *tri[size_t(t)];
+    seg.plane[size_t(t)] << n[size_t(t)], -n[size_t(t)].dot(self.x[0]);
+  }
+  return seg;
+}
+
+/// A pair whose crossing depends on a neighbouring triangle: triangle `which` (0: the pair's
+/// first, 1: its second) lies on the other's plane with its edge (i, j), its third vertex in front.
+struct Pending {
+  TrianglePair pair;
+  int which = 0, i = 0, j = 0;
+};
+
+/// The triangles of a mesh by undirected edge: (min vertex, max vertex, triangle), sorted.
+std::vector<std::array<int, 3>> edge_table(const TriangleMesh& mesh) {
+  std::vector<std::array<int, 3>> t;
+  t.reserve(3 * mesh.triangles.size());
+  for (int f = 0; f < mesh.num_triangles(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const int a = mesh.triangles[size_t(f)][k], b = mesh.triangles[size_t(f)][(k + 1) % 3];
+      t.push_back({std::min(a, b), std::max(a, b), f});
+    }
+  std::sort(t.begin(), t.end());
+  return t;
+}
+
+}  // namespace
+
+SceneVelocities::Block crossing_end_velocity(const CrossingEnd& end, const SceneVelocities& velocities) {
+  SceneVelocities::Block v = SceneVelocities::Block::Zero();
+  for (int i = 0; i < 5; ++i) {
+    const VertexRef& r = end.vertices[size_t(i)];
+    if (r.shape < 0 || r.shape >= int(velocities.position.size())) continue;
+    const auto& V = velocities.position[size_t(r.shape)];
+    if (r.vertex < 0 || r.vertex >= int(V.size())) continue;
+    v += end.jacobian.middleCols<3>(3 * i) * V[size_t(r.vertex)];
+  }
+  return v;
+}
+
+std::vector<CrossingSegment> find_intersection_curves(std::span<const CurveMesh> meshes,
+                                                      IntersectionCurveStats* stats) {
+  const auto t0 = std::chrono::steady_clock::now();
+  std::vector<const TriangleMesh*> ptrs;
+  for (const CurveMesh& m : meshes) ptrs.push_back(m.mesh);
+  auto triangle = [&](int mesh, int f) {
+    const CurveMesh& m = meshes[size_t(mesh)];
+    Tri t;
+    for (int k = 0; k < 3; ++k) {
+      const int v = m.mesh->triangles[size_t(f)][k];
+      t.x[size_t(k)] = m.mesh->positions[size_t(v)];
+      t.ref[size_t(k)] = {m.shape, v};
+    }
+    return t;
+  };
+  auto finish = [&](const TrianglePair& p, CrossingSegment& seg) {
+    seg.shape = {meshes[size_t(p.mesh0)].shape, meshes[size_t(p.mesh1)].shape};
+    seg.face = {p.triangle0, p.triangle1};
+  };
+  // ---- The narrow phase inside the broad phase's callback (Embree's threads), per thread.
+  struct Local {
+    std::vector<std::pair<TrianglePair, CrossingSegment>> found;
+    std::vector<Pending> pending;
+    long long pairs = 0;
+  };
+  tbb::enumerable_thread_specific<Local> local;
+  double build_seconds = 0;
+  for_each_overlapping_triangle_pair(
+      ptrs,
+      [&](const TrianglePair& p) {
+        Local& out = local.local();
+        ++out.pairs;
+        const Tri A = triangle(p.mesh0, p.triangle0), B = triangle(p.mesh1, p.triangle1);
+        const Sharing sh = sharing(A, B);
+        if (sh.count >= 2) return;  // an edge (or the triangle) in common: no crossing
+        const Sides sd = sides(A, B, sh);
+        if (sd.meets[0] == Meets::Cross && sd.meets[1] == Meets::Cross) {
+          std::optional<CrossingSegment> seg = segment(A, B, sd);
+          if (!seg) return;
+          finish(p, *seg);
+          out.found.emplace_back(p, *seg);
+        } else {
+          for (int t = 0; t < 2; ++t)
+            if (sd.meets[size_t(t)] == Meets::EdgeInPlane && sd.meets[size_t(1 - t)] == Meets::Cross) {
+              const auto& sgn = sd.side[size_t(t)];
+              const int k = sgn[0] > 0 ? 0 : (sgn[1] > 0 ? 1 : 2);  // the vertex in front; the edge is the other two
+              out.pending.push_back({p, t, (k + 1) % 3, (k + 2) % 3});
+            }
+        }
+      },
+      &build_seconds);
+  std::vector<std::pair<TrianglePair, CrossingSegment>> found;
+  std::vector<Pending> pending;
+  long long candidate_pairs = 0;
+  for (Local& l : local) {
+    found.insert(found.end(), l.found.begin(), l.found.end());
+    pending.insert(pending.end(), l.pending.begin(), l.pending.end());
+    candidate_pairs += l.pairs;
+  }
+  auto key = [](const TrianglePair& p) { return std::tie(p.mesh0, p.triangle0, p.mesh1, p.triangle1); };
+  std::sort(pending.begin(), pending.end(), [&](const Pending& a, const Pending& b) {
+    return std::tuple_cat(key(a.pair), std::tie(a.which)) < std::tuple_cat(key(b.pair), std::tie(b.which));
+  });
+  // ---- A triangle with an edge in the other's plane crosses it along that edge when the
+  // triangle across the edge lies strictly behind the plane (a ring of vertices exactly in the
+  // other surface); with it in front or in the plane, the surfaces only touch there.
+  std::vector<std::vector<std::array<int, 3>>> tables(meshes.size());
+  for (const Pending& pd : pending) {
+    const TrianglePair& p = pd.pair;
+    const int mesh = pd.which == 0 ? p.mesh0 : p.mesh1, face = pd.which == 0 ? p.triangle0 : p.triangle1;
+    const TriangleMesh& m = *meshes[size_t(mesh)].mesh;
+    if (tables[size_t(mesh)].empty()) tables[size_t(mesh)] = edge_table(m);
+    const auto& table = tables[size_t(mesh)];
+    const int a = m.triangles[size_t(face)][pd.i], c = m.triangles[size_t(face)][pd.j];
+    const std::array<int, 3> edge{std::min(a, c), std::max(a, c), -1};
+    auto it = std::lower_bound(table.begin(), table.end(), edge);
+    std::vector<int> across;
+    for (; it != table.end() && (*it)[0] == edge[0] && (*it)[1] == edge[1]; ++it)
+      if ((*it)[2] != face) across.push_back((*it)[2]);
+    if (across.size() != 1) continue;  // a boundary or non-manifold edge
+    const Tri A = triangle(p.mesh0, p.triangle0), B = triangle(p.mesh1, p.triangle1);
+    const Tri& other = pd.which == 0 ? B : A;
+    const Tri N = triangle(mesh, across[0]);
+    int third = 0;
+    for (int k = 0; k < 3; ++k)
+      if (m.triangles[size_t(across[0])][k] != a && m.triangles[size_t(across[0])][k] != c) third = k;
+    if (orientation(other.x[0], other.x[1], other.x[2], N.x[size_t(third)]) >= 0) continue;
+    std::optional<CrossingSegment> seg = segment(A, B, sides(A, B, sharing(A, B)));
+    if (!seg) continue;
+    finish(p, *seg);
+    found.emplace_back(p, *seg);
+  }
+  // ---- A deterministic order, whatever the threads did: by the pair.
+  std::sort(found.begin(), found.end(), [&](const auto& a, const auto& b) { return key(a.first) < key(b.first); });
+  std::vector<CrossingSegment> out;
+  out.reserve(found.size());
+  for (auto& f : found) out.push_back(f.second);
+  if (stats) {
+    stats->candidate_pairs = candidate_pairs;
+    stats->crossing_pairs = (long long)out.size();
+    stats->build_seconds = build_seconds;
+    stats->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  }
+  return out;
+}
+
+}  // namespace qsil::edgetree
