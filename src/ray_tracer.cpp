@@ -216,9 +216,9 @@ namespace qsil {
 
 namespace {
 
-/// One mesh of the broad phase: its triangles' boxes in double and in (outward-rounded) float.
+/// One mesh of the broad phase: its triangles' boxes (double) and the centre Embree's float boxes are
+/// taken around (collide_bounds rounds them outward).
 struct CollideMesh {
-  const TriangleMesh* mesh = nullptr;
   std::vector<Box3> boxes;  ///< per triangle, world frame, double
   Vec3 centre = Vec3::Zero();
 };
@@ -272,7 +272,6 @@ void for_each_overlapping_triangle_pair(std::span<const TriangleMesh* const> mes
   size_t triangles = 0;
   for (size_t i = 0; i < meshes.size(); ++i) {
     const TriangleMesh& mesh = *meshes[i];
-    cm[i].mesh = &mesh;
     cm[i].boxes.resize(mesh.triangles.size());
     for (size_t f = 0; f < mesh.triangles.size(); ++f) {
       Box3& b = cm[i].boxes[f];

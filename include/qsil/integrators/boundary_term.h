@@ -30,6 +30,7 @@
 #include "qsil/edgetree/edge_sampler.h"
 #include "qsil/edgetree/mesh_edges.h"
 #include "qsil/integrators/crossing_jump.h"
+#include "qsil/integrators/edge_point.h"
 #include "qsil/integrators/geometry_view.h"
 #include "qsil/integrators/path_tracer.h"
 
@@ -145,17 +146,6 @@ inline IgnoreSet edge_faces(const edgetree::ForestEdge& e, bool through_back_fac
   return ignore;
 }
 
-/// Whether `point` (world) is visible from `origin`: nothing but what `ignore` ignores is hit by
-/// the ray from origin aimed at the point itself, which stops 1/4096 of the distance short of it
-/// (the boundary term's visibility test, shared by edge_jump_with and the primary term's
-/// pieces). A point at the origin is visible.
-inline bool point_visible(const RayTracer& tracer, const Vec3& origin, const Vec3& point, const IgnoreSet& ignore) {
-  const Vec3 to = point - origin;
-  const double dist = to.norm();
-  if (!(dist > 0)) return true;
-  return !tracer.occluded(origin, to / dist, dist * (1.0 - 1.0 / 4096.0), ignore);
-}
-
 /// The radiance jump and the Jacobian at a point of a discontinuity edge seen from p (shared by
 /// the secondary and the primary boundary terms). On success (returns true):
 /// - jump = s (L_bg - L_fg): the occluder-side sign times background minus foreground radiance
@@ -191,13 +181,10 @@ bool edge_jump_with(const PathContext& ctx, const edgetree::ForestEdge& e, doubl
   if (e.crossing)
     return crossing_jump(ctx, e, t, p, vis_origin, through_back_faces, own.up, seg, sampler, stats, jump, accept);
   const Scene& scene = *ctx.scene;
-  const Vec3 w0 = e.p0 - p, w1 = e.p1 - p;
-  const Vec3 wt = w0 + t * (w1 - w0);
-  const double dist = wt.norm();
-  if (!(dist > 0)) return false;
-  const Vec3 w = wt / dist;
-  const Vec3 n01 = w0.cross(w1);
-  if (!accept(Vec3(n01 / (dist * dist * dist)))) return false;
+  const std::optional<EdgeSight> sight = edge_sight(e, t, p);
+  if (!sight) return false;
+  const Vec3 &w = sight->w, &wt = sight->wt, &n01 = sight->n01;
+  if (!accept(sight->jacobian_form())) return false;
   const TriangleMesh& mesh = scene.shapes[e.shape].mesh;
   IgnoreSet ignore = edge_faces(e, through_back_faces);
   int own_occluder = -1;      // for an edge in p's plane: the other face, when it occludes

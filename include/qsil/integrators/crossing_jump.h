@@ -29,6 +29,7 @@
 /// - p on the curve's line (in both planes): 0.
 
 #include "qsil/edgetree/edge_set.h"
+#include "qsil/integrators/edge_point.h"
 #include "qsil/integrators/path_tracer.h"
 
 #include <algorithm>
@@ -69,12 +70,9 @@ bool crossing_jump(const PathContext& ctx, const edgetree::ForestEdge& e, double
                    PathStats& stats, Color& jump, Accept&& accept) {
   const edgetree::CrossingSegment& c = *e.crossing;
   const Scene& scene = *ctx.scene;
-  const Vec3 w0 = e.p0 - p, w1 = e.p1 - p;
-  const Vec3 wt = w0 + t * (w1 - w0);
-  const double dist = wt.norm();
-  if (!(dist > 0)) return false;
-  const Vec3 w = wt / dist;
-  const Vec3 n01 = w0.cross(w1);
+  const std::optional<EdgeSight> sight = edge_sight(e, t, p);
+  if (!sight) return false;
+  const Vec3 &w = sight->w, &n01 = sight->n01;
   const Vec3 xe = e.p0 + t * (e.p1 - e.p0);
   const std::array<Vec3, 2> n{c.plane[0].head<3>(), c.plane[1].head<3>()};
   const std::array<double, 2> height{n[0].dot(p) + c.plane[0][3], n[1].dot(p) + c.plane[1][3]};
@@ -82,7 +80,7 @@ bool crossing_jump(const PathContext& ctx, const edgetree::ForestEdge& e, double
   const std::array<bool, 2> in_plane{std::abs(height[0]) <= 0x1p-32 * scale, std::abs(height[1]) <= 0x1p-32 * scale};
   if (in_plane[0] && in_plane[1]) return false;  // p on the curve's line
   if ((in_plane[0] || in_plane[1]) && up == Vec3::Zero()) return false;
-  if (!accept(Vec3(n01 / (dist * dist * dist)))) return false;
+  if (!accept(sight->jacobian_form())) return false;
 
   // The direction in triangle i's plane, perpendicular to the line, toward the side of the other
   // triangle's plane with sign `toward` (+1: the side its normal points to).
@@ -124,14 +122,13 @@ bool crossing_jump(const PathContext& ctx, const edgetree::ForestEdge& e, double
     const Hit h = ctx.tracer->intersect(origin, w, kInf, ig);
     return Color(trace_path(ctx, pv, origin, w, h, seg, 0.0, rng, stats));
   };
+  // point_visible, where the point is not the origin (a ray is traced and counted).
   auto visible = [&](const Vec3& origin, const Vec3& target, bool through) {
-    const Vec3 to = target - origin;
-    const double d = to.norm();
-    if (!(d > 0)) return false;
+    if (!((target - origin).norm() > 0)) return false;
     IgnoreSet ig = ignore;
     ig.through_back_faces = through;
     ++stats.rays;
-    return !ctx.tracer->occluded(origin, to / d, d * (1.0 - 1.0 / 4096.0), ig);
+    return point_visible(*ctx.tracer, origin, target, ig);
   };
   // Common random numbers: both sides continue their paths with the same random numbers.
   Sampler same = sampler;
