@@ -1,7 +1,7 @@
 /// @file conic.cpp
 /// Point on a conic (line and polar line) and convex point-in-polygon [QSS Appendix C].
 
-#include "edgetree/conic.h"
+#include "conic.h"
 
 #include <cmath>
 

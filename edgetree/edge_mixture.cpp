@@ -1,9 +1,9 @@
 /// @file edge_mixture.cpp
 /// See edge_mixture.h.
 
-#include "edgetree/edge_mixture.h"
+#include "edge_mixture.h"
 
-#include "edgetree/positive_part.h"
+#include "positive_part.h"
 
 #include <algorithm>
 #include <cmath>

@@ -4,7 +4,7 @@
 /// importance that comes with it (docs/architecture.md §5 "Importance" and "The point on the
 /// edge"). Private to edgetree/.
 
-#include "edgetree/edge_point_sampler.h"
+#include "edge_point_sampler.h"
 #include "qsil/edgetree/silhouette_sampler.h"
 
 #include <array>

@@ -2,7 +2,7 @@
 /// Closed-form CDF sampling of a point on an edge under the LTC-weighted [QSS] Eq. 4 integrand,
 /// with a defensive angle-uniform share (see edge_point_sampler.h).
 
-#include "edgetree/edge_point_sampler.h"
+#include "edge_point_sampler.h"
 
 #include <algorithm>
 #include <cmath>

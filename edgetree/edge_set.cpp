@@ -4,7 +4,7 @@
 
 #include "qsil/edgetree/edge_set.h"
 
-#include "edgetree/sah_split.h"
+#include "sah_split.h"
 
 #include <tbb/parallel_for.h>
 

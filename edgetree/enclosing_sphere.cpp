@@ -2,8 +2,8 @@
 /// Welzl's smallest enclosing sphere with move-to-front and the extremal-points approximation
 /// [QSS 4.4, Appendix G].
 
-#include "edgetree/enclosing_sphere.h"
-#include "edgetree/extremes.h"
+#include "enclosing_sphere.h"
+#include "extremes.h"
 
 #include <algorithm>
 #include <cmath>

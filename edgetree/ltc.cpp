@@ -12,7 +12,7 @@ namespace {
 
 /// The fitted table: [alpha node][cos node] = {m00, m02, m20, m22, norm} (layout in ltc.h).
 constexpr double kTable[kLTCAlphaCount][kLTCCosCount][5] = {
-#include "edgetree/ltc_ggx_table.inc"
+#include "ltc_ggx_table.inc"
 };
 
 /// atan2(y, x) by a degree-11 odd minimax polynomial on [0, 1] with octant reduction: absolute

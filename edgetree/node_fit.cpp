@@ -3,9 +3,9 @@
 
 #include "qsil/edgetree/node_fit.h"
 
-#include "edgetree/offset_direction.h"
-#include "edgetree/quadric_fit.h"
-#include "edgetree/quadric_offsets.h"
+#include "offset_direction.h"
+#include "quadric_fit.h"
+#include "quadric_offsets.h"
 
 #include <algorithm>
 #include <cmath>

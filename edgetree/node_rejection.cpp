@@ -3,7 +3,7 @@
 
 #include "qsil/edgetree/node_rejection.h"
 
-#include "edgetree/conic.h"
+#include "conic.h"
 
 #include <algorithm>
 #include <array>
@@ -171,13 +171,12 @@ bool leaf_has_silhouette(const EdgeSet& edges, int leaf, const Vec3& p) {
   return false;
 }
 
-bool may_have_silhouette(const EdgeForest& forest, int node, const Vec3& p, Method method) {
-  QSIL_DCHECK(uses_edge_forest(method));
+bool may_have_silhouette(const EdgeForest& forest, int node, const Vec3& p, NodeTest test) {
   const ForestNode& n = forest.node(node);
   if (n.always()) return true;  // an always-candidate tree: no rejection
   if (n.is_leaf()) return leaf_has_silhouette(forest, node, p);
   if (n.unrejectable() || n.bound < 0) return true;
-  return bound_may_have_silhouette(forest.bounds()[size_t(n.bound)], method == Method::QuadricBox || n.box_only(), p);
+  return bound_may_have_silhouette(forest.bounds()[size_t(n.bound)], test == NodeTest::DualBox || n.box_only(), p);
 }
 
 bool node_has_silhouette(const EdgeSet& edges, int node, const Vec3& p) {

@@ -1,10 +1,10 @@
 /// @file offset_direction.cpp
 /// Offset direction D and basis A [QSS 3.2, 4.4].
 
-#include "edgetree/offset_direction.h"
+#include "offset_direction.h"
 
-#include "edgetree/enclosing_sphere.h"
-#include "edgetree/offset_lp.h"
+#include "enclosing_sphere.h"
+#include "offset_lp.h"
 
 #include <cmath>
 #include <vector>

@@ -1,9 +1,9 @@
 /// @file offset_lp.cpp
 /// [QSS Eq. 6] solved with COIN-OR CLP. The only file of qsil that includes CLP.
 
-#include "edgetree/offset_lp.h"
+#include "offset_lp.h"
 
-#include "edgetree/extremes.h"
+#include "extremes.h"
 
 #include <coin/ClpSimplex.hpp>
 

@@ -1,7 +1,7 @@
 /// @file quadric_fit.cpp
 /// Taubin-style dual quadric fit [QSS 4.3, Eq. 5].
 
-#include "edgetree/quadric_fit.h"
+#include "quadric_fit.h"
 
 #include "qsil/edgetree/local_frame.h"
 

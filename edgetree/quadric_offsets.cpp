@@ -1,7 +1,7 @@
 /// @file quadric_offsets.cpp
 /// Closed-form lambda range over a wedge [QSS 4.2, Appendix D].
 
-#include "edgetree/quadric_offsets.h"
+#include "quadric_offsets.h"
 
 #include <algorithm>
 #include <cmath>

@@ -7,17 +7,16 @@
 
 namespace qsil::edgetree {
 
-QuadricEdgeSampler::QuadricEdgeSampler(const EdgeForest& forest, Method method) : forest_(forest), method_(method) {
-  QSIL_CHECK(uses_edge_forest(method));
+QuadricEdgeSampler::QuadricEdgeSampler(const EdgeForest& forest, NodeTest test) : forest_(forest), test_(test) {
 }
 
 SilhouetteSample QuadricEdgeSampler::sample(const SilhouetteQuery& query, const std::function<double()>& next) const {
-  return sample_silhouette(forest_, query, next, method_);
+  return sample_silhouette(forest_, query, next, test_);
 }
 
 void QuadricEdgeSampler::sample_set(const SilhouetteQuery& query, const std::function<double()>& next,
                                     SilhouetteSampleSet& out) const {
-  sample_silhouette_set(forest_, query, next, method_, out);
+  sample_silhouette_set(forest_, query, next, test_, out);
 }
 
 }  // namespace qsil::edgetree

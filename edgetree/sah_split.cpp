@@ -1,7 +1,7 @@
 /// @file sah_split.cpp
 /// Binned SAH split of edges [QSS 4.1].
 
-#include "edgetree/sah_split.h"
+#include "sah_split.h"
 
 #include <algorithm>
 #include <vector>

@@ -3,9 +3,9 @@
 
 #include "qsil/edgetree/silhouette_sampler.h"
 
-#include "edgetree/discrete_choice.h"
-#include "edgetree/edge_mixture.h"
-#include "edgetree/positive_part.h"
+#include "discrete_choice.h"
+#include "edge_mixture.h"
+#include "positive_part.h"
 
 #include <algorithm>
 #include <array>
@@ -69,22 +69,22 @@ NodeWeight leaf_edge_weight(const ForestEdge& e, const Prepared& pq);
 NodeWeight loose_edge_weight(const ForestEdge& e, const Prepared& pq);
 
 /// Whether node n may lead to a silhouette for the query (the test of a non-always node).
-bool accepted(const EdgeForest& f, int n, const SilhouetteQuery& q, Method method) {
+bool accepted(const EdgeForest& f, int n, const SilhouetteQuery& q, NodeTest test) {
   const ForestNode& node = f.node(n);
-  if (method == Method::Quadric && !node.is_leaf() && node.edge_end - node.edge_begin <= kExactTestEdges)
+  if (test == NodeTest::DualBoxAndQuadrics && !node.is_leaf() && node.edge_end - node.edge_begin <= kExactTestEdges)
     return node_has_silhouette(f, n, q.p);
-  return may_have_silhouette(f, n, q.p, method);
+  return may_have_silhouette(f, n, q.p, test);
 }
 
 /// The candidates at the top level: accepted, eligible forest roots, the roots of the
 /// always-candidate trees (never rejected) and the loose always-candidate edges.
-int top_candidates(const EdgeForest& f, const Prepared& pq, Method method, std::vector<Candidate>& out, int& tests) {
+int top_candidates(const EdgeForest& f, const Prepared& pq, NodeTest test, std::vector<Candidate>& out, int& tests) {
   const SilhouetteQuery& q = pq.q;
   out.clear();
   for (int r : f.roots()) {
     if (!q.is_eligible(f.node(r).shape)) continue;
     ++tests;
-    if (!accepted(f, r, q, method)) continue;
+    if (!accepted(f, r, q, test)) continue;
     out.push_back({r, nullptr, node_weight(f.node(r), pq)});
   }
   for (int r : f.always_roots())
@@ -101,14 +101,14 @@ int top_candidates(const EdgeForest& f, const Prepared& pq, Method method, std::
 /// a single candidate is chosen with probability 1 whatever its weights (choice_probabilities
 /// gives exactly 1 for n = 1), and 17 % of the inner choices and 56 % of the leaf choices on
 /// spot-mirror have one candidate.
-int child_candidates(const EdgeForest& f, int n, const Prepared& pq, Method method, std::array<Candidate, 4>& out,
+int child_candidates(const EdgeForest& f, int n, const Prepared& pq, NodeTest test, std::array<Candidate, 4>& out,
                      int& tests) {
   int k = 0;
   const ForestNode& node = f.node(n);
   for (int c = node.first; c < node.first + node.count; ++c) {
     if (!f.node(c).always()) {  // always-candidate trees have no rejection test
       ++tests;
-      if (!accepted(f, c, pq.q, method)) continue;
+      if (!accepted(f, c, pq.q, test)) continue;
     }
     out[k++] = {c, nullptr, {}};
   }
@@ -133,8 +133,8 @@ constexpr int kNearFlatEdges = 1024;
 
 /// Whether the traversal chooses an edge of node `node` directly (flat_candidates) for a query
 /// at p.
-bool is_flat(const ForestNode& node, Method method, const Vec3& p) {
-  if (method != Method::Quadric || node.is_leaf()) return false;
+bool is_flat(const ForestNode& node, NodeTest test, const Vec3& p) {
+  if (test != NodeTest::DualBoxAndQuadrics || node.is_leaf()) return false;
   const int edges = node.edge_end - node.edge_begin;
   if (edges <= kFlatEdges) return true;
   if (edges > kNearFlatEdges) return false;
@@ -392,9 +392,9 @@ struct TopLevel {
   int tests = 0;
 };
 
-void top_level(const EdgeForest& forest, const Prepared& pq, Method method, TopLevel& top) {
+void top_level(const EdgeForest& forest, const Prepared& pq, NodeTest test, TopLevel& top) {
   top.tests = 0;
-  top.n = top_candidates(forest, pq, method, top.cand, top.tests);
+  top.n = top_candidates(forest, pq, test, top.cand, top.tests);
   top.prob.resize(size_t(std::max(top.n, 1)));
   if (top.n > 0) choice_probabilities(top.cand, top.n, top.prob.data());
 }
@@ -447,14 +447,14 @@ bool remove_split(TopLevel& top, const std::array<int, kMaxSplitEdges>& idx, int
 
 /// From the top-level candidate `cur` (chosen with probability pmf) down to an edge and a point.
 SilhouetteSample descend(const EdgeForest& forest, const Prepared& pq, const std::function<double()>& next,
-                         Method method, Candidate cur, double pmf, int tests) {
+                         NodeTest test, Candidate cur, double pmf, int tests) {
   std::array<Candidate, 4> cand;
   std::array<double, 4> p4;
   // ---- Descend: inner nodes choose among accepted children, leaves among silhouette edges,
   // small nodes among all the discontinuity edges below them.
   while (!cur.edge) {
     const ForestNode& node = forest.node(cur.node);
-    if (is_flat(node, method, pq.q.p)) {
+    if (is_flat(node, test, pq.q.p)) {
       thread_local std::vector<Candidate> flat;
       thread_local std::vector<double> prob;
       const int k = flat_candidates(forest, cur.node, pq, flat, prob);
@@ -469,7 +469,7 @@ SilhouetteSample descend(const EdgeForest& forest, const Prepared& pq, const std
       break;
     }
     const int k = node.is_leaf() ? leaf_candidates(forest, cur.node, pq, cand)
-                                 : child_candidates(forest, cur.node, pq, method, cand, tests);
+                                 : child_candidates(forest, cur.node, pq, test, cand, tests);
     if (k == 0) {  // a false accept: no silhouette below (a zero-contribution traversal)
       SilhouetteSample none;
       none.rejection_tests = tests;
@@ -487,17 +487,16 @@ SilhouetteSample descend(const EdgeForest& forest, const Prepared& pq, const std
 }  // namespace
 
 SilhouetteSample sample_silhouette(const EdgeForest& forest, const SilhouetteQuery& query,
-                                   const std::function<double()>& next, Method method) {
-  QSIL_DCHECK(uses_edge_forest(method));
+                                   const std::function<double()>& next, NodeTest test) {
   const Prepared pq = prepare(query);
   thread_local TopLevel top;
-  top_level(forest, pq, method, top);
+  top_level(forest, pq, test, top);
   SilhouetteSample s;
   s.rejection_tests = top.tests;
   if (top.n == 0) return s;
   const int i = choose(top.prob.data(), top.n, next());
   if (i < 0) return s;
-  return descend(forest, pq, next, method, top.cand[size_t(i)], top.prob[size_t(i)], top.tests);
+  return descend(forest, pq, next, test, top.cand[size_t(i)], top.prob[size_t(i)], top.tests);
 }
 
 namespace {
@@ -527,12 +526,11 @@ SilhouetteSample sample_contour(std::span<const ForestEdge* const> contour, cons
 }  // namespace
 
 void sample_silhouette_set(const EdgeForest& forest, const SilhouetteQuery& query, const std::function<double()>& next,
-                           Method method, SilhouetteSampleSet& out) {
-  QSIL_DCHECK(uses_edge_forest(method));
+                           NodeTest test, SilhouetteSampleSet& out) {
   out.count = 0;
   const Prepared pq = prepare(query);
   thread_local TopLevel top;
-  top_level(forest, pq, method, top);
+  top_level(forest, pq, test, top);
   std::array<int, kMaxSplitEdges> idx;
   const int n_split = top.n > 0 ? split_indices(top, idx) : 0;
   // ---- The contour set, less the split edges (which keep their point of probability 1).
@@ -566,13 +564,13 @@ void sample_silhouette_set(const EdgeForest& forest, const SilhouetteQuery& quer
   if (n_split > 0 && !remove_split(top, idx, n_split)) return;
   const int i = choose(top.prob.data(), top.n, next());
   if (i < 0) return;
-  push(descend(forest, pq, next, method, top.cand[size_t(i)], top.prob[size_t(i)], top.tests));
+  push(descend(forest, pq, next, test, top.cand[size_t(i)], top.prob[size_t(i)], top.tests));
 }
 
-std::vector<const ForestEdge*> split_edges(const EdgeForest& forest, const SilhouetteQuery& query, Method method,
+std::vector<const ForestEdge*> split_edges(const EdgeForest& forest, const SilhouetteQuery& query, NodeTest test,
                                            double* split_probability) {
   TopLevel top;
-  top_level(forest, prepare(query), method, top);
+  top_level(forest, prepare(query), test, top);
   std::array<int, kMaxSplitEdges> idx;
   const int n_split = top.n > 0 ? split_indices(top, idx) : 0;
   std::vector<const ForestEdge*> out;
@@ -610,7 +608,7 @@ namespace {
 
 /// The probability with which a traversal from the top-level choice `top` reaches `edge`, by
 /// walking the same choices (silhouette_edge_probability, traversal_edge_probability).
-double walk_probability(const EdgeForest& forest, const Prepared& pq, Method method, const TopLevel& top,
+double walk_probability(const EdgeForest& forest, const Prepared& pq, NodeTest test, const TopLevel& top,
                         const ForestEdge* edge) {
   // A candidate leads to `edge` when it is that edge or a node whose edge range holds it.
   auto leads_to = [&](const Candidate& c) {
@@ -631,7 +629,7 @@ double walk_probability(const EdgeForest& forest, const Prepared& pq, Method met
   std::array<double, 4> p4;
   while (!cur.edge) {
     const ForestNode& node = forest.node(cur.node);
-    if (is_flat(node, method, pq.q.p)) {
+    if (is_flat(node, test, pq.q.p)) {
       std::vector<Candidate> flat;
       std::vector<double> prob;
       const int k = flat_candidates(forest, cur.node, pq, flat, prob);
@@ -640,7 +638,7 @@ double walk_probability(const EdgeForest& forest, const Prepared& pq, Method met
       return 0;
     }
     const int k = node.is_leaf() ? leaf_candidates(forest, cur.node, pq, cand)
-                                 : child_candidates(forest, cur.node, pq, method, cand, tests);
+                                 : child_candidates(forest, cur.node, pq, test, cand, tests);
     if (k == 0) return 0;
     level_probabilities(cand, k, p4);
     bool found = false;
@@ -659,22 +657,22 @@ double walk_probability(const EdgeForest& forest, const Prepared& pq, Method met
 }  // namespace
 
 double silhouette_edge_probability(const EdgeForest& forest, const SilhouetteQuery& query, const ForestEdge* edge,
-                                   Method method) {
+                                   NodeTest test) {
   const Prepared pq = prepare(query);
   TopLevel top;
-  top_level(forest, pq, method, top);
-  return walk_probability(forest, pq, method, top, edge);
+  top_level(forest, pq, test, top);
+  return walk_probability(forest, pq, test, top, edge);
 }
 
 double traversal_edge_probability(const EdgeForest& forest, const SilhouetteQuery& query, const ForestEdge* edge,
-                                  Method method) {
+                                  NodeTest test) {
   const Prepared pq = prepare(query);
   TopLevel top;
-  top_level(forest, pq, method, top);
+  top_level(forest, pq, test, top);
   std::array<int, kMaxSplitEdges> idx;
   const int n_split = top.n > 0 ? split_indices(top, idx) : 0;
   if (n_split > 0 && !remove_split(top, idx, n_split)) return 0;
-  return walk_probability(forest, pq, method, top, edge);
+  return walk_probability(forest, pq, test, top, edge);
 }
 
 }  // namespace qsil::edgetree

@@ -3,7 +3,7 @@
 
 #include "qsil/edgetree/uniform_sampler.h"
 
-#include "edgetree/edge_point_sampler.h"
+#include "edge_point_sampler.h"
 
 #include <algorithm>
 

@@ -5,8 +5,8 @@
 
 #include "qsil/check.h"
 
-#include "edgetree/discrete_choice.h"
-#include "edgetree/edge_point_sampler.h"
+#include "discrete_choice.h"
+#include "edge_point_sampler.h"
 #include "qsil/edgetree/ltc.h"
 
 #include <algorithm>
@@ -105,9 +105,8 @@ void mix(const C* c, int n, double* prob) {
 
 }  // namespace
 
-VSphereEdgeSampler::VSphereEdgeSampler(const EdgeSet& edges, const Vec3& hough_origin, Method method)
-    : edges_(edges), tree_(VSphereTree::build(edges, hough_origin)), method_(method) {
-  QSIL_CHECK(method == Method::VSphere || method == Method::VSphereSolid);
+VSphereEdgeSampler::VSphereEdgeSampler(const EdgeSet& edges, const Vec3& hough_origin, VSphereTest test)
+    : edges_(edges), tree_(VSphereTree::build(edges, hough_origin)), test_(test) {
 }
 
 int VSphereEdgeSampler::top_candidates(const SilhouetteQuery& q, std::vector<Cand>& out, int& tests) const {
@@ -116,7 +115,7 @@ int VSphereEdgeSampler::top_candidates(const SilhouetteQuery& q, std::vector<Can
     if (!q.is_eligible(r.shape)) continue;
     if (r.hough) {
       ++tests;
-      if (!tree_.may_have_silhouette(r.node, q.p, method_)) continue;
+      if (!tree_.may_have_silhouette(r.node, q.p, test_)) continue;
     }
     Cand c;
     c.node = r.node;
@@ -145,7 +144,7 @@ int VSphereEdgeSampler::child_candidates(int n, const SilhouetteQuery& q, Cand* 
     const VSphereNode& ch = tree_.node(c);
     if (ch.hough) {
       ++tests;
-      if (!tree_.may_have_silhouette(c, q.p, method_)) continue;
+      if (!tree_.may_have_silhouette(c, q.p, test_)) continue;
     }
     out[k].node = c;
     out[k].edge = nullptr;

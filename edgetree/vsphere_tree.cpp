@@ -17,8 +17,7 @@ Vec3 hough_point(const Vec4& q, const Vec3& o) {
   return -n * (n.dot(o) + q[3]);
 }
 
-bool vsphere_box_may_have_silhouette(const Box3& hb, double world_scale, const Vec3& p, const Vec3& o, Method method) {
-  QSIL_DCHECK(method == Method::VSphere || method == Method::VSphereSolid);
+bool vsphere_box_may_have_silhouette(const Box3& hb, double world_scale, const Vec3& p, const Vec3& o, VSphereTest test) {
   if (hb.empty()) return false;
   const Vec3 V = p - o;
   const Vec3 c = 0.5 * V;
@@ -39,7 +38,7 @@ bool vsphere_box_may_have_silhouette(const Box3& hb, double world_scale, const V
   const double L = world_scale + p.cwiseAbs().maxCoeff() + o.cwiseAbs().maxCoeff() + V.norm() + hmax;
   const double tol = kVSphereTol * L * (hmax + 1e-6 * L);
   if (!(dmin2 - r2 <= tol)) return std::isnan(dmin2 - r2);  // the box lies outside the sphere
-  if (method == Method::VSphereSolid) return true;
+  if (test == VSphereTest::Solid) return true;
   return !(dmax2 - r2 < -tol);  // hollow: reject a box strictly inside the sphere
 }
 
@@ -193,10 +192,10 @@ VSphereTree VSphereTree::build(const EdgeSet& set, const Vec3& o) {
   return t;
 }
 
-bool VSphereTree::may_have_silhouette(int i, const Vec3& p, Method method) const {
+bool VSphereTree::may_have_silhouette(int i, const Vec3& p, VSphereTest test) const {
   const VSphereNode& n = nodes_[size_t(i)];
   if (!n.hough) return true;
-  return vsphere_box_may_have_silhouette(n.bh, n.bp.max_abs(), p, origin_, method);
+  return vsphere_box_may_have_silhouette(n.bh, n.bp.max_abs(), p, origin_, test);
 }
 
 size_t VSphereTree::memory_bytes() const {

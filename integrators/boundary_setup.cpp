@@ -1,7 +1,7 @@
 /// @file boundary_setup.cpp
 /// See boundary_setup.h.
 
-#include "integrators/boundary_setup.h"
+#include "boundary_setup.h"
 
 #include "qsil/check.h"
 #include "qsil/edgetree/quadric_sampler.h"
@@ -45,7 +45,7 @@ BoundarySetup build_boundary_setup(const Scene& scene, Method method, bool inter
         std::any_of(scene.shapes.begin(), scene.shapes.end(), [](const Shape& s) { return is_quad_light(s); });
     if (method == Method::Quadric && (glossy || quad_light))
       out.contours = std::make_unique<edgetree::ContourIndex>(edgetree::ContourIndex::build(inputs, *forest));
-    out.sampler = std::make_unique<edgetree::QuadricEdgeSampler>(*forest, method);
+    out.sampler = std::make_unique<edgetree::QuadricEdgeSampler>(*forest, node_test(method));
     out.edges = std::move(forest);
   } else {
     edgetree::EdgeSetOptions options;
@@ -55,7 +55,7 @@ BoundarySetup build_boundary_setup(const Scene& scene, Method method, bool inter
       out.sampler = std::make_unique<edgetree::UniformEdgeSampler>(*out.edges);
     } else {
       // Li 2019: the Hough origin is the camera centre (docs/architecture.md §7).
-      out.sampler = std::make_unique<edgetree::VSphereEdgeSampler>(*out.edges, scene.camera.origin(), method);
+      out.sampler = std::make_unique<edgetree::VSphereEdgeSampler>(*out.edges, scene.camera.origin(), vsphere_test(method));
     }
   }
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -87,18 +87,18 @@ void set_light_importance(const Scene& scene, const EnvironmentLight& environmen
   if (context.lights.empty() && context.env_weight == 0) context.env_weight = 1.0;  // plain [QSS 3.5] importance
 }
 
-void check_boundary_spp(double boundary_spp) {
+void check_sppi(double sppi) {
   // Beyond these a traversal's weight 1 / rate or its count overflows nothing yet, but no use
   // needs them: 1/1024 is one traversal in 1024 samples.
-  if (boundary_spp == 0) return;
-  if (!(boundary_spp >= 1.0 / 1024 && boundary_spp <= 1024))
+  if (sppi == 0) return;
+  if (!(sppi >= 1.0 / 1024 && sppi <= 1024))
     throw Error("boundary samples per shading point must be 0 (the method's default) or in [1/1024, 1024] (got " +
-                std::to_string(boundary_spp) + ")");
+                std::to_string(sppi) + ")");
 }
 
-void check_sample_rates(const Camera& camera, double boundary_spp, double primary_samples) {
-  primary_samples_per_index(camera.width, camera.height, primary_samples);  // throws if invalid
-  check_boundary_spp(boundary_spp);
+void check_sample_rates(const Camera& camera, double sppi, double sppp) {
+  primary_samples_per_index(camera.width, camera.height, sppp);  // throws if invalid
+  check_sppi(sppi);
 }
 
 void describe_boundary_setup(const BoundarySetup& boundary, Method method, int primary_edges, SetupReport& setup) {
@@ -119,7 +119,7 @@ void describe_boundary_setup(const BoundarySetup& boundary, Method method, int p
 }
 
 void set_up_boundary_term(const Scene& scene, const RayTracer& tracer, Method method, const SceneVelocities* velocities,
-                          const std::vector<bool>& moving, double boundary_spp, const EnvironmentLight& environment,
+                          const std::vector<bool>& moving, double sppi, const EnvironmentLight& environment,
                           BoundarySetup& boundary, BoundaryContext& bctx, PrimaryEdges& primary, SetupReport& setup,
                           bool intersection_curves) {
   boundary = build_boundary_setup(scene, method, intersection_curves);
@@ -136,7 +136,7 @@ void set_up_boundary_term(const Scene& scene, const RayTracer& tracer, Method me
     auto moves = [&](int s) { return s >= 0 && s < int(moving.size()) && moving[size_t(s)]; };
     bctx.moving[id] = moves(g.shape0) || moves(g.shape1);
   }
-  bctx.samples_per_vertex = boundary_spp > 0 ? boundary_spp : default_boundary_spp(method);
+  bctx.sppi = sppi > 0 ? sppi : default_sppi(method);
   bctx.split_speed = default_split_speed(method);
   set_light_importance(scene, environment, bctx);
   primary = find_primary_edges(scene, *boundary.edges, bctx.moving, tracer);

@@ -5,13 +5,13 @@
 /// term. Used by the gradient and reverse estimators (estimator.cpp, reverse.cpp) and by tests that drive the boundary
 /// term directly.
 
-#include "integrators/primary_boundary.h"
+#include "primary_boundary.h"
 #include "qsil/edgetree/contour_set.h"
 #include "qsil/edgetree/edge_forest.h"
 #include "qsil/edgetree/edge_sampler.h"
 #include "qsil/integrators/boundary_term.h"
 #include "qsil/integrators/estimator.h"
-#include "qsil/method.h"
+#include "qsil/integrators/method.h"
 #include "qsil/scene.h"
 
 #include <memory>
@@ -46,14 +46,14 @@ BoundarySetup build_boundary_setup(const Scene& scene, Method method, bool inter
 /// context.velocities (set it first; none: no scale), each parameter's velocity scale.
 void set_light_importance(const Scene& scene, const EnvironmentLight& environment, BoundaryContext& context);
 
-/// Throws qsil::Error unless `boundary_spp` (EstimatorConfig::boundary_spp) is 0 (the method's
+/// Throws qsil::Error unless `sppi` (EstimatorConfig::sppi) is 0 (the method's
 /// default) or in [1/1024, 1024].
-void check_boundary_spp(double boundary_spp);
+void check_sppi(double sppi);
 
 /// The sample rates of a gradient estimator (forward or reverse mode), checked before any set-up:
-/// throws qsil::Error unless `boundary_spp` passes check_boundary_spp and `primary_samples` is in
+/// throws qsil::Error unless `sppi` passes check_sppi and `sppp` is in
 /// (0, 1024] with its samples per index countable for `camera`'s image (primary_samples_per_index).
-void check_sample_rates(const Camera& camera, double boundary_spp, double primary_samples);
+void check_sample_rates(const Camera& camera, double sppi, double sppp);
 
 /// Fills the set-up report's edge-structure fields from a built boundary method: build time, edge
 /// count, fitted and quadric node counts, `primary_edges`, and the structure's name ("edge forest
@@ -64,15 +64,15 @@ void describe_boundary_setup(const BoundarySetup& boundary, Method method, int p
 /// The boundary term of a run, set up once (what GradientEstimator and ReverseEstimator both do):
 /// build_boundary_setup of `method` into `boundary`; `bctx` with its sampler, `velocities` (forward
 /// mode's; null in reverse mode: velocity factor 1), `moving` (the shapes whose edges are eligible
-/// at a static shading point), every shape eligible at a moving one, boundary_spp traversals per
-/// vertex (0: default_boundary_spp of the method) and set_light_importance; `primary` =
+/// at a static shading point), every shape eligible at a moving one, sppi traversals per
+/// vertex (0: default_sppi of the method) and set_light_importance; `primary` =
 /// find_primary_edges of the `moving` shapes (their visibility from the camera tested with
 /// `tracer`); and describe_boundary_setup into `setup`. `moving` and `bctx.all` are extended with
 /// the crossing groups of the edge set (edgetree::CrossingGroup: eligible where either of its
 /// shapes is), and `primary` takes the extended vector. `intersection_curves`: as for
 /// build_boundary_setup. `scene`, `tracer` and `velocities` must outlive the results.
 void set_up_boundary_term(const Scene& scene, const RayTracer& tracer, Method method, const SceneVelocities* velocities,
-                          const std::vector<bool>& moving, double boundary_spp, const EnvironmentLight& environment,
+                          const std::vector<bool>& moving, double sppi, const EnvironmentLight& environment,
                           BoundarySetup& boundary, BoundaryContext& bctx, PrimaryEdges& primary, SetupReport& setup,
                           bool intersection_curves = true);
 

@@ -4,10 +4,10 @@
 
 #include "qsil/integrators/estimator.h"
 
-#include "integrators/boundary_setup.h"
-#include "integrators/light_setup.h"
-#include "integrators/pixel_loop.h"
-#include "integrators/primary_boundary.h"
+#include "boundary_setup.h"
+#include "light_setup.h"
+#include "pixel_loop.h"
+#include "primary_boundary.h"
 #include "qsil/check.h"
 #include "qsil/error.h"
 #include "qsil/integrators/boundary_term.h"
@@ -94,7 +94,7 @@ class GradientEstimator final : public Estimator::Impl {
     ctx = lights.context(s, tracer);
     // ---- The boundary method's structures, only when something moves.
     if (samples_edges(config.method) && vel.any_moving()) {
-      set_up_boundary_term(s, tracer, config.method, &vel, vel.moving, config.boundary_spp, lights.environment,
+      set_up_boundary_term(s, tracer, config.method, &vel, vel.moving, config.sppi, lights.environment,
                            boundary, bctx, primary, setup, config.intersection_curves);
     }
   }
@@ -107,7 +107,7 @@ class GradientEstimator final : public Estimator::Impl {
     const bool with_boundary = bool(boundary.sampler);
     // A fractional boundary rate draws a pixel's samples unalike (boundary_traversals): that
     // fraction of them makes one more traversal, stratum 1 of the film.
-    const double fraction = with_boundary ? bctx.samples_per_vertex - std::floor(bctx.samples_per_vertex) : 0.0;
+    const double fraction = with_boundary ? bctx.sppi - std::floor(bctx.sppi) : 0.0;
     PathStats total;
     run_pixels(
         cam, layout, options, first, count, "grad",
@@ -119,7 +119,7 @@ class GradientEstimator final : public Estimator::Impl {
           ColorT<Dual<N>> L;
           const uint64_t pixel = uint64_t(y) * cam.width + x;
           const int traversals =
-              with_boundary ? boundary_traversals(bctx.samples_per_vertex, options.seed, pixel, uint64_t(s)) : 0;
+              with_boundary ? boundary_traversals(bctx.sppi, options.seed, pixel, uint64_t(s)) : 0;
           if (traversals > 0) {
             // The boundary term draws from a stream of its own, so it leaves the path's decisions unchanged.
             Sampler bsampler(options.seed, pixel, uint64_t(s), 1);
@@ -135,14 +135,14 @@ class GradientEstimator final : public Estimator::Impl {
                 (out[layout.derivative(k, 0)] + out[layout.derivative(k, 1)] + out[layout.derivative(k, 2)]) / 3.0;
           }
           // Stratum 1: the samples that made the rate's fractional traversal (Film::standard_error).
-          return fraction > 0 && traversals > int(bctx.samples_per_vertex) ? 1 : 0;
+          return fraction > 0 && traversals > int(bctx.sppi) ? 1 : 0;
         },
         r, total, fraction);
-    // ---- Primary silhouettes: primary_samples edge samples per pixel sample, splatted where they land.
+    // ---- Primary silhouettes: sppp edge samples per pixel sample, splatted where they land.
     if (with_boundary) {
       const auto t0 = Clock::now();
       PathStats primary_stats;
-      add_primary_boundary(r.film, ctx, vel, primary, config.primary_samples, first, count, options.seed,
+      add_primary_boundary(r.film, ctx, vel, primary, config.sppp, first, count, options.seed,
                            options.threads, primary_stats, options.part, options.parts,
                            options.parts > 1 ? &r.splats : nullptr);
       const double dt = seconds_since(t0);
@@ -251,13 +251,13 @@ std::unique_ptr<Estimator::Impl> make_impl(const Scene& scene, EstimatorConfig c
 
 EstimatorConfig EstimatorConfig::primal() { return {}; }
 
-EstimatorConfig EstimatorConfig::gradient(std::vector<ParameterSpec> params, Method method, double boundary_spp,
-                                          double primary_samples) {
+EstimatorConfig EstimatorConfig::gradient(std::vector<ParameterSpec> params, Method method, double sppi,
+                                          double sppp) {
   EstimatorConfig c;
   c.params = std::move(params);
   c.method = method;
-  c.boundary_spp = boundary_spp;
-  c.primary_samples = primary_samples;
+  c.sppi = sppi;
+  c.sppp = sppp;
   return c;
 }
 
@@ -297,7 +297,7 @@ Estimator::Estimator(const Scene& scene, EstimatorConfig config) {
   if (!config.params.empty() && config.method != Method::FiniteDifferences && config.method != Method::None &&
       !samples_edges(config.method))
     throw Error("method " + std::string(method_name(config.method)) + " cannot estimate derivatives");
-  check_sample_rates(scene.camera, config.boundary_spp, config.primary_samples);
+  check_sample_rates(scene.camera, config.sppi, config.sppp);
   const auto t0 = Clock::now();
   impl_ = make_impl(scene, std::move(config));
   impl_->setup.seconds = seconds_since(t0);

@@ -1,7 +1,7 @@
 /// @file pixel_loop.cpp
 /// See pixel_loop.h.
 
-#include "integrators/pixel_loop.h"
+#include "pixel_loop.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/blocked_range2d.h>

@@ -1,7 +1,7 @@
 /// @file primary_boundary.cpp
 /// See primary_boundary.h.
 
-#include "integrators/primary_boundary.h"
+#include "primary_boundary.h"
 
 #include "qsil/edgetree/mesh_edges.h"
 #include "qsil/error.h"

@@ -3,9 +3,9 @@
 
 #include "qsil/integrators/reverse.h"
 
-#include "integrators/boundary_setup.h"
-#include "integrators/light_setup.h"
-#include "integrators/primary_boundary.h"
+#include "boundary_setup.h"
+#include "light_setup.h"
+#include "primary_boundary.h"
 #include "qsil/error.h"
 #include "qsil/integrators/boundary_term.h"
 #include "qsil/integrators/path_tracer.h"
@@ -196,7 +196,7 @@ bool finite(const std::vector<Contribution>& cs) {
 class ReverseEstimator::Impl {
  public:
   Impl(const Scene& s, ReverseConfig c) : scene(s), config(std::move(c)), tracer(s), lights(s) {
-    check_sample_rates(s.camera, config.boundary_spp, config.primary_samples);
+    check_sample_rates(s.camera, config.sppi, config.sppp);
     if (config.shapes.empty()) throw Error("reverse mode: no shape to differentiate");
     chosen.assign(s.shapes.size(), false);
     chosen_index.assign(s.shapes.size(), -1);
@@ -213,7 +213,7 @@ class ReverseEstimator::Impl {
       throw Error("method " + std::string(method_name(config.method)) + " cannot estimate derivatives");
     ctx = lights.context(s, tracer);
     if (samples_edges(config.method)) {
-      set_up_boundary_term(s, tracer, config.method, nullptr, chosen, config.boundary_spp, lights.environment, boundary,
+      set_up_boundary_term(s, tracer, config.method, nullptr, chosen, config.sppi, lights.environment, boundary,
                            bctx, primary, setup, config.intersection_curves);
     }
   }
@@ -325,7 +325,7 @@ ReverseResult ReverseEstimator::run(const std::vector<double>& adjoint, const Re
             ++st.rays;
             const Hit hit = m.tracer.intersect(origin, d);
             const int traversals =
-                with_boundary ? boundary_traversals(m.bctx.samples_per_vertex, options.seed, pixel, uint64_t(s)) : 0;
+                with_boundary ? boundary_traversals(m.bctx.sppi, options.seed, pixel, uint64_t(s)) : 0;
             if (traversals > 0) {
               Sampler bsampler(options.seed, pixel, uint64_t(s), 1);
               const ReverseBoundaryHook hook{&m.ctx,          &m.bctx, &bsampler,   traversals,    &tape,
@@ -385,7 +385,7 @@ ReverseResult ReverseEstimator::run(const std::vector<double>& adjoint, const Re
   // ---- Primary boundary term: the camera's edge samples, weighted by their pixel's adjoint.
   if (with_boundary) {
     PathStats st;
-    for_each_primary_sample(m.ctx, m.primary, m.config.primary_samples, first, count, options.seed, options.threads, st,
+    for_each_primary_sample(m.ctx, m.primary, m.config.sppp, first, count, options.seed, options.threads, st,
                             [&](const PrimarySample& ps) {
                               const size_t pixel = size_t(ps.py) * size_t(W) + size_t(ps.px);
                               const double a = (Eigen::Map<const Color>(&adjoint[3 * pixel]) * ps.weight).sum() / count;

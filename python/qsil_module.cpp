@@ -9,7 +9,7 @@
 #include "qsil/error.h"
 #include "qsil/integrators/estimator.h"
 #include "qsil/integrators/reverse.h"
-#include "qsil/method.h"
+#include "qsil/integrators/method.h"
 #include "qsil/parameters.h"
 #include "qsil/scene.h"
 
@@ -141,14 +141,14 @@ PYBIND11_MODULE(qsil, m) {
   m.def(
       "grad",
       [](const Scene& scene, const std::vector<std::string>& params, int spp, uint64_t seed, int threads,
-         const std::string& boundary, double boundary_spp, double primary_samples) {
+         const std::string& boundary, double sppi, double sppp) {
         const Method method = parse_method(boundary, "boundary", kBoundaryMethods);
         const std::vector<ParameterSpec> specs = parse_parameters(params, scene);
         std::optional<Estimator> e;
         std::optional<RenderResult> r;
         {
           py::gil_scoped_release release;
-          e.emplace(scene, EstimatorConfig::gradient(specs, method, boundary_spp, primary_samples));
+          e.emplace(scene, EstimatorConfig::gradient(specs, method, sppi, sppp));
           r = e->run(options(spp, seed, threads));
         }
         const FilmLayout& layout = e->layout();
@@ -162,16 +162,16 @@ PYBIND11_MODULE(qsil, m) {
         return py::make_tuple(film_image(r->film, [&](int c) { return layout.primal(c); }), d);
       },
       py::arg("scene"), py::arg("params"), py::arg("spp") = 0, py::arg("seed") = 0, py::arg("threads") = 0,
-      py::arg("boundary") = "quadric", py::arg("boundary_spp") = 0, py::arg("primary_samples") = kDefaultPrimarySamples,
+      py::arg("boundary") = "quadric", py::arg("sppi") = 0, py::arg("sppp") = kDefaultSppp,
       "Forward mode: (image (H, W, 3), derivatives (K, H, W, 3)) for 1-8 parameter specs "
-      "('ID:translate:X,Y,Z', 'ID:rotate:X,Y,Z', 'ID:scale', 'ID:vertex:I:X,Y,Z'). boundary_spp: secondary "
+      "('ID:translate:X,Y,Z', 'ID:rotate:X,Y,Z', 'ID:scale', 'ID:vertex:I:X,Y,Z'). sppi: secondary "
       "boundary-term samples per shading point on average over a pixel's samples (0: the method's default, 0.5 for "
-      "quadric); primary_samples: primary edge samples per pixel sample (`qsil grad --help`)");
+      "quadric); sppp: primary edge samples per pixel sample (`qsil grad --help`)");
 
   m.def(
       "reverse",
       [](const Scene& scene, const std::vector<std::string>& shapes, const Array& adjoint, int spp, uint64_t seed,
-         int threads, const std::string& boundary, double boundary_spp, double primary_samples) {
+         int threads, const std::string& boundary, double sppi, double sppp) {
         const Method method = parse_method(boundary, "boundary", kBoundaryMethods);
         const int W = scene.camera.width, H = scene.camera.height;
         if (adjoint.ndim() != 3 || adjoint.shape(0) != H || adjoint.shape(1) != W || adjoint.shape(2) != 3)
@@ -182,7 +182,7 @@ PYBIND11_MODULE(qsil, m) {
         std::optional<ReverseResult> r;
         {
           py::gil_scoped_release release;
-          const ReverseEstimator e(scene, ReverseConfig{indices, method, boundary_spp, primary_samples});
+          const ReverseEstimator e(scene, ReverseConfig{indices, method, sppi, sppp});
           r = e.run(w, options(spp, seed, threads));
         }
         Array image({H, W, 3});
@@ -204,8 +204,8 @@ PYBIND11_MODULE(qsil, m) {
         return out;
       },
       py::arg("scene"), py::arg("shapes"), py::arg("adjoint"), py::arg("spp") = 0, py::arg("seed") = 0,
-      py::arg("threads") = 0, py::arg("boundary") = "quadric", py::arg("boundary_spp") = 0,
-      py::arg("primary_samples") = kDefaultPrimarySamples,
+      py::arg("threads") = 0, py::arg("boundary") = "quadric", py::arg("sppi") = 0,
+      py::arg("sppp") = kDefaultSppp,
       "Reverse mode: for the loss L = sum(adjoint * I), a dict with 'image' (H, W, 3), 'loss' (of that image), "
-      "'gradient' {shape id: dL/dx (V, 3)}, 'seconds', 'nonfinite'; boundary_spp and primary_samples as for grad");
+      "'gradient' {shape id: dL/dx (V, 3)}, 'seconds', 'nonfinite'; sppi and sppp as for grad");
 }

@@ -22,8 +22,8 @@
 #include "qsil/image.h"
 #include "qsil/scene.h"
 
-#include "src/xml_plugin.h"
-#include "src/xml_source.h"
+#include "xml_plugin.h"
+#include "xml_source.h"
 
 #include <algorithm>
 #include <cmath>

@@ -4,7 +4,7 @@
 /// See parse_transform() in xml_source.h.
 
 #include "qsil/scene.h"
-#include "src/xml_source.h"
+#include "xml_source.h"
 
 namespace qsil::xml {
 

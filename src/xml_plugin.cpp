@@ -1,7 +1,7 @@
 /// @file xml_plugin.cpp
 /// Strict parameter access for one Mitsuba plugin element. See xml_plugin.h.
 
-#include "src/xml_plugin.h"
+#include "xml_plugin.h"
 
 #include <algorithm>
 

@@ -5,7 +5,7 @@
 /// does: a parameter the plugin does not know, a duplicate, or a value of the wrong type is a
 /// `FILE:LINE:` error.
 
-#include "src/xml_source.h"
+#include "xml_source.h"
 
 #include "qsil/math.h"
 

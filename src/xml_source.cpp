@@ -2,7 +2,7 @@
 /// A parsed XML scene file with line numbers, `$name` substitution and strict number parsing.
 /// See xml_source.h.
 
-#include "src/xml_source.h"
+#include "xml_source.h"
 
 #include "qsil/error.h"
 

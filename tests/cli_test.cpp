@@ -60,6 +60,36 @@ TEST(CLI, ParameterErrorsExitWithCode2) {
   expect_error("fd scenes/shadow-quad.xml --spp 1 --param object:rotate:0,1,0 --h -1", "step");
 }
 
+// Numbers out of their range are bad input like any other: one line naming the flag, exit 2, no
+// output (a sample count of 0 or -3 once rendered the scene's default silently).
+TEST(CLI, OutOfRangeNumbersExitWithCode2NamingTheFlag) {
+  expect_error("render scenes/shadow-quad.xml --spp 0", "--spp");
+  expect_error("render scenes/shadow-quad.xml --spp -3", "--spp");
+  expect_error("grad scenes/shadow-quad.xml --spp 1 --param object:translate:0,1,0 --spp 0", "--spp");
+  expect_error("render scenes/shadow-quad.xml --spp 1 --threads -1", "--threads");
+  expect_error("render scenes/shadow-quad.xml --spp 1 --seed -3", "--seed");
+  expect_error("grad scenes/shadow-quad.xml --spp 1 --param object:translate:0,1,0 --sppi -1", "--sppi");
+  expect_error("grad scenes/shadow-quad.xml --spp 1 --param object:translate:0,1,0 --primary-samples 0",
+               "--sppp");
+}
+
+// --sppi is Mitsuba 3's name of the secondary boundary samples; --boundary-spp, the old name, sets
+// the same value: the two images are bit-identical, and differ from the default's.
+TEST(CLI, SppiAndItsOldNameBoundarySppAreTheSameSetting) {
+  const std::string a = tmp("qsil_sppi.exr"), b = tmp("qsil_boundary_spp.exr"), c = tmp("qsil_sppi_default.exr");
+  const std::string common =
+      "grad scenes/shadow-quad.xml -q -D res=16 --spp 2 --seed 5 --param object:translate:1,0,0 --boundary quadric ";
+  ASSERT_EQ(run_qsil(common + "--sppi 3 -o " + a).code, 0);
+  ASSERT_EQ(run_qsil(common + "--boundary-spp 3 -o " + b).code, 0);
+  ASSERT_EQ(run_qsil(common + "-o " + c).code, 0);
+  const qsil::Image ia = qsil::read_exr(a), ib = qsil::read_exr(b), ic = qsil::read_exr(c);
+  const int k = ia.channel_index("dtheta0.R");
+  ASSERT_GE(k, 0);
+  const auto& pa = ia.planes[size_t(k)];
+  EXPECT_EQ(0, std::memcmp(pa.data(), ib.planes[size_t(k)].data(), pa.size() * sizeof(float)));
+  EXPECT_NE(0, std::memcmp(pa.data(), ic.planes[size_t(k)].data(), pa.size() * sizeof(float)));
+}
+
 // Repeatable options take one value each, wherever they stand relative to the scene argument.
 TEST(CLI, RepeatedOptionsBeforeTheSceneDoNotSwallowIt) {
   const std::string out = tmp("qsil_order.exr");

@@ -1,7 +1,7 @@
 // The one method type (qsil/method.h): every name parses back to its method, the subsets accept
 // exactly their members with an error that lists them, and the structure predicates agree with
 // what each method samples from.
-#include "qsil/method.h"
+#include "qsil/integrators/method.h"
 #include "qsil/error.h"
 
 #include <gtest/gtest.h>

@@ -48,9 +48,11 @@ void add_scene_options(CLI::App& app, std::string& scene, std::vector<std::strin
 void add_common_flags(CLI::App& app, CommonFlags& flags, const std::string& default_output) {
   flags.output = default_output;
   add_scene_options(app, flags.scene, flags.defines);
-  app.add_option("--spp", flags.render.spp, "Samples per pixel (default: the scene's sampler sample_count)");
-  app.add_option("--seed", flags.render.seed, "Random seed; a seed gives bit-identical output for any --threads");
-  app.add_option("--threads", flags.render.threads, "Worker threads (0 = all cores)")->check(CLI::NonNegativeNumber);
+  app.add_option("--spp", flags.render.spp, "Samples per pixel (default: the scene's sampler sample_count)")
+      ->check(qsil::cli::positive_number());
+  app.add_option("--seed", flags.render.seed, "Random seed; a seed gives bit-identical output for any --threads")
+      ->check(qsil::cli::non_negative_number());
+  app.add_option("--threads", flags.render.threads, "Worker threads (0 = all cores)")->check(qsil::cli::non_negative_number());
   app.add_option("-o,--output", flags.output, "Output OpenEXR file")->capture_default_str();
   app.add_option("--preview", flags.preview, "Also write a PNG preview to this path");
   app.add_option("--exposure", flags.exposure, "Preview exposure in stops (primal previews)");
@@ -66,24 +68,26 @@ void add_param_option(CLI::App& app, std::vector<std::string>& params) {
       ->allow_extra_args(false);
 }
 
-void add_boundary_spp_option(CLI::App& app, double& boundary_spp) {
-  app.add_option("--boundary-spp", boundary_spp,
-                 "Secondary boundary-term samples per shading point, on average over a pixel's samples (a fraction "
+void add_sppi_option(CLI::App& app, double& sppi) {
+  app.add_option("--sppi,--boundary-spp", sppi,
+                 "Secondary (indirect) boundary-term samples per shading point (Mitsuba 3's sppi; --boundary-spp is "
+                 "the old name), on average over a pixel's samples (a fraction "
                  "is a stratified pick of samples: 0.5 = every other sample, weighted 2); 0 = the method's default "
                  "(quadric, quadric-box: 0.5; the others: 1). Quadric and quadric-box split each into ceil(s / 4), at "
                  "most 16, at a shading point moving s times as fast as the mesh's fastest vertex (grazing hits; "
                  "docs/architecture.md §5)")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(qsil::cli::non_negative_number());
 }
 
-void add_primary_samples_option(CLI::App& app, double& primary_samples) {
-  app.add_option("--primary-samples", primary_samples,
-                 "Primary boundary-term edge samples per pixel sample (Mitsuba 3's sppp as a ratio to spp; the "
+void add_sppp_option(CLI::App& app, double& sppp) {
+  app.add_option("--sppp,--primary-samples", sppp,
+                 "Primary boundary-term edge samples per pixel sample (Mitsuba 3's sppp as a ratio to spp; --primary-samples "
+                 "is the old name; the "
                  "camera's silhouettes): R x width x height edge samples per sample index, rounded up to a whole "
                  "chunk of 1024")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(qsil::cli::positive_number());
 }
 
 void add_intersection_curves_flag(CLI::App& app, bool& intersection_curves) {

@@ -7,9 +7,11 @@
 #include "qsil/image.h"
 #include "qsil/integrators/distributed.h"
 #include "qsil/integrators/estimator.h"
-#include "qsil/method.h"
+#include "qsil/integrators/method.h"
 #include "qsil/parameters.h"
 #include "qsil/scene.h"
+
+#include "cli_parse.h"
 
 #include <CLI/CLI.hpp>
 
@@ -53,13 +55,13 @@ void add_scene_options(CLI::App& app, std::string& scene, std::vector<std::strin
 /// Adds the repeatable --param SPEC (1 to 8), required.
 void add_param_option(CLI::App& app, std::vector<std::string>& params);
 
-/// Adds --boundary-spp R (secondary boundary-term samples per shading point on average over a
-/// pixel's samples; 0: the method's default; EstimatorConfig::boundary_spp).
-void add_boundary_spp_option(CLI::App& app, double& boundary_spp);
+/// Adds --sppi R, alias --boundary-spp (secondary boundary-term samples per shading point on average over a
+/// pixel's samples; 0: the method's default; EstimatorConfig::sppi).
+void add_sppi_option(CLI::App& app, double& sppi);
 
 /// Adds --primary-samples R (primary boundary-term edge samples per pixel sample,
-/// EstimatorConfig::primary_samples).
-void add_primary_samples_option(CLI::App& app, double& primary_samples);
+/// EstimatorConfig::sppp).
+void add_sppp_option(CLI::App& app, double& sppp);
 
 /// Adds --no-intersection-curves, which sets `intersection_curves` to false
 /// (EstimatorConfig::intersection_curves).

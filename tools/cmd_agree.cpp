@@ -1,14 +1,14 @@
 /// @file cmd_agree.cpp
 /// `qsil agree A.exr B.exr [--block 8]`: whether two independent references (`qsil reference`
 /// outputs, with NAME.se channels) of the same scene and parameters estimate the same images:
-/// image-sum and block z-tests (qsil::agreement, qsil/integrators/reference.h). Exit 0 if they
+/// image-sum and block z-tests (qsil::agreement, qsil/study/reference.h). Exit 0 if they
 /// agree, 1 if not, 2 on bad input (missing file, different sizes or parameters).
 
 #include "cli_common.h"
 #include "commands.h"
 #include "qsil/error.h"
 #include "qsil/film.h"
-#include "qsil/integrators/reference.h"
+#include "qsil/study/reference.h"
 
 #include <cstdio>
 
@@ -42,7 +42,7 @@ const CommandRegistrar registrar{
            ->required();
        app.add_option("--block", flags->block, "Block size in pixels of the block z-tests")
            ->capture_default_str()
-           ->check(CLI::PositiveNumber);
+           ->check(qsil::cli::positive_number());
        return [flags]() {
          const Reference a = read_any_reference(flags->a), b = read_any_reference(flags->b);
          for (int k = 0; k < std::min(a.num_params, b.num_params); ++k) {

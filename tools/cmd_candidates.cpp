@@ -1,6 +1,6 @@
 /// @file cmd_candidates.cpp
 /// `qsil candidates` ([QSS] Sec. 5.1, Fig. 8): for one shading point, every edge each method can
-/// sample (find_candidates, qsil/integrators/candidates.h, which documents the study and its
+/// sample (find_candidates, qsil/study/candidates.h, which documents the study and its
 /// outputs).
 ///
 ///   qsil candidates SCENE.xml (--pixel X,Y | --point X,Y,Z --normal X,Y,Z)
@@ -11,7 +11,7 @@
 
 #include "cli_common.h"
 #include "commands.h"
-#include "qsil/integrators/candidates.h"
+#include "qsil/study/candidates.h"
 
 #include <cstdio>
 #include <filesystem>
@@ -71,7 +71,9 @@ const CommandRegistrar registrar{
            ->delimiter(',');
        app.add_option("--shapes", f->study.shapes, "Eligible shape ids, comma separated (default: every shape)")
            ->delimiter(',');
-       app.add_option("--size", f->size, "Larger side of the pictures in pixels")->capture_default_str();
+       app.add_option("--size", f->size, "Larger side of the pictures in pixels")
+           ->capture_default_str()
+           ->check(qsil::cli::positive_number());
        app.add_option("--out-dir", f->out_dir, "Output directory (default out/candidates)");
        app.add_flag("--no-grid", f->no_grid, "Skip the labelled grid image (no Python)");
        add_scripts_dir_option(app, f->scripts_dir);

@@ -2,13 +2,13 @@
 /// `qsil compare SCENE.xml --param SPEC --methods quadric,quadric-box,vsphere,uniform,fd
 /// --budgets 1,2,4 [--reference REF.exr] [--spp-list 4,16] [--h H] --out DIR`: equal-time (or
 /// equal-sample) comparison of gradient methods against a reference (run_compare,
-/// qsil/integrators/compare.h). Writes DIR/results.csv, DIR/results.json, DIR/images/ and calls
+/// qsil/study/compare.h). Writes DIR/results.csv, DIR/results.json, DIR/images/ and calls
 /// tools/plot_compare.py DIR for error_vs_time.png and grid.png.
 
 #include "cli_common.h"
 #include "commands.h"
 #include "qsil/error.h"
-#include "qsil/integrators/compare.h"
+#include "qsil/study/compare.h"
 
 #include <cstdio>
 #include <iostream>
@@ -25,8 +25,8 @@ struct Flags {
   std::vector<int> spp_list;
   std::string reference;
   std::vector<double> h;
-  double boundary_spp = 0;
-  double primary_samples = kDefaultPrimarySamples;
+  double sppi = 0;
+  double sppp = kDefaultSppp;
   std::string out;
   double reference_factor = 8;
   uint64_t seed = 0;
@@ -38,8 +38,9 @@ struct Flags {
 
 void add_options(CLI::App& app, Flags& f) {
   add_scene_options(app, f.scene, f.defines);
-  app.add_option("--seed", f.seed, "Base random seed (each method, budget and the reference derive their own)");
-  app.add_option("--threads", f.threads, "Worker threads (0 = all cores)")->check(CLI::NonNegativeNumber);
+  app.add_option("--seed", f.seed, "Base random seed (each method, budget and the reference derive their own)")
+      ->check(qsil::cli::non_negative_number());
+  app.add_option("--threads", f.threads, "Worker threads (0 = all cores)")->check(qsil::cli::non_negative_number());
   app.add_flag("-q,--quiet", f.quiet, "No per-run progress lines");
   add_param_option(app, f.params);
   app.add_option("--methods", f.methods, "Comma-separated methods: " + method_list(kAllMethods))
@@ -47,10 +48,10 @@ void add_options(CLI::App& app, Flags& f) {
       ->capture_default_str();
   app.add_option("--budgets", f.budgets, "Comma-separated wall-clock budgets in seconds (equal-time mode)")
       ->delimiter(',')
-      ->check(CLI::PositiveNumber);
+      ->check(qsil::cli::positive_number());
   app.add_option("--spp-list", f.spp_list, "Comma-separated spp counts (equal-sample mode, instead of --budgets)")
       ->delimiter(',')
-      ->check(CLI::PositiveNumber);
+      ->check(qsil::cli::positive_number());
   app.add_option("--reference", f.reference,
                  "Reference EXR from `qsil reference` (same scene, -D and --param). Without it, a quadric "
                  "reference is rendered first for --reference-factor x the largest budget (or spp) and saved "
@@ -58,10 +59,10 @@ void add_options(CLI::App& app, Flags& f) {
   app.add_option("--reference-factor", f.reference_factor,
                  "Budget (or spp) of the automatic reference relative to the largest budget")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(qsil::cli::positive_number());
   add_fd_step_option(app, f.h);
-  add_boundary_spp_option(app, f.boundary_spp);
-  add_primary_samples_option(app, f.primary_samples);
+  add_sppi_option(app, f.sppi);
+  add_sppp_option(app, f.sppp);
   app.add_option("--out", f.out, "Output directory")->required();
   app.add_flag("--no-plot", f.no_plot, "Do not call plot_compare.py (the charts)");
   add_scripts_dir_option(app, f.scripts_dir);
@@ -78,8 +79,8 @@ CompareOptions compare_options(const Flags& f) {
   o.reference = f.reference;
   o.reference_factor = f.reference_factor;
   o.h = f.h;
-  o.boundary_spp = f.boundary_spp;
-  o.primary_samples = f.primary_samples;
+  o.sppi = f.sppi;
+  o.sppp = f.sppp;
   o.out = f.out;
   o.seed = f.seed;
   o.threads = f.threads;

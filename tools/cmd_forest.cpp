@@ -4,6 +4,7 @@
 /// class, edges kept, nodes, unrejectable / box-only / inherited-quadric nodes, tree depth,
 /// build time and bytes per edge. Bad input: one-line qsil::Error, exit code 2.
 
+#include "cli_parse.h"
 #include "commands.h"
 #include "qsil/edgetree/edge_forest.h"
 #include "qsil/error.h"
@@ -114,10 +115,10 @@ const CommandRegistrar registrar{
        app.add_flag("--stats", flags->stats, "Print per-shape statistics");
        app.add_flag("--keep-concave", flags->keep_concave,
                     "Keep concave edges (needed for open meshes or a camera inside a closed one)");
-       app.add_option("--threads", flags->threads, "Worker threads (0 = all)")->check(CLI::NonNegativeNumber);
+       app.add_option("--threads", flags->threads, "Worker threads (0 = all)")->check(qsil::cli::non_negative_number());
        app.add_option("--min-fit-planes", flags->min_fit_planes,
                       "Fewer distinct planes: inherit the parent's quadric (default 15)")
-           ->check(CLI::PositiveNumber);
+           ->check(qsil::cli::positive_number());
        return [flags]() { return run_forest(*flags); };
      }}};
 

@@ -19,8 +19,8 @@ const CommandRegistrar registrar{
        struct Flags : CommonFlags {
          std::vector<std::string> params;
          std::string boundary = "quadric";
-         double boundary_spp = 0;
-         double primary_samples = kDefaultPrimarySamples;
+         double sppi = 0;
+         double sppp = kDefaultSppp;
          bool intersection_curves = true;
          std::string preview_dir;
        };
@@ -33,8 +33,8 @@ const CommandRegistrar registrar{
                       "vsphere-solid (redner's original solid v-sphere test), uniform (no rejection, length x "
                       "dihedral angle), none (interior term only: misses silhouettes, shadows, outlines)")
            ->capture_default_str();
-       add_boundary_spp_option(app, flags->boundary_spp);
-       add_primary_samples_option(app, flags->primary_samples);
+       add_sppi_option(app, flags->sppi);
+       add_sppp_option(app, flags->sppp);
        add_intersection_curves_flag(app, flags->intersection_curves);
        app.add_option("--preview-dir", flags->preview_dir, "Write primal.png and one diverging PNG per parameter here");
        return [flags]() {
@@ -45,7 +45,7 @@ const CommandRegistrar registrar{
            const Method method = parse_method(flags->boundary, "--boundary", kBoundaryMethods);
            scene.emplace(load_scene_with_flags(flags->scene, flags->defines));
            EstimatorConfig config = EstimatorConfig::gradient(parse_parameters(flags->params, *scene), method,
-                                                              flags->boundary_spp, flags->primary_samples);
+                                                              flags->sppi, flags->sppp);
            config.intersection_curves = flags->intersection_curves;
            estimator.emplace(*scene, std::move(config));
          });

@@ -7,7 +7,7 @@
 
 #include "cli_common.h"
 #include "commands.h"
-#include "qsil/integrators/reference.h"
+#include "qsil/study/reference.h"
 #include "qsil/preview.h"
 
 #include <cstdio>
@@ -20,8 +20,8 @@ struct Flags : CommonFlags {
   std::vector<std::string> params;
   std::string method = "quadric";
   std::vector<double> h;
-  double boundary_spp = 0;
-  double primary_samples = kDefaultPrimarySamples;
+  double sppi = 0;
+  double sppp = kDefaultSppp;
 };
 
 /// Writes the reference EXR (and preview) of run `r` and prints its summary (rank 0).
@@ -62,8 +62,8 @@ const CommandRegistrar registrar{
                       "of `qsil grad`), or fd (central finite differences; biased by O(h^2))")
            ->capture_default_str();
        add_fd_step_option(app, flags->h);
-       add_boundary_spp_option(app, flags->boundary_spp);
-       add_primary_samples_option(app, flags->primary_samples);
+       add_sppi_option(app, flags->sppi);
+       add_sppp_option(app, flags->sppp);
        return [flags]() {
          const ProcessGroup& group = process_group();
          std::optional<Scene> scene;
@@ -76,7 +76,7 @@ const CommandRegistrar registrar{
            estimator.emplace(
                *scene, method == Method::FiniteDifferences
                            ? EstimatorConfig::finite_differences(params, fd_steps(*scene, params, flags->h))
-                           : EstimatorConfig::gradient(params, method, flags->boundary_spp, flags->primary_samples));
+                           : EstimatorConfig::gradient(params, method, flags->sppi, flags->sppp));
          });
          // One run with the progress bar (a reference is one long run, not passes).
          const RenderResult r = group.run(*estimator, flags->render);

@@ -52,8 +52,8 @@ const CommandRegistrar registrar{
          std::vector<std::string> shapes;
          std::string adjoint, target, image;
          std::string boundary = "quadric";
-         double boundary_spp = 0;
-         double primary_samples = kDefaultPrimarySamples;
+         double sppi = 0;
+         double sppp = kDefaultSppp;
          bool intersection_curves = true;
        };
        auto flags = std::make_shared<Flags>();
@@ -69,8 +69,8 @@ const CommandRegistrar registrar{
                       "Boundary-term estimator: quadric, quadric-box, vsphere, vsphere-solid, uniform, or none "
                       "(interior term only)")
            ->capture_default_str();
-       add_boundary_spp_option(app, flags->boundary_spp);
-       add_primary_samples_option(app, flags->primary_samples);
+       add_sppi_option(app, flags->sppi);
+       add_sppp_option(app, flags->sppp);
        add_intersection_curves_flag(app, flags->intersection_curves);
        app.add_option("--image", flags->image, "Also write the primal image of the same paths (EXR)");
        return [flags]() {
@@ -80,8 +80,8 @@ const CommandRegistrar registrar{
          const Scene scene = load_scene_with_flags(flags->scene, flags->defines);
          const Camera& cam = scene.camera;
          const ReverseEstimator reverse(scene,
-                                        ReverseConfig{resolve_shapes(scene, flags->shapes), method, flags->boundary_spp,
-                                                      flags->primary_samples, flags->intersection_curves});
+                                        ReverseConfig{resolve_shapes(scene, flags->shapes), method, flags->sppi,
+                                                      flags->sppp, flags->intersection_curves});
          std::vector<double> w;
          double l2 = NAN;
          if (!flags->adjoint.empty()) {

@@ -1,7 +1,7 @@
 /// @file cmd_slices.cpp
 /// `qsil slices` ([QSS] Sec. 5.1, Fig. 7): the verdicts of four rejection tests for one node on
 /// two parallel planes, next to the brute-force ground truth (run_slice_study,
-/// qsil/edgetree/slice_study.h, which documents the study and its outputs).
+/// qsil/study/slice_study.h, which documents the study and its outputs).
 ///
 ///   qsil slices --patch sphere|torus [--origin X,Y,Z] [--plane-normal X,Y,Z] [--heights H1,H2]
 ///               [--center X,Y,Z] [--extent E] [--resolution N] [--out-dir DIR] [--no-grid]
@@ -12,7 +12,7 @@
 
 #include "cli_common.h"
 #include "commands.h"
-#include "qsil/edgetree/slice_study.h"
+#include "qsil/study/slice_study.h"
 
 #include <cstdio>
 #include <filesystem>
@@ -65,7 +65,8 @@ const CommandRegistrar registrar{
        auto f = std::make_shared<Flags>();
        edgetree::SliceStudyOptions& s = f->study;
        app.add_option("mesh", s.mesh, "Mesh (.obj) whose forest node --node is shown");
-       app.add_option("--node", s.node, "Inner node id of the mesh's quadric edge forest");
+       app.add_option("--node", s.node, "Inner node id of the mesh's quadric edge forest")
+           ->check(qsil::cli::non_negative_number());
        app.add_option("--patch", s.patch,
                       "Canonical patch instead of a mesh: sphere (spherical cap) or torus (toroidal patch)");
        app.add_option("--origin", s.origin,
@@ -82,7 +83,7 @@ const CommandRegistrar registrar{
            ->delimiter(',')
            ->expected(3);
        app.add_option("--extent", s.extent, "Side of the square on each plane (scene units)");
-       app.add_option("--resolution", s.resolution, "Points per side")->capture_default_str();
+       app.add_option("--resolution", s.resolution, "Points per side")->capture_default_str()->check(qsil::cli::positive_number());
        app.add_option("--out-dir", f->out_dir, "Output directory (default out/slices-<patch>)");
        app.add_flag("--no-grid", f->no_grid, "Skip the labelled grid image (no Python)");
        add_scripts_dir_option(app, f->scripts_dir);

@@ -13,7 +13,7 @@
 /// Exit code 1 when a criterion fails (sums within 3 SE, >= 98% of pixel-channels within 4 SE).
 
 #include "cli_parse.h"
-#include "qsil/integrators/gradient_check.h"
+#include "qsil/study/gradient_check.h"
 #include "qsil/scene.h"
 
 #include <cstdio>
@@ -81,11 +81,11 @@ int main(int argc, char** argv) {
       "under --root):" +
       case_list};
   app.add_option("--case", f.names, "A gradient case (repeatable; default: every case)")->allow_extra_args(false);
-  app.add_option("--res", f.res, "Image side in pixels")->capture_default_str()->check(CLI::PositiveNumber);
-  app.add_option("--spp", f.spp, "Samples per pixel of grad")->capture_default_str()->check(CLI::PositiveNumber);
-  app.add_option("--fd-spp", f.fd_spp, "Samples per pixel of FD")->capture_default_str()->check(CLI::PositiveNumber);
-  app.add_option("--h", f.h, "FD step (default: the case's)")->check(CLI::NonNegativeNumber);
-  app.add_option("--threads", f.threads, "Worker threads (0 = all cores)")->check(CLI::NonNegativeNumber);
+  app.add_option("--res", f.res, "Image side in pixels")->capture_default_str()->check(qsil::cli::positive_number());
+  app.add_option("--spp", f.spp, "Samples per pixel of grad")->capture_default_str()->check(qsil::cli::positive_number());
+  app.add_option("--fd-spp", f.fd_spp, "Samples per pixel of FD")->capture_default_str()->check(qsil::cli::positive_number());
+  app.add_option("--h", f.h, "FD step (default: the case's)")->check(qsil::cli::non_negative_number());
+  app.add_option("--threads", f.threads, "Worker threads (0 = all cores)")->check(qsil::cli::non_negative_number());
   app.add_option("--csv", f.csv, "Write DIR/NAME.csv with every pixel-channel");
   app.add_option("--root", f.root, "The repository whose scenes the cases use")->capture_default_str();
   app.add_option("--scene", f.scene, "Any scene instead of the cases (with --param)");

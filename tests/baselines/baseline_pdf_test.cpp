@@ -58,10 +58,10 @@ struct TestedSampler {
 
 std::vector<TestedSampler> methods(const EdgeSet& f, const Vec3& o) {
   std::vector<TestedSampler> m;
-  for (Method t : {Method::VSphere, Method::VSphereSolid}) {
+  for (VSphereTest t : {VSphereTest::Hollow, VSphereTest::Solid}) {
     auto s = std::make_unique<VSphereEdgeSampler>(f, o, t);
     const VSphereEdgeSampler* raw = s.get();
-    m.push_back({std::string(method_name(s->method())), std::move(s),
+    m.push_back({std::string(s->name()), std::move(s),
                  [raw](const SilhouetteQuery& q) { return raw->edge_probabilities(q); }});
   }
   auto u = std::make_unique<UniformEdgeSampler>(f);

@@ -8,7 +8,7 @@
 /// And the commands themselves: `qsil slices --patch sphere` and `qsil candidates` on a small
 /// scene exit 0 and write their PNGs and summaries.
 
-#include "qsil/edgetree/canonical_patch.h"
+#include "qsil/study/canonical_patch.h"
 
 #include <gtest/gtest.h>
 

@@ -42,8 +42,8 @@ Counts check_tree(const VSphereTree& t, const std::vector<Vec3>& pts) {
         has[size_t(i)] = n.is_leaf() ? edge_is_silhouette(*t.edges()[size_t(n.edge)], p)
                                      : (has[size_t(n.child[0])] || has[size_t(n.child[1])]);
         if (!n.hough) continue;
-        const bool h = t.may_have_silhouette(i, p, Method::VSphere);
-        const bool s = t.may_have_silhouette(i, p, Method::VSphereSolid);
+        const bool h = t.may_have_silhouette(i, p, VSphereTest::Hollow);
+        const bool s = t.may_have_silhouette(i, p, VSphereTest::Solid);
         c.hollow_not_solid += h && !s;
         if (has[size_t(i)]) {
           ++c.with_sil;

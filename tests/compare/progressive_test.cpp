@@ -1,6 +1,6 @@
-// Progressive rendering (qsil/integrators/progressive.h) and `qsil compare` output (run_compare,
-// qsil/integrators/compare.h, through tools/cmd_compare.cpp).
-#include "qsil/integrators/progressive.h"
+// Progressive rendering (qsil/study/progressive.h) and `qsil compare` output (run_compare,
+// qsil/study/compare.h, through tools/cmd_compare.cpp).
+#include "qsil/study/progressive.h"
 
 #include "qsil/scene.h"
 

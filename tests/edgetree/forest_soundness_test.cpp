@@ -82,8 +82,8 @@ SoundnessResult check_forest(const EdgeForest& f, const std::vector<Vec3>& pts) 
           bool h = false;
           for (int c = n.first; c < n.first + n.count; ++c) h = h || has[c];
           has[i] = h;
-          const bool q = may_have_silhouette(f, i, p, Method::Quadric);
-          const bool b = may_have_silhouette(f, i, p, Method::QuadricBox);
+          const bool q = may_have_silhouette(f, i, p, NodeTest::DualBoxAndQuadrics);
+          const bool b = may_have_silhouette(f, i, p, NodeTest::DualBox);
           if (h) {
             ++lt;
             lq += !q;

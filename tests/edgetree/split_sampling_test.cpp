@@ -91,10 +91,10 @@ TEST(SplitSampling, SplitSetIsTheBrightLooseEdges) {
   for (size_t qi = 0; qi < qs.size(); ++qi) {
     const SilhouetteQuery& q = qs[qi];
     double sum = 0;
-    const auto split = split_edges(w->forest, q, Method::Quadric, &sum);
+    const auto split = split_edges(w->forest, q, NodeTest::DualBoxAndQuadrics, &sum);
     std::vector<std::pair<double, const ForestEdge*>> want;
     for (const ForestEdge& e : w->forest.always_edges()) {
-      const double pr = silhouette_edge_probability(w->forest, q, &e, Method::Quadric);
+      const double pr = silhouette_edge_probability(w->forest, q, &e, NodeTest::DualBoxAndQuadrics);
       if (pr >= kSplitShare) want.push_back({pr, &e});
     }
     std::sort(want.rbegin(), want.rend());
@@ -113,25 +113,25 @@ TEST(SplitSampling, SplitSetIsTheBrightLooseEdges) {
 TEST(SplitSampling, TraversalHistogramMatchesRenormalisedProbabilities) {
   const auto w = make_world();
   const auto qs = queries(*w, 24, 42);
-  const QuadricEdgeSampler sampler(w->forest, Method::Quadric);
+  const QuadricEdgeSampler sampler(w->forest, NodeTest::DualBoxAndQuadrics);
   const int n = 40000;
   std::vector<size_t> tested;
   for (size_t qi = 0; qi < qs.size(); ++qi)
-    if (!split_edges(w->forest, qs[qi], Method::Quadric).empty()) tested.push_back(qi);
+    if (!split_edges(w->forest, qs[qi], NodeTest::DualBoxAndQuadrics).empty()) tested.push_back(qi);
   ASSERT_GE(tested.size(), 3u) << "too few queries split: the test has no power";
   if (tested.size() > 6) tested.resize(6);
   const double alpha = sidak(0.01, int(tested.size()));
   for (size_t qi : tested) {
     const SilhouetteQuery& q = qs[qi];
     double split_sum = 0;
-    const auto split = split_edges(w->forest, q, Method::Quadric, &split_sum);
+    const auto split = split_edges(w->forest, q, NodeTest::DualBoxAndQuadrics, &split_sum);
     auto is_split = [&](const ForestEdge* e) { return std::find(split.begin(), split.end(), e) != split.end(); };
     std::map<const ForestEdge*, int> bin;
     std::vector<double> expected(1, 0.0);  // bin 0: no traversal sample
     double mass = 0;
     auto add = [&](const ForestEdge& e) {
       if (is_split(&e) || !edge_is_silhouette(e, q.p)) return;
-      const double pr = traversal_edge_probability(w->forest, q, &e, Method::Quadric);
+      const double pr = traversal_edge_probability(w->forest, q, &e, NodeTest::DualBoxAndQuadrics);
       if (!(pr > 0)) return;
       bin[&e] = int(expected.size());
       expected.push_back(n * pr);
@@ -192,17 +192,17 @@ TEST(SplitSampling, ChoiceAmongTheRestIsMadeAfresh) {
   double largest_old_ratio = 1.0;
   for (const SilhouetteQuery& q : qs) {
     double split_sum = 0;
-    if (split_edges(w->forest, q, Method::Quadric, &split_sum).size() != w->forest.always_edges().size()) continue;
+    if (split_edges(w->forest, q, NodeTest::DualBoxAndQuadrics, &split_sum).size() != w->forest.always_edges().size()) continue;
     ++tested;
     SilhouetteQuery without = q;
     without.eligible = &spot_only;
     for (const ForestEdge& e : w->forest.edges()) {
       if (!edge_is_silhouette(e, q.p)) continue;
-      const double want = silhouette_edge_probability(w->forest, without, &e, Method::Quadric);
-      const double got = traversal_edge_probability(w->forest, q, &e, Method::Quadric);
+      const double want = silhouette_edge_probability(w->forest, without, &e, NodeTest::DualBoxAndQuadrics);
+      const double got = traversal_edge_probability(w->forest, q, &e, NodeTest::DualBoxAndQuadrics);
       ++edges;
       bad += !(std::abs(got - want) <= 1e-9 * want);
-      const double old = silhouette_edge_probability(w->forest, q, &e, Method::Quadric) / (1.0 - split_sum);
+      const double old = silhouette_edge_probability(w->forest, q, &e, NodeTest::DualBoxAndQuadrics) / (1.0 - split_sum);
       if (old > 0 && want > 0) largest_old_ratio = std::max({largest_old_ratio, want / old, old / want});
     }
   }
@@ -226,7 +226,7 @@ TEST(QuadricTraversal, EveryDiscontinuityEdgeHasProbabilityAndTheySumToAtMostOne
     const auto w = make_world(creases);
     const bool with_creases = creases != CreaseSet::None;
     const auto qs = queries(*w, with_creases ? 16 : 60, with_creases ? 5 : 7);
-    for (Method m : {Method::Quadric, Method::QuadricBox}) {
+    for (NodeTest m : {NodeTest::DualBoxAndQuadrics, NodeTest::DualBox}) {
       int missing = 0, over = 0, edges = 0, crease_edges = 0;
       for (const SilhouetteQuery& q : qs) {
         double sum = 0;
@@ -242,7 +242,7 @@ TEST(QuadricTraversal, EveryDiscontinuityEdgeHasProbabilityAndTheySumToAtMostOne
         for (const ForestEdge& e : w->forest.always_edges()) check(e);
         over += sum > 1 + 1e-9;
       }
-      const std::string what = std::string(method_name(m)) + (with_creases ? " with creases" : "");
+      const std::string what = std::string(m == NodeTest::DualBox ? "dual box" : "dual box + quadrics") + (with_creases ? " with creases" : "");
       EXPECT_GT(edges, 1000) << what << ": too few discontinuity edges for power";
       if (with_creases) {
         EXPECT_GT(crease_edges, 16 * 2000) << what << ": too few creases for power";

@@ -1,5 +1,5 @@
 // How many secondary boundary traversals a pixel sample makes (boundary_traversals in
-// qsil/integrators/boundary_term.h; EstimatorConfig::boundary_spp):
+// qsil/integrators/boundary_term.h; EstimatorConfig::sppi):
 // - a whole rate is exact and draws nothing;
 // - a fractional rate picks each sample with probability exactly its fraction (over many pixels,
 //   binomial tests at 5 standard deviations), and any run of n consecutive samples of a pixel
@@ -15,7 +15,7 @@
 #include "qsil/error.h"
 #include "qsil/integrators/boundary_term.h"
 #include "qsil/integrators/estimator.h"
-#include "qsil/method.h"
+#include "qsil/integrators/method.h"
 #include "test_data.h"
 
 #include <gtest/gtest.h>
@@ -57,10 +57,10 @@ TEST(BoundaryRate, ConsecutiveSamplesOfAPixelHoldTheFractionOfPicksUpToOne) {
 }
 
 TEST(BoundaryRate, MethodDefaults) {
-  EXPECT_EQ(default_boundary_spp(Method::Quadric), 0.5);
-  EXPECT_EQ(default_boundary_spp(Method::QuadricBox), 0.5);
-  EXPECT_EQ(default_boundary_spp(Method::VSphere), 1.0);
-  EXPECT_EQ(default_boundary_spp(Method::Uniform), 1.0);
+  EXPECT_EQ(default_sppi(Method::Quadric), 0.5);
+  EXPECT_EQ(default_sppi(Method::QuadricBox), 0.5);
+  EXPECT_EQ(default_sppi(Method::VSphere), 1.0);
+  EXPECT_EQ(default_sppi(Method::Uniform), 1.0);
 }
 
 /// Image sum and standard error of the plane-light case's derivative at a boundary rate.

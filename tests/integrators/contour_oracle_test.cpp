@@ -9,7 +9,7 @@
 // for_each_boundary_sample):
 // - with the contour set: the traversal for the edges outside the set (its points on the set's
 //   edges dropped) plus one point on the set's edges (split edges left to their own point);
-// - the same with two traversals per vertex (samples_per_vertex 2);
+// - the same with two traversals per vertex (sppi 2);
 // - the traversal alone (no contour index).
 // Each must agree with the reference within 4 standard errors (two-sided, ~99.99 % for a correct
 // estimator) with a standard error below 1 % of it: a 5 % bias is caught.
@@ -150,7 +150,7 @@ OracleResult run_oracle(const Scene& scene, const Vec3& p_velocity = Vec3::Zero(
   std::vector<const edgetree::ForestEdge*> contour;
   boundary.contours->contour_edges(probe, p, q.eligible, contour);
   EXPECT_FALSE(contour.empty());
-  for (const edgetree::ForestEdge* e : edgetree::split_edges(*boundary.forest, q, Method::Quadric))
+  for (const edgetree::ForestEdge* e : edgetree::split_edges(*boundary.forest, q, edgetree::NodeTest::DualBoxAndQuadrics))
     r.contour_has_split_edge |= std::find(contour.begin(), contour.end(), e) != contour.end();
 
   // ---- Reference: quadrature over every discontinuity edge of the moving occluder.
@@ -195,13 +195,13 @@ OracleResult run_oracle(const Scene& scene, const Vec3& p_velocity = Vec3::Zero(
   auto estimate = [&](const BoundaryContext& b, uint64_t seed) {
     Sampler sampler(seed, 0, 0);
     PathStats st;
-    const int n = int(200000 / b.samples_per_vertex);
+    const int n = int(200000 / b.sppi);
     double sum = 0, sum2 = 0;
     for (int i = 0; i < n; ++i) {
       double v = 0;
       Eigen::Matrix<double, 1, 1> J;
       for_each_boundary_sample(
-          ctx, b, sampler, si, sp, q, wo_local, Color::Ones(), 1, int(b.samples_per_vertex), st,
+          ctx, b, sampler, si, sp, q, wo_local, Color::Ones(), 1, int(b.sppi), st,
           [&](const edgetree::ForestEdge& e, double t, const Vec3& gv) {
             J = edge_point_jacobian<1>(vel, e, t, gv, dp);
             return !J.isZero(0.0);
@@ -218,7 +218,7 @@ OracleResult run_oracle(const Scene& scene, const Vec3& p_velocity = Vec3::Zero(
   };
   r.with = estimate(bctx, 11);
   BoundaryContext two = bctx;
-  two.samples_per_vertex = 2;
+  two.sppi = 2;
   r.with_two = estimate(two, 13);
   BoundaryContext plain = bctx;
   plain.contours = nullptr;

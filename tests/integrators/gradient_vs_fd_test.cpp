@@ -5,7 +5,7 @@
 // pixel-channels; the slack is for heavy-tailed pixels whose SE is itself noisy). The scenes and the statistics are
 // shared with `qsil-check_gradients` (tools/tool_check_gradients.cpp), which runs them at higher spp and resolution;
 // its output is docs/gradient-checks.md. The whole file runs in a few seconds.
-#include "qsil/integrators/gradient_check.h"
+#include "qsil/study/gradient_check.h"
 #include "qsil/scene.h"
 #include "test_data.h"
 

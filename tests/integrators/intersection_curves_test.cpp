@@ -80,7 +80,7 @@ struct CurveCase {
   std::map<std::string, std::string> defines;
   std::string param;
   int grad_spp = 1024;
-  double boundary_spp = 0;  ///< 0: the method's default
+  double sppi = 0;  ///< 0: the method's default
   int fd_spp = 8192;
   double h = 0;  ///< FD step (0: default_fd_step)
   Weights weights = Weights::Signed;
@@ -113,7 +113,7 @@ void expect_curves_agree(const CurveCase& c) {
       }
   }
   const ImageSum f = weighted_sum(fd.run(options(22, c.fd_spp)).film, fd.layout(), w);
-  EstimatorConfig on = EstimatorConfig::gradient(params, Method::Quadric, c.boundary_spp);
+  EstimatorConfig on = EstimatorConfig::gradient(params, Method::Quadric, c.sppi);
   EstimatorConfig off = on;
   off.intersection_curves = false;
   const Estimator grad_on(scene, on), grad_off(scene, off);

@@ -1,11 +1,11 @@
-// qsil::agreement (qsil/integrators/reference.h), the test behind `qsil agree` and the step study
+// qsil::agreement (qsil/study/reference.h), the test behind `qsil agree` and the step study
 // of tools/references.py, on synthetic references with known truth and Gaussian noise of known
 // standard error: independent references agree; a 3 % scale error, a local bias that cancels in
 // the image sum, or a differing exact block is refused; a blur of sharp lines is refused per pixel
 // (not by blocks) and measured by excess_rel_mse. Fixed seeds; the agreeing case has
 // chi^2/dof ~ 1 +- 0.1 against a limit of 1.76 (a false refusal has probability < 1e-9), the
 // scaled one chi^2/dof ~ 3.9.
-#include "qsil/integrators/reference.h"
+#include "qsil/study/reference.h"
 #include "qsil/error.h"
 #include "qsil/film.h"
 

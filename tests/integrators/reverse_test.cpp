@@ -178,7 +178,7 @@ Estimate estimate(int runs, F&& one) {
 /// The boundary-term check of the file comment for `param` of shape `shape_id` in a scene. The
 /// adjoint is the sign of a pilot forward-mode derivative per pixel-channel (its own seed), so
 /// that the weighted sum adds the derivative's magnitude everywhere instead of cancelling. Both
-/// modes run at `rate` secondary traversals per vertex (EstimatorConfig::boundary_spp; 0: the
+/// modes run at `rate` secondary traversals per vertex (EstimatorConfig::sppi; 0: the
 /// method's default, a stratified pick of half the samples).
 void expect_boundary_agreement(const Scene& scene, const std::string& param, const std::string& shape_id, int runs,
                                double rate) {

@@ -25,7 +25,7 @@
 #include "qsil/integrators/boundary_term.h"
 #include "qsil/integrators/geometry_view.h"
 #include "qsil/integrators/estimator.h"
-#include "qsil/integrators/gradient_check.h"
+#include "qsil/study/gradient_check.h"
 #include "qsil/integrators/path_tracer.h"
 #include "qsil/parameters.h"
 #include "qsil/ray_tracer.h"

@@ -78,7 +78,7 @@ int main(int argc, char** argv) {
     long long acc[2] = {0, 0}, fa[2] = {0, 0};
     double secs[2] = {0, 0};
     for (int mode = 0; mode < 2; ++mode) {
-      const Method rm = mode == 0 ? Method::Quadric : Method::QuadricBox;
+      const NodeTest rm = mode == 0 ? NodeTest::DualBoxAndQuadrics : NodeTest::DualBox;
       const auto t0 = std::chrono::steady_clock::now();
       for (const Vec3& p : pts)
         for (int i : inner) acc[mode] += may_have_silhouette(f, i, p, rm);
@@ -87,8 +87,8 @@ int main(int argc, char** argv) {
     for (const Vec3& p : pts)
       for (int i : inner) {
         if (node_has_silhouette(f, i, p)) continue;
-        fa[0] += may_have_silhouette(f, i, p, Method::Quadric);
-        fa[1] += may_have_silhouette(f, i, p, Method::QuadricBox);
+        fa[0] += may_have_silhouette(f, i, p, NodeTest::DualBoxAndQuadrics);
+        fa[1] += may_have_silhouette(f, i, p, NodeTest::DualBox);
       }
     const double ntests = double(pts.size()) * double(inner.size());
     std::printf("%-8s %6d %6d %6d %6d %5d %5d %8.4f %8.4f %7.1f %9.3g %9.3g %7.3f %7.3f\n", name, st.edges_total,

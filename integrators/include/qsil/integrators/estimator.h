@@ -24,7 +24,7 @@
 ///   the merged film equals its film up to the rounding of the sums.
 
 #include "qsil/film.h"
-#include "qsil/method.h"
+#include "qsil/integrators/method.h"
 #include "qsil/parameters.h"
 #include "qsil/scene.h"
 
@@ -35,10 +35,10 @@
 
 namespace qsil {
 
-/// Default primary boundary-term edge samples per pixel sample (EstimatorConfig::primary_samples):
+/// Default primary boundary-term edge samples per pixel sample (EstimatorConfig::sppp):
 /// the ratio at which the primary term's share of the variance and of the time balance on the
 /// bundled scenes (docs/architecture.md §6 "How many primary samples").
-inline constexpr double kDefaultPrimarySamples = 0.25;
+inline constexpr double kDefaultSppp = 0.25;
 
 /// What an estimator estimates.
 struct EstimatorConfig {
@@ -49,12 +49,12 @@ struct EstimatorConfig {
   Method method = Method::Quadric;
   /// Secondary boundary-term traversals per shading point (edge-sampling methods), on average over
   /// a pixel's samples: a fraction is taken by a stratified pick of samples (boundary_traversals
-  /// in boundary_term.h). 0: the method's default (default_boundary_spp), else in [1/1024, 1024].
-  double boundary_spp = 0;
+  /// in boundary_term.h). 0: the method's default (default_sppi), else in [1/1024, 1024].
+  double sppi = 0;
   /// Primary boundary-term edge samples per pixel sample (edge-sampling methods; Mitsuba 3's
   /// `sppp` as a ratio to spp): ratio x W x H edge samples per sample index, rounded up to a whole
   /// chunk of 1024 (integrators/primary_boundary.h). In (0, 1024].
-  double primary_samples = kDefaultPrimarySamples;
+  double sppp = kDefaultSppp;
   /// Finite differences: one step h per parameter (units of theta); empty: default_fd_step each.
   std::vector<double> fd_steps;
   /// Edge-sampling methods: sample the intersection curves where surfaces cross
@@ -66,7 +66,7 @@ struct EstimatorConfig {
   static EstimatorConfig primal();
   /// Primal + derivatives with `method` (an edge sampler or Method::None).
   static EstimatorConfig gradient(std::vector<ParameterSpec> params, Method method = Method::Quadric,
-                                  double boundary_spp = 0, double primary_samples = kDefaultPrimarySamples);
+                                  double sppi = 0, double sppp = kDefaultSppp);
   /// Primal + central finite differences with steps `steps` (empty: defaults).
   static EstimatorConfig finite_differences(std::vector<ParameterSpec> params, std::vector<double> steps = {});
 };
@@ -136,7 +136,7 @@ class Estimator {
  public:
   /// Sets up `config` for `scene`, which must outlive the estimator. Throws qsil::Error for a
   /// parameter count outside 1..8 (check_parameter_count), a method that cannot estimate
-  /// derivatives, primary_samples or boundary_spp out of range (above), or finite-difference steps that are not positive and finite or not one per
+  /// derivatives, sppp or sppi out of range (above), or finite-difference steps that are not positive and finite or not one per
   /// parameter. Uses the caller's TBB arena (forest fitting is parallel).
   Estimator(const Scene& scene, EstimatorConfig config);
   ~Estimator();

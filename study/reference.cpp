@@ -1,7 +1,7 @@
 /// @file reference.cpp
-/// See qsil/integrators/reference.h.
+/// See qsil/study/reference.h.
 
-#include "qsil/integrators/reference.h"
+#include "qsil/study/reference.h"
 
 #include "qsil/error.h"
 

@@ -16,6 +16,11 @@
 
 namespace qsil {
 
+namespace edgetree {
+enum class NodeTest;     // node_rejection.h
+enum class VSphereTest;  // vsphere_tree.h
+}  // namespace edgetree
+
 /// A derivative estimator: the boundary-term sampler of `qsil grad`, the interior term alone, or
 /// finite differences. The first four are also the four rejection tests of `qsil slices`.
 enum class Method {
@@ -64,12 +69,12 @@ bool uses_edge_forest(Method method);
 /// True for quadric only: the forest's nodes carry fitted dual quadrics (the others need none).
 bool uses_quadrics(Method method);
 /// The secondary boundary-term traversals per path vertex a method uses by default
-/// (EstimatorConfig::boundary_spp = 0): 0.5 for quadric and quadric-box, one traversal every
+/// (EstimatorConfig::sppi = 0): 0.5 for quadric and quadric-box, one traversal every
 /// other pixel sample (their boundary term is cheap in variance and dear in time against the
 /// interior term: measured 1.13-1.36x the efficiency of 1 on the three chart scenes, 1.16-1.56x
 /// on the stability scenes, docs/architecture.md §5 "How many traversals"); 1 for the baselines,
 /// whose boundary term holds most of their variance.
-double default_boundary_spp(Method method);
+double default_sppi(Method method);
 
 /// The shading-point speed per extra secondary traversal a method uses (BoundaryContext::
 /// split_speed, boundary_split): 4 for quadric and quadric-box, whose rate above is tuned for
@@ -78,5 +83,11 @@ double default_boundary_spp(Method method);
 /// docs/architecture.md §5 "Splitting at fast shading points"); 0 (no splitting) for the
 /// baselines, which keep one traversal per vertex as published.
 double default_split_speed(Method method);
+
+/// The forest node test of `method` (Quadric or QuadricBox; QSIL_CHECK otherwise).
+edgetree::NodeTest node_test(Method method);
+
+/// The v-sphere test of `method` (VSphere or VSphereSolid; QSIL_CHECK otherwise).
+edgetree::VSphereTest vsphere_test(Method method);
 
 }  // namespace qsil

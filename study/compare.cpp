@@ -1,7 +1,7 @@
 /// @file compare.cpp
-/// The comparison driver; see qsil/integrators/compare.h.
+/// The comparison driver; see qsil/study/compare.h.
 
-#include "qsil/integrators/compare.h"
+#include "qsil/study/compare.h"
 
 #include "qsil/error.h"
 #include "qsil/files.h"
@@ -79,9 +79,9 @@ ProgressiveOptions progressive_options(const CompareOptions& o, double target, u
 
 /// The estimator configuration of a method.
 EstimatorConfig method_config(Method m, const std::vector<ParameterSpec>& params, const std::vector<double>& steps,
-                              double boundary_spp, double primary_samples) {
+                              double sppi, double sppp) {
   if (m == Method::FiniteDifferences) return EstimatorConfig::finite_differences(params, steps);
-  return EstimatorConfig::gradient(params, m, boundary_spp, primary_samples);
+  return EstimatorConfig::gradient(params, m, sppi, sppp);
 }
 
 /// The reference: read from options.reference, or rendered with `quadric` (set up by the caller
@@ -183,7 +183,7 @@ CompareReport run_compare(const Scene& scene, const std::vector<ParameterSpec>& 
   auto estimator = [&](Method m) -> const Estimator& {
     auto& e = estimators[m];
     if (!e) {
-      e = std::make_unique<Estimator>(scene, method_config(m, params, rep.fd_steps, o.boundary_spp, o.primary_samples));
+      e = std::make_unique<Estimator>(scene, method_config(m, params, rep.fd_steps, o.sppi, o.sppp));
       if (log) *log << "compare: set up " << method_name(m) << " once: " << e->setup().describe() << "\n";
     }
     return *e;

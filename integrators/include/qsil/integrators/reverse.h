@@ -25,7 +25,7 @@
 /// tiles, then primary chunks, are added in order.
 
 #include "qsil/integrators/estimator.h"
-#include "qsil/method.h"
+#include "qsil/integrators/method.h"
 #include "qsil/scene.h"
 
 #include <memory>
@@ -37,9 +37,9 @@ namespace qsil {
 struct ReverseConfig {
   std::vector<int> shapes;          ///< indices into Scene::shapes whose vertex positions are differentiated
   Method method = Method::Quadric;  ///< boundary term: an edge-sampling method, or Method::None (interior only)
-  double boundary_spp = 0;          ///< EstimatorConfig::boundary_spp (0: the method's default)
-  /// Primary boundary-term edge samples per pixel sample (EstimatorConfig::primary_samples).
-  double primary_samples = kDefaultPrimarySamples;
+  double sppi = 0;          ///< EstimatorConfig::sppi (0: the method's default)
+  /// Primary boundary-term edge samples per pixel sample (EstimatorConfig::sppp).
+  double sppp = kDefaultSppp;
   /// Sample the intersection curves where surfaces cross (EstimatorConfig::intersection_curves).
   bool intersection_curves = true;
 };
@@ -69,7 +69,7 @@ class ReverseEstimator {
   /// Builds the ray tracer, lights, and for an edge-sampling method the boundary method's
   /// structures over every shape and the primary edges of the chosen shapes. Throws qsil::Error
   /// for an empty or repeated shape list, a shape index out of range, a method that is neither
-  /// an edge-sampling method nor none, or a boundary_spp or primary_samples out of range
+  /// an edge-sampling method nor none, or a sppi or sppp out of range
   /// (check_sample_rates).
   ReverseEstimator(const Scene& scene, ReverseConfig config);
   ~ReverseEstimator();

@@ -41,11 +41,11 @@ double vsphere_max_bsdf(const Box3& box, const Vec3& p, const Frame& frame, cons
 class VSphereEdgeSampler final : public EdgeSampler {
  public:
   /// Builds the tree from the edge set's tree edges and creases (the set must outlive the
-  /// sampler). `method`: Method::VSphere (hollow test) or Method::VSphereSolid (solid test).
-  VSphereEdgeSampler(const EdgeSet& edges, const Vec3& hough_origin, Method method);
+  /// sampler). `test`: the hollow or the solid v-sphere test.
+  VSphereEdgeSampler(const EdgeSet& edges, const Vec3& hough_origin, VSphereTest test);
 
   SilhouetteSample sample(const SilhouetteQuery& query, const std::function<double()>& next) const override;
-  Method method() const override { return method_; }
+  std::string_view name() const override { return test_ == VSphereTest::Hollow ? "vsphere" : "vsphere-solid"; }
 
   /// Exhaustive traversal (every accepted child down to the leaves): every edge with non-zero
   /// probability of being chosen, silhouette or not, with that probability. The probabilities
@@ -67,7 +67,7 @@ class VSphereEdgeSampler final : public EdgeSampler {
 
   const EdgeSet& edges_;
   VSphereTree tree_;
-  Method method_;
+  VSphereTest test_;
 };
 
 }  // namespace qsil::edgetree

@@ -1,7 +1,7 @@
 /// @file canonical_patch.cpp
 /// See canonical_patch.h.
 
-#include "qsil/edgetree/canonical_patch.h"
+#include "qsil/study/canonical_patch.h"
 
 #include "qsil/check.h"
 #include "qsil/edgetree/mesh_edges.h"
@@ -161,13 +161,13 @@ SliceVerdict PatchTests::evaluate(const Vec3& p) const {
     const Method m = kRejectionMethods[i];
     if (uses_edge_forest(m)) {
       if (forest_) {
-        v.accept[i] = may_have_silhouette(*forest_, node_, p, m);
+        v.accept[i] = may_have_silhouette(*forest_, node_, p, node_test(m));
       } else {
         const bool box_only = m == Method::QuadricBox || (flags_ & kNodeBoxOnly);
         v.accept[i] = (flags_ & kNodeUnrejectable) || bound_may_have_silhouette(bound_, box_only, p);
       }
     } else {
-      v.accept[i] = origin_sil_ > 0 || vsphere_box_may_have_silhouette(bh_, bp_.max_abs(), p, o_, m);
+      v.accept[i] = origin_sil_ > 0 || vsphere_box_may_have_silhouette(bh_, bp_.max_abs(), p, o_, vsphere_test(m));
     }
   }
   return v;

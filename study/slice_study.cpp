@@ -1,7 +1,7 @@
 /// @file slice_study.cpp
-/// See qsil/edgetree/slice_study.h.
+/// See qsil/study/slice_study.h.
 
-#include "qsil/edgetree/slice_study.h"
+#include "qsil/study/slice_study.h"
 
 #include "qsil/edgetree/edge_forest.h"
 #include "qsil/error.h"

@@ -17,7 +17,7 @@
 #include "qsil/edgetree/node_fit.h"
 #include "qsil/edgetree/vsphere_tree.h"
 #include "qsil/math.h"
-#include "qsil/method.h"
+#include "qsil/integrators/method.h"
 #include "qsil/scene.h"
 
 #include <array>

@@ -1,7 +1,7 @@
 /// @file gradient_check.cpp
 /// Image-level gradient checks against finite differences; see gradient_check.h.
 
-#include "qsil/integrators/gradient_check.h"
+#include "qsil/study/gradient_check.h"
 
 #include "qsil/error.h"
 #include "qsil/files.h"

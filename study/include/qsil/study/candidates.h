@@ -25,7 +25,7 @@
 /// candidate line sets and the point for external viewers); DIR/summary.json and summary.csv.
 
 #include "qsil/edgetree/edge_sampler.h"
-#include "qsil/method.h"
+#include "qsil/integrators/method.h"
 #include "qsil/scene.h"
 
 #include <filesystem>

@@ -31,7 +31,6 @@
 
 #include "qsil/edgetree/edge_set.h"
 #include "qsil/math.h"
-#include "qsil/method.h"
 
 #include <cstdint>
 #include <vector>
@@ -42,19 +41,24 @@ namespace qsil::edgetree {
 /// compared quantities counts as touching, i.e. accept (soundness under rounding).
 inline constexpr double kVSphereTol = 1e-9;
 
+/// Which v-sphere test a node runs (the `--boundary` methods `vsphere` and `vsphere-solid`).
+enum class VSphereTest {
+  Hollow,  ///< the hollow v-sphere vs the solid box, [QSS] App. F (the corrected test)
+  Solid,   ///< the solid v-sphere, redner's original
+};
+
 /// Hough point of the world plane q = [n, -n.x0] (unit n) for the origin o: h = -n (q.[o,1])
 /// (scene units, relative to o).
 Vec3 hough_point(const Vec4& q, const Vec3& o);
 
 /// The v-sphere test of a Hough box for the shading point p (world) and the Hough origin o, with
-/// the test of `method`: Method::VSphere (the hollow v-sphere vs the solid box, [QSS] App. F, the
-/// corrected test) or Method::VSphereSolid (the solid v-sphere, redner's original).
+/// `test` (VSphereTest).
 /// `world_scale` is the largest absolute world coordinate of the edges the box bounds (it scales
 /// the rounding tolerance, together with |p|, |o| and the box). Returns false only when no plane
 /// pair with Hough points in the box (and d0 d1 > 0) can be a silhouette for p: see the file
 /// comment. An empty box is rejected.
 bool vsphere_box_may_have_silhouette(const Box3& hough_box, double world_scale, const Vec3& p, const Vec3& o,
-                                     Method method);
+                                     VSphereTest test);
 
 /// A node of the v-sphere tree. Inner nodes have two children; leaves hold one edge.
 struct VSphereNode {
@@ -99,8 +103,8 @@ class VSphereTree {
 
   /// Rejection test of node i for the shading point p: plain nodes always accept; 6D nodes
   /// (leaves included: the box of their one edge's two Hough points) run the v-sphere test of
-  /// `method` (VSphere or VSphereSolid).
-  bool may_have_silhouette(int i, const Vec3& p, Method method) const;
+  /// `test`.
+  bool may_have_silhouette(int i, const Vec3& p, VSphereTest test) const;
 
   /// Bytes of the arrays.
   size_t memory_bytes() const;

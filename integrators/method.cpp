@@ -1,8 +1,11 @@
 /// @file method.cpp
-/// Method names; see qsil/method.h.
+/// Method names and defaults; see qsil/integrators/method.h.
 
-#include "qsil/method.h"
+#include "qsil/integrators/method.h"
 
+#include "qsil/check.h"
+#include "qsil/edgetree/node_rejection.h"
+#include "qsil/edgetree/vsphere_tree.h"
 #include "qsil/error.h"
 
 #include <algorithm>
@@ -43,8 +46,18 @@ bool uses_edge_forest(Method method) { return method == Method::Quadric || metho
 
 bool uses_quadrics(Method method) { return method == Method::Quadric; }
 
-double default_boundary_spp(Method method) { return uses_edge_forest(method) ? 0.5 : 1.0; }
+double default_sppi(Method method) { return uses_edge_forest(method) ? 0.5 : 1.0; }
 
 double default_split_speed(Method method) { return uses_edge_forest(method) ? 4.0 : 0.0; }
+
+edgetree::NodeTest node_test(Method method) {
+  QSIL_CHECK(uses_edge_forest(method));
+  return method == Method::Quadric ? edgetree::NodeTest::DualBoxAndQuadrics : edgetree::NodeTest::DualBox;
+}
+
+edgetree::VSphereTest vsphere_test(Method method) {
+  QSIL_CHECK(method == Method::VSphere || method == Method::VSphereSolid);
+  return method == Method::VSphere ? edgetree::VSphereTest::Hollow : edgetree::VSphereTest::Solid;
+}
 
 }  // namespace qsil

@@ -53,9 +53,9 @@ struct BoundaryContext {
   std::vector<bool> moving;  ///< shapes with non-zero velocity (eligible at a static p)
   std::vector<bool> all;     ///< every shape (eligible at a moving p)
   /// Secondary boundary-term traversals per path vertex, on average over a pixel's samples
-  /// (EstimatorConfig::boundary_spp; positive and finite): boundary_traversals() of them at every
-  /// vertex of a sample's path, each weighted 1 / samples_per_vertex.
-  double samples_per_vertex = 1.0;
+  /// (EstimatorConfig::sppi; positive and finite): boundary_traversals() of them at every
+  /// vertex of a sample's path, each weighted 1 / sppi.
+  double sppi = 1.0;
   /// Splitting at fast shading points (boundary_split): a vertex whose shading point moves at
   /// speed s makes ceil(s / split_speed) traversals, at most kMaxBoundarySplit, for each one
   /// boundary_traversals schedules. 0: no splitting. Set from default_split_speed(method).
@@ -406,7 +406,7 @@ edgetree::ContourProbe contour_probe(const PathContext& ctx, const edgetree::Con
 }
 
 /// How many secondary boundary traversals sample `sample` of pixel `pixel` makes at each vertex of
-/// its path, at `rate` = BoundaryContext::samples_per_vertex: the whole part of the rate, plus one
+/// its path, at `rate` = BoundaryContext::sppi: the whole part of the rate, plus one
 /// where a stratified pick over the pixel's samples selects it: with f the fraction of the rate
 /// and phi uniform in [0, 1) drawn once per pixel (Sampler(seed, pixel, 0, 3): the same for every
 /// sample range and process split), sample s is picked iff floor(f (s + 1) + phi) > floor(f s +
@@ -461,7 +461,7 @@ inline int boundary_split(const BoundaryContext& bctx, const edgetree::Silhouett
 /// ContourIndex::contour_edges), each split into m = boundary_split(bctx, q), drawing from
 /// `sampler`; for each edge point with f_s != 0, `accept(edge, t, g)` decides before any ray
 /// whether it can contribute (edge_jump_with), and each contributing one is handed to
-/// `visit(edge, t, weight, g)` with weight = T f_s jump / (pdf r m), r = bctx.samples_per_vertex
+/// `visit(edge, t, weight, g)` with weight = T f_s jump / (pdf r m), r = bctx.sppi
 /// and T the detached throughput (the vertex's derivative gains weight (g . v_t)). Counts
 /// traversals (the split ones each), zero traversals and thread time.
 template <class T, class Accept, class Visit>
@@ -472,7 +472,7 @@ void for_each_boundary_sample(const PathContext& ctx, const BoundaryContext& bct
   if (traversals <= 0) return;
   const int split = boundary_split(bctx, q);
   traversals *= split;
-  const double rate = bctx.samples_per_vertex * double(split);
+  const double rate = bctx.sppi * double(split);
   const auto t0 = std::chrono::steady_clock::now();
   const Vec3 wo_world = q.frame.to_world(wo_local);
   // ---- The contour set of a glossy vertex: made once, used by every traversal here. The

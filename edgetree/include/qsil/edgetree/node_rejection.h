@@ -10,7 +10,6 @@
 
 #include "qsil/edgetree/edge_forest.h"
 #include "qsil/math.h"
-#include "qsil/method.h"
 
 namespace qsil::edgetree {
 
@@ -19,18 +18,24 @@ namespace qsil::edgetree {
 /// may_have_silhouette) counts as zero, i.e. as touching, i.e. accept.
 inline constexpr double kRejectTol = 1e-9;
 
+/// Which bound an inner forest node is tested with (the `--boundary` methods `quadric` and
+/// `quadric-box` of the integrators' Method).
+enum class NodeTest {
+  DualBoxAndQuadrics,  ///< the dual box, then the bounding quadric pair [QSS 3.4]
+  DualBox,             ///< the dual box only (the ablation of docs/architecture.md §7)
+};
+
 /// Rejection test of node `node` of `forest` for the shading point p (world frame), with the
-/// bound of `method`: Method::Quadric (dual box, then the bounding quadric pair, [QSS 3.4]) or
-/// Method::QuadricBox (dual box only, docs/architecture.md §7); no other method has this test.
-/// - Leaves: exact per-edge test (leaf_has_silhouette), for both methods.
+/// bound `test` (NodeTest).
+/// - Leaves: exact per-edge test (leaf_has_silhouette), for both tests.
 /// - Unrejectable inner nodes: true.
 /// - Inner nodes [QSS 3.4]: 1. the polygon C = B_q ∩ {r : [r,1].(A^T x') = 0} with x' the local
-///   point [(p-c)/s, 1]; empty -> false. QuadricBox and box-only nodes: true otherwise.
+///   point [(p-c)/s, 1]; empty -> false. NodeTest::DualBox and box-only nodes: true otherwise.
 ///   2. a vertex with Q~0 <= 0 <= Q~1 -> true; 3. Q~0 or Q~1 has a root on a polygon edge
 ///   (sign change at the ends or interior extremum of the other sign) -> true; 4. a real point
 ///   of either conic (found on a line or its polar line, [QSS App. C]) inside C -> true;
 ///   5. false. Q~k(r) = [r,1]^T (A^T Qk A) [r,1].
-bool may_have_silhouette(const EdgeForest& forest, int node, const Vec3& p, Method method = Method::Quadric);
+bool may_have_silhouette(const EdgeForest& forest, int node, const Vec3& p, NodeTest test = NodeTest::DualBoxAndQuadrics);
 
 /// The dual-space part of the test on a bound directly (steps 1-5 above; `box_only` stops after
 /// step 1). Exposed for tests of degenerate patches fitted with fit_node().

@@ -11,9 +11,9 @@
 /// forest fit, v-sphere tree, ...) is not charged to any budget and is reported per method
 /// (setup_seconds in the CSV and JSON, and one log line per method).
 
-#include "qsil/integrators/progressive.h"
-#include "qsil/integrators/reference.h"
-#include "qsil/method.h"
+#include "qsil/study/progressive.h"
+#include "qsil/study/reference.h"
+#include "qsil/integrators/method.h"
 #include "qsil/parameters.h"
 #include "qsil/scene.h"
 
@@ -35,10 +35,10 @@ struct CompareOptions {
   std::string reference;        ///< reference EXR (`qsil reference`); empty: render one
   double reference_factor = 8;  ///< automatic reference: this times the largest target, quadric
   std::vector<double> h;        ///< FD steps (fd_steps())
-  /// EstimatorConfig::boundary_spp and primary_samples of every edge-sampling method (0: each
+  /// EstimatorConfig::sppi and sppp of every edge-sampling method (0: each
   /// method's default rate).
-  double boundary_spp = 0;
-  double primary_samples = kDefaultPrimarySamples;
+  double sppi = 0;
+  double sppp = kDefaultSppp;
   std::filesystem::path out;  ///< output directory (created)
   uint64_t seed = 0;          ///< base seed: every method, target and the reference derive theirs
   int threads = 0;

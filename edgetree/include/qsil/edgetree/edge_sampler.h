@@ -14,9 +14,8 @@
 /// under the strategy that covers it.
 
 #include "qsil/edgetree/silhouette_sampler.h"
-#include "qsil/method.h"
-
 #include <functional>
+#include <string_view>
 
 namespace qsil::edgetree {
 
@@ -44,8 +43,8 @@ class EdgeSampler {
     const SilhouetteSample s = sample(query, next);
     if (s.edge) out.push(s);
   }
-  /// The `--boundary` method it implements.
-  virtual Method method() const = 0;
+  /// The name of the `--boundary` method it implements (e.g. "quadric").
+  virtual std::string_view name() const = 0;
 };
 
 }  // namespace qsil::edgetree

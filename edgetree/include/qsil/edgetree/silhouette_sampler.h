@@ -25,7 +25,7 @@
 /// under the cosine lobe for a smooth shape's creases: kSmoothCreaseWeight), a shape's few (e.g.
 /// a rectangle's outline) one by one.
 ///
-/// Flat choice (Method::Quadric only; QuadricBox keeps the paper's traversal): a chosen inner
+/// Flat choice (NodeTest::DualBoxAndQuadrics only; DualBox keeps the paper's traversal): a chosen inner
 /// node with at most 64 edges below it does not descend through its children but chooses among
 /// all the discontinuity edges below it at once, each weighed as a leaf weighs its edges (I_e
 /// with the normal-velocity factor, G_e). The box importance of its subtree's nodes spreads a
@@ -194,18 +194,18 @@ struct SilhouetteSampleSet {
 /// its t from EdgeMixture, drawn first (two random numbers). Each edge is covered by exactly
 /// one strategy with positive probability, so the sum stays unbiased whatever the set.
 void sample_silhouette_set(const EdgeForest& forest, const SilhouetteQuery& query, const std::function<double()>& next,
-                           Method method, SilhouetteSampleSet& out);
+                           NodeTest test, SilhouetteSampleSet& out);
 
 /// The edges sample_silhouette_set splits for the query and the sum of their top-level
 /// probabilities (those of sample_silhouette). For tests and `qsil candidates`.
-std::vector<const ForestEdge*> split_edges(const EdgeForest& forest, const SilhouetteQuery& query, Method method,
+std::vector<const ForestEdge*> split_edges(const EdgeForest& forest, const SilhouetteQuery& query, NodeTest test,
                                            double* split_probability = nullptr);
 
 /// Samples one discontinuity edge and a point on it for the query (no splitting), with the rejection test of
-/// `method` (Method::Quadric or Method::QuadricBox, node_rejection.h). `next` returns a fresh
+/// `test` (NodeTest, node_rejection.h). `next` returns a fresh
 /// uniform number in [0,1) each call.
 SilhouetteSample sample_silhouette(const EdgeForest& forest, const SilhouetteQuery& query,
-                                   const std::function<double()>& next, Method method = Method::Quadric);
+                                   const std::function<double()>& next, NodeTest test = NodeTest::DualBoxAndQuadrics);
 
 /// Completes a sample on a chosen edge e (chosen with discrete probability pmf): t from the
 /// light-aware EdgeMixture of the query ([QSS Eq. 4] x LTC, weighted by the radiance that can
@@ -289,17 +289,17 @@ NodeWeight loose_edge_weight(const ForestEdge& e, const SilhouetteQuery& q);
 /// plane (e.g. an edge of p's own triangle under a rigid motion), where the integrand is 0 too.
 double velocity_factor(const ForestEdge& e, const SilhouetteQuery& q);
 
-/// Probability with which sample_silhouette (with `method`) picks `edge` (an element of
+/// Probability with which sample_silhouette (with `test`) picks `edge` (an element of
 /// forest.edges() or forest.always_edges()) for the query, by walking the same choices (for
 /// tests: the sampling probabilities of all edges sum to at most 1, and match the histogram).
 double silhouette_edge_probability(const EdgeForest& forest, const SilhouetteQuery& query, const ForestEdge* edge,
-                                   Method method = Method::Quadric);
+                                   NodeTest test = NodeTest::DualBoxAndQuadrics);
 
 /// Probability with which the traversal of sample_silhouette_set (after splitting, without a
 /// contour set) picks `edge`: 0 for a split edge, otherwise the walk of
 /// silhouette_edge_probability from the top-level choice among the non-split candidates. For
 /// tests (the histogram of split_sampling_test).
 double traversal_edge_probability(const EdgeForest& forest, const SilhouetteQuery& query, const ForestEdge* edge,
-                                  Method method = Method::Quadric);
+                                  NodeTest test = NodeTest::DualBoxAndQuadrics);
 
 }  // namespace qsil::edgetree

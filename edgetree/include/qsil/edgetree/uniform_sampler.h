@@ -27,7 +27,7 @@ class UniformEdgeSampler final : public EdgeSampler {
   explicit UniformEdgeSampler(const EdgeSet& edges);
 
   SilhouetteSample sample(const SilhouetteQuery& query, const std::function<double()>& next) const override;
-  Method method() const override { return Method::Uniform; }
+  std::string_view name() const override { return "uniform"; }
 
   /// Every edge of the eligible shapes with its probability (they sum to 1 unless no shape is
   /// eligible).

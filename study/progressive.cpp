@@ -1,7 +1,7 @@
 /// @file progressive.cpp
-/// See qsil/integrators/progressive.h.
+/// See qsil/study/progressive.h.
 
-#include "qsil/integrators/progressive.h"
+#include "qsil/study/progressive.h"
 
 #include "qsil/error.h"
 

@@ -1,7 +1,7 @@
 /// @file candidates.cpp
-/// The candidate-edge study; see qsil/integrators/candidates.h.
+/// The candidate-edge study; see qsil/study/candidates.h.
 
-#include "qsil/integrators/candidates.h"
+#include "qsil/study/candidates.h"
 
 #include "qsil/edgetree/edge_forest.h"
 #include "qsil/edgetree/node_rejection.h"
@@ -36,9 +36,9 @@ std::vector<EdgeProbability> forest_candidates(const EdgeForest& f, const Silhou
   std::vector<EdgeProbability> out;
   std::vector<int> stack;
   for (int r : f.roots())
-    if (q.is_eligible(f.node(r).shape) && edgetree::may_have_silhouette(f, r, q.p, method)) stack.push_back(r);
+    if (q.is_eligible(f.node(r).shape) && edgetree::may_have_silhouette(f, r, q.p, node_test(method))) stack.push_back(r);
   for (const ForestEdge& e : f.always_edges())
-    if (q.is_eligible(e.shape)) out.push_back({&e, edgetree::silhouette_edge_probability(f, q, &e, method)});
+    if (q.is_eligible(e.shape)) out.push_back({&e, edgetree::silhouette_edge_probability(f, q, &e, node_test(method))});
   while (!stack.empty()) {
     const int n = stack.back();
     stack.pop_back();
@@ -46,14 +46,14 @@ std::vector<EdgeProbability> forest_candidates(const EdgeForest& f, const Silhou
       for (const ForestEdge& e : f.leaf_edges(n)) {
         ++leaf_edges;
         if (!edgetree::edge_is_silhouette(e, q.p)) continue;
-        const double pr = edgetree::silhouette_edge_probability(f, q, &e, method);
+        const double pr = edgetree::silhouette_edge_probability(f, q, &e, node_test(method));
         if (pr > 0) out.push_back({&e, pr});
       }
       continue;
     }
     const edgetree::ForestNode& node = f.node(n);
     for (int c = node.first; c < node.first + node.count; ++c)
-      if (edgetree::may_have_silhouette(f, c, q.p, method)) stack.push_back(c);
+      if (edgetree::may_have_silhouette(f, c, q.p, node_test(method))) stack.push_back(c);
   }
   return out;
 }
@@ -153,7 +153,7 @@ CandidatesReport find_candidates(const Scene& scene, const CandidatesOptions& o)
       mc.leaf_edges = 0;
       mc.edges = forest_candidates(*forest, q, m, mc.leaf_edges);
     } else if (m == Method::VSphere || m == Method::VSphereSolid) {
-      mc.edges = edgetree::VSphereEdgeSampler(*forest, scene.camera.origin(), m).edge_probabilities(q);
+      mc.edges = edgetree::VSphereEdgeSampler(*forest, scene.camera.origin(), vsphere_test(m)).edge_probabilities(q);
     } else if (m == Method::Uniform) {
       mc.edges = edgetree::UniformEdgeSampler(*forest).edge_probabilities(q);
     } else {

@@ -12,7 +12,7 @@
 /// plane: points, points without silhouette, false accepts, false-accept rate = false accepts /
 /// points without silhouette, false rejects).
 
-#include "qsil/edgetree/canonical_patch.h"
+#include "qsil/study/canonical_patch.h"
 #include "qsil/math.h"
 
 #include <array>
