@@ -72,7 +72,7 @@ class PrimalEstimator final : public Estimator::Impl {
           const Vec3 d = cam.direction(x + u.x(), y + u.y());
           ++st.rays;
           const Hit hit = tracer.intersect(origin, d);
-          const Color L = trace_path(ctx, view, origin, d, hit, 0, 0.0, sampler, st);
+          const Color L = trace_path(ctx, view, {origin, d, hit}, sampler, st);
           for (int c = 0; c < 3; ++c) out[layout.primal(c)] = L[c];
         },
         r, total);
@@ -124,9 +124,9 @@ class GradientEstimator final : public Estimator::Impl {
             // The boundary term draws from a stream of its own, so it leaves the path's decisions unchanged.
             Sampler bsampler(options.seed, pixel, uint64_t(s), 1);
             const BoundaryHook<N> hook{&ctx, &bctx, &bsampler, traversals};
-            L = trace_path(ctx, view, lift<Dual<N>>(origin), d, hit, 0, 0.0, sampler, st, hook);
+            L = trace_path(ctx, view, {lift<Dual<N>>(origin), d, hit}, sampler, st, hook);
           } else {
-            L = trace_path(ctx, view, lift<Dual<N>>(origin), d, hit, 0, 0.0, sampler, st);
+            L = trace_path(ctx, view, {lift<Dual<N>>(origin), d, hit}, sampler, st);
           }
           for (int c = 0; c < 3; ++c) out[layout.primal(c)] = L[c].value();
           for (int k = 0; k < K; ++k) {
@@ -199,7 +199,7 @@ class FiniteDifferenceEstimator final : public Estimator::Impl {
       const Vec3 d = cam.direction(x + u.x(), y + u.y());
       ++st.rays;
       const Hit hit = side.tracer.intersect(origin, d);
-      return trace_path(side.ctx, PrimalView{&side.scene}, origin, d, hit, 0, 0.0, sampler, st);
+      return trace_path(side.ctx, PrimalView{&side.scene}, {origin, d, hit}, sampler, st);
     };
     PathStats total;
     run_pixels(

@@ -23,7 +23,25 @@
 
 namespace qsil {
 
-/// Calls body(x, y) for every pixel of a width x height image, in parallel over 16x16 tiles on
+/// The side of a tile of pixels (for_each_tile).
+inline constexpr int kTileSize = 16;
+
+/// A tile of pixels [x0, x1) x [y0, y1), kTileSize on a side but at the image's right and bottom
+/// borders; tiles are numbered row by row (`index`), which is the order results summed per tile
+/// are combined in (independent of the thread count).
+struct Tile {
+  int index, x0, y0, x1, y1;
+};
+
+/// Number of tiles of a width x height image.
+int tile_count(int width, int height);
+
+/// Calls body(tile) for every tile of a width x height image, each once, in parallel on `threads`
+/// threads (0 = all cores). `label` prefixes the progress bar ("" = no bar).
+void for_each_tile(int width, int height, int threads, const std::string& label,
+                   const std::function<void(const Tile& tile)>& body);
+
+/// Calls body(x, y) for every pixel of a width x height image, in parallel over its tiles on
 /// `threads` threads (0 = all cores). `label` prefixes the progress bar ("" = no bar). With
 /// parts > 1 only for the pixels of part `part` (Film::part_of), in parallel over runs of them.
 void for_each_pixel(int width, int height, int threads, const std::string& label,

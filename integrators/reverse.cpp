@@ -5,14 +5,12 @@
 
 #include "boundary_setup.h"
 #include "light_setup.h"
+#include "pixel_loop.h"
 #include "primary_boundary.h"
 #include "qsil/error.h"
 #include "qsil/integrators/boundary_term.h"
 #include "qsil/integrators/path_tracer.h"
 #include "qsil/vertex_normals.h"
-
-#include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
 
 #include <chrono>
 #include <cmath>
@@ -191,6 +189,33 @@ bool finite(const std::vector<Contribution>& cs) {
   return true;
 }
 
+/// What one tile of the interior and secondary boundary terms adds up; tiles are combined in
+/// tile order, so the sums do not depend on the thread count.
+struct TileSums {
+  Accumulator acc;
+  PathStats stats;
+  double loss = 0;
+  uint64_t nonfinite = 0, replays = 0;
+};
+
+/// One sample of one pixel: sample index s of pixel (x, y), and the run's seed.
+struct PixelSample {
+  int x, y, s;
+  uint64_t seed;
+};
+
+/// Throws qsil::Error unless `adjoint` holds width x height x 3 finite weights (names the pixel).
+void check_adjoint(const std::vector<double>& adjoint, int width, int height) {
+  const size_t expected = size_t(width) * size_t(height) * 3;
+  if (adjoint.size() != expected)
+    throw Error("adjoint image: expected " + std::to_string(width) + " x " + std::to_string(height) +
+                " x 3 = " + std::to_string(expected) + " values (got " + std::to_string(adjoint.size()) + ")");
+  for (size_t i = 0; i < adjoint.size(); ++i)
+    if (!std::isfinite(adjoint[i]))
+      throw Error("adjoint image: non-finite weight at pixel (" + std::to_string((i / 3) % size_t(width)) + ", " +
+                  std::to_string((i / 3) / size_t(width)) + ")");
+}
+
 }  // namespace
 
 class ReverseEstimator::Impl {
@@ -245,6 +270,93 @@ class ReverseEstimator::Impl {
     }
   }
 
+  /// One pass of sample `ps`'s path: the path from the sample's first random number, with slots
+  /// for tape hits [window, window + kHitsPerPass) (every pass draws the same numbers: the same
+  /// path), its secondary boundary term adding to `contributions` (adjoint `a` of the pixel, per
+  /// sample) and its hits' adjoints added by backpropagate_hits.
+  ColorT<RDual> trace_pass(const PixelSample& ps, int window, const Color& a, Tape& tape,
+                           std::vector<Contribution>& contributions, PathStats& st) const {
+    const Camera& cam = scene.camera;
+    const Vec3 origin = cam.origin();
+    const uint64_t pixel = uint64_t(ps.y) * uint64_t(cam.width) + uint64_t(ps.x);
+    tape.reset(window);
+    Sampler sampler(ps.seed, pixel, uint64_t(ps.s));
+    const Vec2 u = sampler.next2();
+    const Vec3 d = cam.direction(ps.x + u.x(), ps.y + u.y());
+    ++st.rays;
+    const Hit hit = tracer.intersect(origin, d);
+    const ReverseView view{&scene, &chosen, &tape};
+    const int traversals = boundary.sampler ? boundary_traversals(bctx.sppi, ps.seed, pixel, uint64_t(ps.s)) : 0;
+    ColorT<RDual> L;
+    if (traversals > 0) {
+      Sampler bsampler(ps.seed, pixel, uint64_t(ps.s), 1);
+      const ReverseBoundaryHook hook{&ctx, &bctx, &bsampler, traversals, &tape, &chosen_index, a, window == 0,
+                                     &contributions};
+      L = trace_path(ctx, view, {lift<RDual>(origin), d, hit}, sampler, st, hook);
+    } else {
+      L = trace_path(ctx, view, {lift<RDual>(origin), d, hit}, sampler, st);
+    }
+    backpropagate_hits(tape, L, a, contributions);
+    return L;
+  }
+
+  /// The interior and secondary boundary terms of samples [first, first + count) of the pixels of
+  /// `tile`: each sample's path is traced once per window of kHitsPerPass tape hits; a sample
+  /// with a non-finite radiance or adjoint is dropped and counted. Writes the pixels' primal
+  /// values into `image` (W x H x 3).
+  void reverse_tile(const Tile& tile, const std::vector<double>& adjoint, int first, int count, uint64_t seed,
+                    TileSums& sums, std::vector<double>& image) const {
+    Tape tape;
+    std::vector<Contribution> contributions;
+    for (int y = tile.y0; y < tile.y1; ++y)
+      for (int x = tile.x0; x < tile.x1; ++x) {
+        const uint64_t pixel = uint64_t(y) * uint64_t(scene.camera.width) + uint64_t(x);
+        const Color a = Eigen::Map<const Color>(&adjoint[3 * pixel]) / double(count);
+        Color sum = Color::Zero();
+        for (int s = first; s < first + count; ++s) {
+          contributions.clear();
+          const PixelSample ps{x, y, s, seed};
+          const Color value_L = value(trace_pass(ps, 0, a, tape, contributions, sums.stats));
+          for (int w = kHitsPerPass; w < int(tape.hits.size()); w += kHitsPerPass) {
+            trace_pass(ps, w, a, tape, contributions, sums.stats);
+            ++sums.replays;
+          }
+          if (!value_L.allFinite() || !finite(contributions)) {
+            ++sums.nonfinite;
+            continue;
+          }
+          sum += value_L;
+          for (const Contribution& c : contributions) sums.acc.add(c);
+        }
+        for (int c = 0; c < 3; ++c) image[3 * pixel + size_t(c)] = sum[c] / count;
+        sums.loss += (Eigen::Map<const Color>(&adjoint[3 * pixel]) * sum).sum() / count;
+      }
+  }
+
+  /// The primary boundary term: the camera's edge samples of samples [first, first + count),
+  /// weighted by their pixel's adjoint, added to `d_position` and to r's counters.
+  void add_primary_term(const std::vector<double>& adjoint, int first, int count, const RenderOptions& options,
+                        std::vector<std::vector<Vec3>>& d_position, ReverseResult& r) const {
+    const size_t W = size_t(scene.camera.width);
+    PathStats st;
+    for_each_primary_sample(ctx, primary, config.sppp, first, count, options.seed, options.threads, st,
+                            [&](const PrimarySample& ps) {
+                              const size_t pixel = size_t(ps.py) * W + size_t(ps.px);
+                              const double a = (Eigen::Map<const Color>(&adjoint[3 * pixel]) * ps.weight).sum() / count;
+                              const Vec3 g0 = a * (1 - ps.t) * ps.g, g1 = a * ps.t * ps.g;
+                              if (!g0.allFinite() || !g1.allFinite()) {
+                                ++r.nonfinite;
+                                return;
+                              }
+                              add_edge_adjoint(*ps.edge, g0, g1, chosen_index, [&](int ci, int vertex, const Vec3& value) {
+                                d_position[size_t(ci)][size_t(vertex)] += value;
+                              });
+                            });
+    r.rays += st.rays;
+    r.traversals += st.boundary_traversals;
+    r.zero_traversals += st.boundary_zero;
+  }
+
   const Scene& scene;
   ReverseConfig config;
   RayTracer tracer;
@@ -272,17 +384,9 @@ const SetupReport& ReverseEstimator::setup() const { return impl_->setup; }
 ReverseResult ReverseEstimator::run(const std::vector<double>& adjoint, const RenderOptions& options) const {
   const Impl& m = *impl_;
   const Scene& scene = m.scene;
-  const Camera& cam = scene.camera;
-  const int W = cam.width, H = cam.height;
-  const size_t expected = size_t(W) * size_t(H) * 3;
-  if (adjoint.size() != expected)
-    throw Error("adjoint image: expected " + std::to_string(W) + " x " + std::to_string(H) +
-                " x 3 = " + std::to_string(expected) + " values (got " + std::to_string(adjoint.size()) + ")");
-  for (size_t i = 0; i < adjoint.size(); ++i)
-    if (!std::isfinite(adjoint[i]))
-      throw Error("adjoint image: non-finite weight at pixel (" + std::to_string((i / 3) % size_t(W)) + ", " +
-                  std::to_string((i / 3) / size_t(W)) + ")");
-  const int count = sample_range_count(options, cam);
+  const int W = scene.camera.width, H = scene.camera.height;
+  check_adjoint(adjoint, W, H);
+  const int count = sample_range_count(options, scene.camera);
   if (options.parts != 1) throw Error("reverse mode runs in one process (parts = 1)");
   const int first = options.first_sample;
   const auto t0 = std::chrono::steady_clock::now();
@@ -291,118 +395,35 @@ ReverseResult ReverseEstimator::run(const std::vector<double>& adjoint, const Re
   r.width = W;
   r.height = H;
   r.spp = count;
-  r.image.assign(expected, 0.0);
-  const Vec3 origin = cam.origin();
-  const bool with_boundary = bool(m.boundary.sampler);
+  r.image.assign(adjoint.size(), 0.0);
 
-  // ---- Interior and secondary boundary terms, per 16 x 16 tile.
-  const int tiles_x = (W + 15) / 16, tiles_y = (H + 15) / 16;
-  const int tiles = tiles_x * tiles_y;
-  std::vector<Accumulator> acc(static_cast<size_t>(tiles));
-  std::vector<PathStats> tile_stats(static_cast<size_t>(tiles));
-  std::vector<double> tile_loss(static_cast<size_t>(tiles), 0.0);
-  std::vector<uint64_t> tile_nonfinite(static_cast<size_t>(tiles), 0), tile_replays(static_cast<size_t>(tiles), 0);
-  auto tile_body = [&](int tile) {
-    const int x0 = (tile % tiles_x) * 16, y0 = (tile / tiles_x) * 16;
-    Tape tape;
-    std::vector<Contribution> contributions;
-    const ReverseView view{&scene, &m.chosen, &tape};
-    PathStats& st = tile_stats[size_t(tile)];
-    for (int y = y0; y < std::min(H, y0 + 16); ++y)
-      for (int x = x0; x < std::min(W, x0 + 16); ++x) {
-        const uint64_t pixel = uint64_t(y) * uint64_t(W) + uint64_t(x);
-        const Color a = Eigen::Map<const Color>(&adjoint[3 * pixel]) / double(count);
-        Color sum = Color::Zero();
-        for (int s = first; s < first + count; ++s) {
-          contributions.clear();
-          // One pass: the path from the sample's first random number, slots for tape hits
-          // [window, window + kHitsPerPass). Every pass draws the same numbers: the same path.
-          auto pass = [&](int window, ColorT<RDual>& L) {
-            tape.reset(window);
-            Sampler sampler(options.seed, pixel, uint64_t(s));
-            const Vec2 u = sampler.next2();
-            const Vec3 d = cam.direction(x + u.x(), y + u.y());
-            ++st.rays;
-            const Hit hit = m.tracer.intersect(origin, d);
-            const int traversals =
-                with_boundary ? boundary_traversals(m.bctx.sppi, options.seed, pixel, uint64_t(s)) : 0;
-            if (traversals > 0) {
-              Sampler bsampler(options.seed, pixel, uint64_t(s), 1);
-              const ReverseBoundaryHook hook{&m.ctx,          &m.bctx, &bsampler,   traversals,    &tape,
-                                             &m.chosen_index, a,       window == 0, &contributions};
-              L = trace_path(m.ctx, view, lift<RDual>(origin), d, hit, 0, 0.0, sampler, st, hook);
-            } else {
-              L = trace_path(m.ctx, view, lift<RDual>(origin), d, hit, 0, 0.0, sampler, st);
-            }
-            m.backpropagate_hits(tape, L, a, contributions);
-          };
-          ColorT<RDual> L;
-          pass(0, L);
-          const Color value_L = value(L);
-          for (int w = kHitsPerPass; w < int(tape.hits.size()); w += kHitsPerPass) {
-            ColorT<RDual> Lw;
-            pass(w, Lw);
-            ++tile_replays[size_t(tile)];
-          }
-          if (!value_L.allFinite() || !finite(contributions)) {
-            ++tile_nonfinite[size_t(tile)];
-            continue;
-          }
-          sum += value_L;
-          for (const Contribution& c : contributions) acc[size_t(tile)].add(c);
-        }
-        for (int c = 0; c < 3; ++c) r.image[3 * pixel + size_t(c)] = sum[c] / count;
-        tile_loss[size_t(tile)] += (Eigen::Map<const Color>(&adjoint[3 * pixel]) * sum).sum() / count;
-      }
-  };
-  auto run_tiles = [&] { tbb::parallel_for(0, tiles, [&](int tile) { tile_body(tile); }); };
-  if (options.threads > 0)
-    tbb::task_arena(options.threads).execute(run_tiles);
-  else
-    run_tiles();
+  // ---- Interior and secondary boundary terms, per tile.
+  std::vector<TileSums> tiles(size_t(tile_count(W, H)));
+  for_each_tile(W, H, options.threads, options.progress ? "reverse" : "", [&](const Tile& tile) {
+    m.reverse_tile(tile, adjoint, first, count, options.seed, tiles[size_t(tile.index)], r.image);
+  });
 
-  // ---- Sums in tile order (deterministic whatever the thread count).
+  // ---- Sums in tile order (deterministic whatever the thread count). Within a tile, each
+  // vertex's sum is in sample order; across tiles, in tile order (the maps' iteration order
+  // changes neither).
   std::vector<std::vector<Vec3>> d_position(m.config.shapes.size()), d_normal(m.config.shapes.size());
   for (size_t i = 0; i < m.config.shapes.size(); ++i) {
     const size_t n = scene.shapes[size_t(m.config.shapes[i])].mesh.positions.size();
     d_position[i].assign(n, Vec3::Zero());
     d_normal[i].assign(n, Vec3::Zero());
   }
-  // Within a tile, each vertex's sum is in sample order; across tiles, in tile order (the maps'
-  // iteration order changes neither).
-  for (int tile = 0; tile < tiles; ++tile) {
-    for (const auto& [key, v] : acc[size_t(tile)].position) d_position[key >> 32][key & 0xffffffffu] += v;
-    for (const auto& [key, v] : acc[size_t(tile)].normal) d_normal[key >> 32][key & 0xffffffffu] += v;
-    r.loss += tile_loss[size_t(tile)];
-    const PathStats& st = tile_stats[size_t(tile)];
-    r.rays += st.rays;
-    r.traversals += st.boundary_traversals;
-    r.zero_traversals += st.boundary_zero;
-    r.nonfinite += tile_nonfinite[size_t(tile)];
-    r.replays += tile_replays[size_t(tile)];
+  for (const TileSums& t : tiles) {
+    for (const auto& [key, v] : t.acc.position) d_position[key >> 32][key & 0xffffffffu] += v;
+    for (const auto& [key, v] : t.acc.normal) d_normal[key >> 32][key & 0xffffffffu] += v;
+    r.loss += t.loss;
+    r.rays += t.stats.rays;
+    r.traversals += t.stats.boundary_traversals;
+    r.zero_traversals += t.stats.boundary_zero;
+    r.nonfinite += t.nonfinite;
+    r.replays += t.replays;
   }
 
-  // ---- Primary boundary term: the camera's edge samples, weighted by their pixel's adjoint.
-  if (with_boundary) {
-    PathStats st;
-    for_each_primary_sample(m.ctx, m.primary, m.config.sppp, first, count, options.seed, options.threads, st,
-                            [&](const PrimarySample& ps) {
-                              const size_t pixel = size_t(ps.py) * size_t(W) + size_t(ps.px);
-                              const double a = (Eigen::Map<const Color>(&adjoint[3 * pixel]) * ps.weight).sum() / count;
-                              const Vec3 g0 = a * (1 - ps.t) * ps.g, g1 = a * ps.t * ps.g;
-                              if (!g0.allFinite() || !g1.allFinite()) {
-                                ++r.nonfinite;
-                                return;
-                              }
-                              add_edge_adjoint(*ps.edge, g0, g1, m.chosen_index,
-                                               [&](int ci, int vertex, const Vec3& value) {
-                                                 d_position[size_t(ci)][size_t(vertex)] += value;
-                                               });
-                            });
-    r.rays += st.rays;
-    r.traversals += st.boundary_traversals;
-    r.zero_traversals += st.boundary_zero;
-  }
+  if (m.boundary.sampler) m.add_primary_term(adjoint, first, count, options, d_position, r);
 
   // ---- Vertex normals -> positions (area-weighted normals of the moving mesh).
   for (size_t i = 0; i < m.config.shapes.size(); ++i) {

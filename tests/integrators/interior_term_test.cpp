@@ -211,8 +211,8 @@ TEST(InteriorTerm, ConstantInteractionsChangeNoPath) {
         const Hit hit = tracer.intersect(cam.origin(), d);
         if (hit.valid() && !vel.moving[size_t(hit.shape)]) ++constant_hits;
         PathStats st;
-        const auto a = trace_path(ctx, fast, lift<Dual<2>>(cam.origin()), d, hit, 0, 0.0, sa, st);
-        const auto b = trace_path(ctx, slow, lift<Dual<2>>(cam.origin()), d, hit, 0, 0.0, sb, st);
+        const auto a = trace_path(ctx, fast, {lift<Dual<2>>(cam.origin()), d, hit}, sa, st);
+        const auto b = trace_path(ctx, slow, {lift<Dual<2>>(cam.origin()), d, hit}, sb, st);
         for (int c = 0; c < 3; ++c) {
           const double scale = 1e-12 * (1.0 + std::abs(b[c].value()) + b[c].derivatives().norm());
           EXPECT_NEAR(a[c].value(), b[c].value(), scale) << "pixel " << x << "," << y;

@@ -94,8 +94,8 @@ struct EdgeLimit {
     PathStats ps;
     for (int k = 0; k < samples; ++k) {
       Sampler sa(seed, stream, uint64_t(k)), sb(seed, stream, uint64_t(k));
-      const Color la = trace_path(t.ctx, view, viewer, w, on_edge, 0, 0.0, sa, ps);
-      const Color lb = trace_path(t.ctx, view, viewer, w, inside, 0, 0.0, sb, ps);
+      const Color la = trace_path(t.ctx, view, {viewer, w, on_edge}, sa, ps);
+      const Color lb = trace_path(t.ctx, view, {viewer, w, inside}, sb, ps);
       sum_edge += la.mean();
       sum_inside += lb.mean();
       differing += (la - lb).abs().maxCoeff() > 1e-6 * std::max(1.0, lb.abs().maxCoeff());
@@ -168,8 +168,8 @@ TEST(SmoothShading, RadianceIsContinuousAcrossConvexEdges) {
     PathStats ps;
     for (int s = 0; s < samples; ++s) {
       Sampler sa(1, i, uint64_t(s)), sb(1, i, uint64_t(s));
-      const Color la = trace_path(t.ctx, view, viewer, w, on0, 1, 0.0, sa, ps);
-      const Color lb = trace_path(t.ctx, view, viewer, w, on1, 1, 0.0, sb, ps);
+      const Color la = trace_path(t.ctx, view, {viewer, w, on0, 1}, sa, ps);
+      const Color lb = trace_path(t.ctx, view, {viewer, w, on1, 1}, sb, ps);
       a += la;
       b += lb;
       differing[c] += (la - lb).abs().maxCoeff() > 1e-9 * std::max(1.0, la.abs().maxCoeff());

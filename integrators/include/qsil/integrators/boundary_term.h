@@ -234,7 +234,7 @@ bool edge_jump_with(const PathContext& ctx, const edgetree::ForestEdge& e, doubl
     h.u = weight(1);
     h.v = weight(2);
     h.exact = true;
-    return Color(trace_path(ctx, pv, p, w, h, seg, 0.0, rng, stats));
+    return Color(trace_path(ctx, pv, {p, w, h, seg}, rng, stats));
   };
   if (own_occluder < 0 && e.crease && !edgetree::edge_is_silhouette(e, p)) {
     // ---- A crease (edgetree::CreaseSet), both faces facing p: the two faces lie on opposite
@@ -263,7 +263,7 @@ bool edge_jump_with(const PathContext& ctx, const edgetree::ForestEdge& e, doubl
   const Vec3 bg_origin = xe + below;
   ++stats.rays;
   const Hit bg = ctx.tracer->intersect(bg_origin, w, kInf, ignore);
-  const Color L_bg = trace_path(ctx, pv, bg_origin, w, bg, seg, 0.0, sampler, stats);
+  const Color L_bg = trace_path(ctx, pv, {bg_origin, w, bg, seg}, sampler, stats);
   jump = s * (L_bg - L_fg);
   return true;
 }

@@ -109,7 +109,7 @@ bool crossing_jump(const PathContext& ctx, const edgetree::ForestEdge& e, double
     h.exact = true;
     const double len = dir.norm();
     h.inward = len > 0 ? Vec3(dir * (reach / len)) : Vec3::Zero();
-    return Color(trace_path(ctx, pv, p, w, h, seg, 0.0, rng, stats));
+    return Color(trace_path(ctx, pv, {p, w, h, seg}, rng, stats));
   };
   IgnoreSet ignore;
   ignore.prims[0] = {c.shape[0], c.face[0]};
@@ -120,7 +120,7 @@ bool crossing_jump(const PathContext& ctx, const edgetree::ForestEdge& e, double
     ig.through_back_faces = through;
     ++stats.rays;
     const Hit h = ctx.tracer->intersect(origin, w, kInf, ig);
-    return Color(trace_path(ctx, pv, origin, w, h, seg, 0.0, rng, stats));
+    return Color(trace_path(ctx, pv, {origin, w, h, seg}, rng, stats));
   };
   // point_visible, where the point is not the origin (a ray is traced and counted).
   auto visible = [&](const Vec3& origin, const Vec3& target, bool through) {

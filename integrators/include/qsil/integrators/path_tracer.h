@@ -27,6 +27,8 @@
 #include "qsil/rng.h"
 #include "qsil/scene.h"
 
+#include <optional>
+
 namespace qsil {
 
 /// Segment cap for max_depth = -1 (Russian roulette is off: it adds variance to gradients).
@@ -147,17 +149,111 @@ struct NoVertexHook {
   void operator()(Args&&...) const {}
 };
 
-/// Radiance arriving at `origin` from fixed direction `dir` along a path, plus its forward-mode
-/// derivative when T is a dual. At every vertex that may still scatter (segments < max_depth),
-/// `hook(si, sp, wo_local_value, beta, segments_so_far, sampler, stats, L)` may add to L. `first_hit` is the
-/// already-traced hit of that ray (so the caller can reuse it); `segments` is the number of segments already used
-/// before this one (0 for a camera ray); `prev_bsdf_pdf` is the detached solid-angle pdf with which `dir` was chosen by
-/// BSDF sampling (0: the direction was not BSDF-sampled, so emission found along it is counted
-/// with weight 1).
+/// Radiance the environment sends along an escaped ray's direction `d`, weighted by MIS against
+/// environment NEE when the ray was BSDF-sampled with solid-angle pdf `bsdf_pdf_prev` > 0.
+inline Color escaped_radiance(const PathContext& ctx, const Vec3& d, double bsdf_pdf_prev) {
+  if (!ctx.environment || !ctx.environment->present()) return Color::Zero();
+  double w = 1.0;
+  if (bsdf_pdf_prev > 0 && ctx.p_environment > 0)
+    w = power_heuristic(bsdf_pdf_prev, ctx.p_environment * ctx.environment->pdf(d));
+  return Color(ctx.environment->eval(d) * w);
+}
+
+/// One light sample of next-event estimation: the vertex's f_s cos toward the light (over T) and
+/// the light's radiance times its MIS weight over its pdf (detached), so that the path adds
+/// beta * f * weighted_radiance.
+template <class T>
+struct DirectLight {
+  ColorT<T> f;
+  Color weighted_radiance;
+};
+
+/// Next-event estimation at a path vertex: draws four numbers (environment or area lights, the
+/// point, the triangle), traces the shadow ray and returns the sample, or nothing when the light
+/// sample is invalid, the BSDF is zero toward it or it is occluded. `wo_local` is the viewer
+/// direction in the shading frame (detached); `bsdf_toward(w)` is f_s cos toward world direction
+/// w. MIS: power heuristic against BSDF sampling (with the defensive diffuse share of paths over T,
+/// kDerivativeDiffuseUniformShare).
+template <class T, class BsdfToward>
+std::optional<DirectLight<T>> sample_direct_light(const PathContext& ctx, const SurfaceInteraction<T>& si,
+                                                  const ShadingPoint<T>& sp, const Vec3& wo_world, const Vec3& wo_local,
+                                                  const BsdfToward& bsdf_toward, Sampler& sampler, PathStats& stats) {
+  constexpr double uniform_share = std::is_same_v<T, double> ? 0.0 : kDerivativeDiffuseUniformShare;
+  const Vec3 p = value(si.p);
+  const bool use_env = ctx.p_environment > 0 && sampler.next() < ctx.p_environment;
+  const Vec2 u = sampler.next2();
+  const double u_tri = sampler.next();
+  Vec3 wi;
+  Color Le = Color::Zero();
+  double pdf_light = 0;
+  Vec3 light_point = Vec3::Constant(kInf);  // finite for area lights: where the shadow ray ends
+  if (use_env) {
+    const auto s = ctx.environment->sample(u);
+    if (s.pdf > 0) {
+      wi = s.dir;
+      Le = s.radiance;
+      pdf_light = ctx.p_environment * s.pdf;
+    }
+  } else if (ctx.area_lights && !ctx.area_lights->empty()) {
+    const auto s = ctx.area_lights->sample(u, u_tri);
+    const Vec3 to = s.point - p;
+    const double dist = to.norm();
+    if (s.pdf_area > 0 && dist > 0) {
+      wi = to / dist;
+      pdf_light = nee_area_pdf(ctx, dist, wi, s.normal);
+      if (pdf_light > 0) {
+        Le = ctx.area_lights->radiance(s.shape, s.normal, -wi);
+        light_point = s.point;
+      }
+    }
+  }
+  if (!(pdf_light > 0 && (Le > 0).any())) return std::nullopt;
+  const ColorT<T> f = bsdf_toward(wi);
+  if (!(value(f) != 0).any()) return std::nullopt;
+  ++stats.rays;
+  // The shadow ray starts at the offset origin and stops short of the light's own triangle by a
+  // relative margin, measured from that origin (measured from p, an offset toward the light could
+  // reach the light itself).
+  const Vec3 origin = spawn_origin(si, wi);
+  const double tmax = light_point.allFinite() ? (light_point - origin).norm() * (1.0 - 1.0 / 4096.0) : kInf;
+  IgnoreSet ignore;
+  ignore.through_back_faces = leaves_below(si, wo_world, wi);
+  if (ctx.tracer->occluded(origin, wi, tmax, ignore)) return std::nullopt;
+  const double w = power_heuristic(pdf_light, bsdf_pdf(*sp.bsdf, sp.frame_value.to_local(wi), wo_local, uniform_share));
+  return DirectLight<T>{f, Color(Le * (w / pdf_light))};
+}
+
+/// The point the next segment's hit is recomputed from (differentiable): the point p the ray left,
+/// or, from an exact edge point (si.inward set), the offset origin `spawned` (spawn_origin), p
+/// shifted by a constant, so its derivatives are p's. The edge point lies in the plane of its
+/// edge's other face, so at a concave edge a ray recomputed from the point itself would meet that
+/// face at t = 0, on the edge, instead of where the ray from inside the face meets it
+/// (docs/design-notes.md, "Smooth shading" item 2).
+template <class T>
+Vec3T<T> continuation_origin(const SurfaceInteraction<T>& si, const Vec3& spawned) {
+  const Vec3 p = value(si.p);
+  return si.inward == Vec3::Zero() ? si.p : Vec3T<T>(si.p + lift<T>(Vec3(spawned - p)));
+}
+
+/// The ray a path starts or continues with: from `origin` (over T: it may move) in the fixed
+/// direction `dir`, whose hit `first_hit` is already traced (so the caller can reuse it), after
+/// `segments_before` segments (0 for a camera ray), chosen by BSDF sampling with detached
+/// solid-angle pdf `bsdf_pdf` (0: not BSDF-sampled, so emission found along it has weight 1).
+template <class T>
+struct PathRay {
+  Vec3T<T> origin;
+  Vec3 dir;
+  Hit first_hit;
+  int segments_before = 0;
+  double bsdf_pdf = 0;
+};
+
+/// Radiance arriving at `ray.origin` from `ray.dir` along a path, plus its forward-mode derivative
+/// when T is a dual. At every vertex that may still scatter (segments < max_depth),
+/// `hook(si, sp, wo_local_value, beta, segments_so_far, sampler, stats, L)` may add to L.
 template <class View, class Hook = NoVertexHook>
 ColorT<typename View::Real> trace_path(const PathContext& ctx, const View& view,
-                                       const Vec3T<typename View::Real>& origin, const Vec3& dir, const Hit& first_hit,
-                                       int segments, double prev_bsdf_pdf, Sampler& sampler, PathStats& stats,
+                                       const PathRay<typename View::Real>& ray, Sampler& sampler, PathStats& stats,
                                        const Hook& hook = {}) {
   using T = typename View::Real;
   // Paths that carry derivatives draw diffuse directions from the defensive mixture
@@ -165,19 +261,14 @@ ColorT<typename View::Real> trace_path(const PathContext& ctx, const View& view,
   constexpr double uniform_share = std::is_same_v<T, double> ? 0.0 : kDerivativeDiffuseUniformShare;
   ColorT<T> L = lift<T>(Color::Zero().eval());
   ColorT<T> beta = lift<T>(Color::Ones().eval());
-  Vec3T<T> o = origin;
-  Vec3 d = dir;
-  Hit hit = first_hit;
-  double bsdf_pdf_prev = prev_bsdf_pdf;
-  for (int seg = segments + 1;; ++seg) {
+  Vec3T<T> o = ray.origin;
+  Vec3 d = ray.dir;
+  Hit hit = ray.first_hit;
+  double bsdf_pdf_prev = ray.bsdf_pdf;
+  for (int seg = ray.segments_before + 1;; ++seg) {
     // ---- The ray escaped: it sees the environment (MIS against environment NEE).
     if (!hit.valid()) {
-      if (ctx.environment && ctx.environment->present()) {
-        double w = 1.0;
-        if (bsdf_pdf_prev > 0 && ctx.p_environment > 0)
-          w = power_heuristic(bsdf_pdf_prev, ctx.p_environment * ctx.environment->pdf(d));
-        L += beta * lift<T>(Color(ctx.environment->eval(d) * w));
-      }
+      if (ctx.environment && ctx.environment->present()) L += beta * lift<T>(escaped_radiance(ctx, d, bsdf_pdf_prev));
       break;
     }
     SurfaceInteraction<T> si = make_interaction(view, hit, o, d, ctx.tracer->local_origin());
@@ -191,7 +282,6 @@ ColorT<typename View::Real> trace_path(const PathContext& ctx, const View& view,
     // propagate a NaN (never reached with Embree's own hits in practice).
     if (!value(si.p).allFinite() || !value(si.ns).allFinite()) break;
     const Shape& shape = ctx.scene->shapes[si.shape];
-    const Vec3 p = value(si.p);
     const Vec3 ng = value(si.ng);
     const Vec3 wo_world = -d;
 
@@ -216,53 +306,8 @@ ColorT<typename View::Real> trace_path(const PathContext& ctx, const View& view,
     hook(si, sp, wo_value, beta, seg, sampler, stats, L);
 
     // ---- Next-event estimation: keep only the sampled direction; re-evaluate along it.
-    {
-      const bool use_env = ctx.p_environment > 0 && sampler.next() < ctx.p_environment;
-      const Vec2 u = sampler.next2();
-      const double u_tri = sampler.next();
-      Vec3 wi;
-      Color Le = Color::Zero();
-      double pdf_light = 0;
-      Vec3 light_point = Vec3::Constant(kInf);  // finite for area lights: where the shadow ray ends
-      if (use_env) {
-        const auto s = ctx.environment->sample(u);
-        if (s.pdf > 0) {
-          wi = s.dir;
-          Le = s.radiance;
-          pdf_light = ctx.p_environment * s.pdf;
-        }
-      } else if (ctx.area_lights && !ctx.area_lights->empty()) {
-        const auto s = ctx.area_lights->sample(u, u_tri);
-        const Vec3 to = s.point - p;
-        const double dist = to.norm();
-        if (s.pdf_area > 0 && dist > 0) {
-          wi = to / dist;
-          pdf_light = nee_area_pdf(ctx, dist, wi, s.normal);
-          if (pdf_light > 0) {
-            Le = ctx.area_lights->radiance(s.shape, s.normal, -wi);
-            light_point = s.point;
-          }
-        }
-      }
-      if (pdf_light > 0 && (Le > 0).any()) {
-        const ColorT<T> f = bsdf_toward(wi);
-        if ((value(f) != 0).any()) {
-          ++stats.rays;
-          // The shadow ray starts at the offset origin and stops short of the light's own
-          // triangle by a relative margin, measured from that origin (measured from p, an
-          // offset toward the light could reach the light itself).
-          const Vec3 origin = spawn_origin(si, wi);
-          const double tmax = light_point.allFinite() ? (light_point - origin).norm() * (1.0 - 1.0 / 4096.0) : kInf;
-          IgnoreSet ignore;
-          ignore.through_back_faces = leaves_below(si, wo_world, wi);
-          if (!ctx.tracer->occluded(origin, wi, tmax, ignore)) {
-            const double w =
-                power_heuristic(pdf_light, bsdf_pdf(*sp.bsdf, sp.frame_value.to_local(wi), wo_value, uniform_share));
-            L += beta * f * lift<T>(Color(Le * (w / pdf_light)));
-          }
-        }
-      }
-    }
+    if (const auto direct = sample_direct_light(ctx, si, sp, wo_world, wo_value, bsdf_toward, sampler, stats))
+      L += beta * direct->f * lift<T>(direct->weighted_radiance);
 
     // ---- BSDF sampling: a detached direction, then the throughput re-evaluated over T.
     const BSDFSample bs = bsdf_sample(*sp.bsdf, wo_value, sampler.next2(), uniform_share);
@@ -277,13 +322,7 @@ ColorT<typename View::Real> trace_path(const PathContext& ctx, const View& view,
     ignore.through_back_faces = leaves_below(si, wo_world, wi);
     const Vec3 spawned = spawn_origin(si, wi);
     hit = ctx.tracer->intersect(spawned, wi, kInf, ignore);
-    // The next hit is recomputed from the point the ray left (o, differentiable). From an exact
-    // edge point that is the offset origin (spawn_origin), p shifted by a constant, so its
-    // derivatives are p's: the edge point lies in the plane of its edge's other face, so at a
-    // concave edge a ray recomputed from the point itself would meet that face at t = 0, on the
-    // edge, instead of where the ray from inside the face meets it (docs/design-notes.md,
-    // "Smooth shading" item 2).
-    o = si.inward == Vec3::Zero() ? si.p : Vec3T<T>(si.p + lift<T>(Vec3(spawned - p)));
+    o = continuation_origin(si, spawned);
     d = wi;
   }
   return L;
