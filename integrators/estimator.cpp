@@ -4,10 +4,8 @@
 
 #include "qsil/integrators/estimator.h"
 
-#include "boundary_setup.h"
-#include "light_setup.h"
 #include "pixel_loop.h"
-#include "primary_boundary.h"
+#include "render_setup.h"
 #include "qsil/check.h"
 #include "qsil/error.h"
 #include "qsil/integrators/boundary_term.h"
@@ -55,11 +53,9 @@ class Estimator::Impl {
 namespace {
 
 /// The primal image (`qsil render`): film channels R, G, B.
-class PrimalEstimator final : public Estimator::Impl {
+class PrimalEstimator final : public Estimator::Impl, private RenderSetup {
  public:
-  PrimalEstimator(const Scene& s, EstimatorConfig c) : Impl(s, std::move(c)), tracer(s), lights(s) {
-    ctx = lights.context(s, tracer);
-  }
+  PrimalEstimator(const Scene& s, EstimatorConfig c) : Impl(s, std::move(c)), RenderSetup(s) {}
   void run(const RenderOptions& options, int first, int count, RenderResult& r) const override {
     const Camera& cam = scene.camera;
     const Vec3 origin = cam.origin();
@@ -68,30 +64,21 @@ class PrimalEstimator final : public Estimator::Impl {
     run_pixels(
         cam, layout, options, first, count, "render",
         [&](int x, int y, int, Sampler& sampler, PathStats& st, double* out) {
-          const Vec2 u = sampler.next2();
-          const Vec3 d = cam.direction(x + u.x(), y + u.y());
-          ++st.rays;
-          const Hit hit = tracer.intersect(origin, d);
-          const Color L = trace_path(ctx, view, {origin, d, hit}, sampler, st);
+          const CameraRay ray = trace_camera_ray(ctx, x, y, sampler.next2(), st);
+          const Color L = trace_path(ctx, view, {origin, ray.dir, ray.hit}, sampler, st);
           for (int c = 0; c < 3; ++c) out[layout.primal(c)] = L[c];
         },
         r, total);
   }
-
- private:
-  RayTracer tracer;
-  LightSetup lights;
-  PathContext ctx;
 };
 
 /// Primal + interior term in forward mode (duals of size N) + the boundary term of the method
 /// (`qsil grad`).
 template <int N>
-class GradientEstimator final : public Estimator::Impl {
+class GradientEstimator final : public Estimator::Impl, private RenderSetup {
  public:
   GradientEstimator(const Scene& s, EstimatorConfig c)
-      : Impl(s, std::move(c)), vel(compute_velocities(s, config.params)), tracer(s), lights(s) {
-    ctx = lights.context(s, tracer);
+      : Impl(s, std::move(c)), RenderSetup(s), vel(compute_velocities(s, config.params)) {
     // ---- The boundary method's structures, only when something moves.
     if (samples_edges(config.method) && vel.any_moving()) {
       set_up_boundary_term(s, tracer, config.method, &vel, vel.moving, config.sppi, lights.environment,
@@ -112,10 +99,7 @@ class GradientEstimator final : public Estimator::Impl {
     run_pixels(
         cam, layout, options, first, count, "grad",
         [&](int x, int y, int s, Sampler& sampler, PathStats& st, double* out) {
-          const Vec2 u = sampler.next2();
-          const Vec3 d = cam.direction(x + u.x(), y + u.y());
-          ++st.rays;
-          const Hit hit = tracer.intersect(origin, d);
+          const CameraRay ray = trace_camera_ray(ctx, x, y, sampler.next2(), st);
           ColorT<Dual<N>> L;
           const uint64_t pixel = uint64_t(y) * cam.width + x;
           const int traversals =
@@ -124,9 +108,9 @@ class GradientEstimator final : public Estimator::Impl {
             // The boundary term draws from a stream of its own, so it leaves the path's decisions unchanged.
             Sampler bsampler(options.seed, pixel, uint64_t(s), 1);
             const BoundaryHook<N> hook{&ctx, &bctx, &bsampler, traversals};
-            L = trace_path(ctx, view, {lift<Dual<N>>(origin), d, hit}, sampler, st, hook);
+            L = trace_path(ctx, view, {lift<Dual<N>>(origin), ray.dir, ray.hit}, sampler, st, hook);
           } else {
-            L = trace_path(ctx, view, {lift<Dual<N>>(origin), d, hit}, sampler, st);
+            L = trace_path(ctx, view, {lift<Dual<N>>(origin), ray.dir, ray.hit}, sampler, st);
           }
           for (int c = 0; c < 3; ++c) out[layout.primal(c)] = L[c].value();
           for (int k = 0; k < K; ++k) {
@@ -160,12 +144,6 @@ class GradientEstimator final : public Estimator::Impl {
 
  private:
   SceneVelocities vel;
-  RayTracer tracer;
-  LightSetup lights;
-  PathContext ctx;
-  BoundarySetup boundary;
-  BoundaryContext bctx;
-  PrimaryEdges primary;
 };
 
 /// Central finite differences with common random numbers (`qsil fd`): the primal scene and, per
@@ -196,10 +174,8 @@ class FiniteDifferenceEstimator final : public Estimator::Impl {
     const Camera& cam = scene.camera;
     const Vec3 origin = cam.origin();
     auto radiance = [&](const Side& side, Sampler sampler, PathStats& st, const Vec2& u, int x, int y) {
-      const Vec3 d = cam.direction(x + u.x(), y + u.y());
-      ++st.rays;
-      const Hit hit = side.tracer.intersect(origin, d);
-      return trace_path(side.ctx, PrimalView{&side.scene}, {origin, d, hit}, sampler, st);
+      const CameraRay ray = trace_camera_ray(side.ctx, x, y, u, st);
+      return trace_path(side.ctx, PrimalView{&side.scene}, {origin, ray.dir, ray.hit}, sampler, st);
     };
     PathStats total;
     run_pixels(

@@ -3,10 +3,8 @@
 
 #include "qsil/integrators/reverse.h"
 
-#include "boundary_setup.h"
-#include "light_setup.h"
 #include "pixel_loop.h"
-#include "primary_boundary.h"
+#include "render_setup.h"
 #include "qsil/error.h"
 #include "qsil/integrators/boundary_term.h"
 #include "qsil/integrators/path_tracer.h"
@@ -218,9 +216,9 @@ void check_adjoint(const std::vector<double>& adjoint, int width, int height) {
 
 }  // namespace
 
-class ReverseEstimator::Impl {
+class ReverseEstimator::Impl : public RenderSetup {
  public:
-  Impl(const Scene& s, ReverseConfig c) : scene(s), config(std::move(c)), tracer(s), lights(s) {
+  Impl(const Scene& s, ReverseConfig c) : RenderSetup(s), scene(s), config(std::move(c)) {
     check_sample_rates(s.camera, config.sppi, config.sppp);
     if (config.shapes.empty()) throw Error("reverse mode: no shape to differentiate");
     chosen.assign(s.shapes.size(), false);
@@ -236,7 +234,6 @@ class ReverseEstimator::Impl {
     }
     if (config.method != Method::None && !samples_edges(config.method))
       throw Error("method " + std::string(method_name(config.method)) + " cannot estimate derivatives");
-    ctx = lights.context(s, tracer);
     if (samples_edges(config.method)) {
       set_up_boundary_term(s, tracer, config.method, nullptr, chosen, config.sppi, lights.environment, boundary,
                            bctx, primary, setup, config.intersection_curves);
@@ -281,10 +278,7 @@ class ReverseEstimator::Impl {
     const uint64_t pixel = uint64_t(ps.y) * uint64_t(cam.width) + uint64_t(ps.x);
     tape.reset(window);
     Sampler sampler(ps.seed, pixel, uint64_t(ps.s));
-    const Vec2 u = sampler.next2();
-    const Vec3 d = cam.direction(ps.x + u.x(), ps.y + u.y());
-    ++st.rays;
-    const Hit hit = tracer.intersect(origin, d);
+    const CameraRay ray = trace_camera_ray(ctx, ps.x, ps.y, sampler.next2(), st);
     const ReverseView view{&scene, &chosen, &tape};
     const int traversals = boundary.sampler ? boundary_traversals(bctx.sppi, ps.seed, pixel, uint64_t(ps.s)) : 0;
     ColorT<RDual> L;
@@ -292,9 +286,9 @@ class ReverseEstimator::Impl {
       Sampler bsampler(ps.seed, pixel, uint64_t(ps.s), 1);
       const ReverseBoundaryHook hook{&ctx, &bctx, &bsampler, traversals, &tape, &chosen_index, a, window == 0,
                                      &contributions};
-      L = trace_path(ctx, view, {lift<RDual>(origin), d, hit}, sampler, st, hook);
+      L = trace_path(ctx, view, {lift<RDual>(origin), ray.dir, ray.hit}, sampler, st, hook);
     } else {
-      L = trace_path(ctx, view, {lift<RDual>(origin), d, hit}, sampler, st);
+      L = trace_path(ctx, view, {lift<RDual>(origin), ray.dir, ray.hit}, sampler, st);
     }
     backpropagate_hits(tape, L, a, contributions);
     return L;
@@ -359,12 +353,6 @@ class ReverseEstimator::Impl {
 
   const Scene& scene;
   ReverseConfig config;
-  RayTracer tracer;
-  LightSetup lights;
-  PathContext ctx;
-  BoundarySetup boundary;
-  BoundaryContext bctx;
-  PrimaryEdges primary;
   std::vector<bool> chosen;
   std::vector<int> chosen_index;
   SetupReport setup;

@@ -52,23 +52,25 @@ Film::Film(int width, int height, const FilmLayout& layout, double stratum_fract
   QSIL_CHECK(stratum_fraction >= 0 && stratum_fraction < 1);
 }
 
+namespace {
+
+/// Adds values[0 .. n) to sum[0 .. n) and their squares to sum_sq[0 .. n).
+void accumulate(const double* values, int n, double* sum, double* sum_sq) {
+  for (int c = 0; c < n; ++c) {
+    sum[c] += values[c];
+    sum_sq[c] += values[c] * values[c];
+  }
+}
+
+}  // namespace
+
 void Film::add_sample(int x, int y, const double* values, int stratum) {
   QSIL_DCHECK(x >= 0 && x < width_ && y >= 0 && y < height_ && (stratum == 0 || (stratum == 1 && stratified())));
   const size_t p = size_t(y) * width_ + x;
-  double* s = &sum_[p * channels_];
-  double* q = &sum_sq_[p * channels_];
-  for (int c = 0; c < channels_; ++c) {
-    s[c] += values[c];
-    q[c] += values[c] * values[c];
-  }
+  accumulate(values, channels_, &sum_[p * channels_], &sum_sq_[p * channels_]);
   ++count_[p];
   if (stratum == 1 && stratified()) {
-    double* s1 = &sum1_[p * channels_];
-    double* q1 = &sum_sq1_[p * channels_];
-    for (int c = 0; c < channels_; ++c) {
-      s1[c] += values[c];
-      q1[c] += values[c] * values[c];
-    }
+    accumulate(values, channels_, &sum1_[p * channels_], &sum_sq1_[p * channels_]);
     ++count1_[p];
   }
 }

@@ -223,6 +223,22 @@ std::optional<DirectLight<T>> sample_direct_light(const PathContext& ctx, const 
   return DirectLight<T>{f, Color(Le * (w / pdf_light))};
 }
 
+/// A camera ray: its direction (world frame, unit) and first hit.
+struct CameraRay {
+  Vec3 dir;
+  Hit hit;
+};
+
+/// The camera ray of pixel (x, y) at offset u in [0, 1)^2 within the pixel (a sample's first two
+/// numbers), traced with ctx.tracer from ctx.scene's camera and counted in stats.rays. Every
+/// estimator opens a sample with it, so that they all place a sample alike.
+inline CameraRay trace_camera_ray(const PathContext& ctx, int x, int y, const Vec2& u, PathStats& stats) {
+  const Camera& cam = ctx.scene->camera;
+  const Vec3 d = cam.direction(x + u.x(), y + u.y());
+  ++stats.rays;
+  return {d, ctx.tracer->intersect(cam.origin(), d)};
+}
+
 /// The point the next segment's hit is recomputed from (differentiable): the point p the ray left,
 /// or, from an exact edge point (si.inward set), the offset origin `spawned` (spawn_origin), p
 /// shifted by a constant, so its derivatives are p's. The edge point lies in the plane of its
