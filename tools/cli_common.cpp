@@ -68,7 +68,7 @@ void add_param_option(CLI::App& app, std::vector<std::string>& params) {
       ->allow_extra_args(false);
 }
 
-void add_sppi_option(CLI::App& app, double& sppi) {
+void add_sample_rate_options(CLI::App& app, double& sppi, double& sppp) {
   app.add_option("--sppi,--boundary-spp", sppi,
                  "Secondary (indirect) boundary-term samples per shading point (Mitsuba 3's sppi; --boundary-spp is "
                  "the old name), on average over a pixel's samples (a fraction "
@@ -78,23 +78,40 @@ void add_sppi_option(CLI::App& app, double& sppi) {
                  "docs/architecture.md §5)")
       ->capture_default_str()
       ->check(qsil::cli::non_negative_number());
-}
-
-void add_sppp_option(CLI::App& app, double& sppp) {
   app.add_option("--sppp,--primary-samples", sppp,
-                 "Primary boundary-term edge samples per pixel sample (Mitsuba 3's sppp as a ratio to spp; --primary-samples "
-                 "is the old name; the "
-                 "camera's silhouettes): R x width x height edge samples per sample index, rounded up to a whole "
-                 "chunk of 1024")
+                 "Primary boundary-term edge samples per pixel sample (the camera's silhouettes; Mitsuba 3's sppp "
+                 "as a ratio to spp; --primary-samples is the old name): R x width x height edge samples per "
+                 "sample index, rounded up to a whole chunk of 1024")
       ->capture_default_str()
       ->check(qsil::cli::positive_number());
 }
 
-void add_intersection_curves_flag(CLI::App& app, bool& intersection_curves) {
+void add_boundary_flags(CLI::App& app, BoundaryFlags& flags, const std::string& method_option,
+                        const std::string& method_help, bool curves_flag) {
+  app.add_option(method_option, flags.method, method_help)->capture_default_str();
+  add_sample_rate_options(app, flags.sppi, flags.sppp);
+  if (!curves_flag) return;
+  bool& intersection_curves = flags.intersection_curves;
   app.add_flag_callback(
       "--no-intersection-curves", [&intersection_curves] { intersection_curves = false; },
       "Do not sample the intersection curves where surfaces cross (to measure what they add: where surfaces "
       "cross, the derivative is then biased)");
+}
+
+EstimatorConfig gradient_config(std::vector<ParameterSpec> params, Method method, const BoundaryFlags& flags) {
+  EstimatorConfig config = EstimatorConfig::gradient(std::move(params), method, flags.sppi, flags.sppp);
+  config.intersection_curves = flags.intersection_curves;
+  return config;
+}
+
+void set_up_estimator(const CommonFlags& flags, const std::vector<std::string>& param_specs,
+                      const std::function<EstimatorConfig(const Scene&, const std::vector<ParameterSpec>&)>& make_config,
+                      SceneEstimator& out) {
+  process_group().all_or_none([&] {
+    out.scene.emplace(load_scene_with_flags(flags.scene, flags.defines));
+    out.params = parse_parameters(param_specs, *out.scene);
+    out.estimator.emplace(*out.scene, make_config(*out.scene, out.params));
+  });
 }
 
 void add_fd_step_option(CLI::App& app, std::vector<double>& h) {
@@ -140,6 +157,12 @@ void add_scripts_dir_option(CLI::App& app, std::string& scripts_dir) {
   app.add_option("--scripts-dir", scripts_dir,
                  "Directory of the chart scripts (default: $QSIL_SCRIPTS_DIR, else share/qsil beside or above "
                  "the executable)");
+}
+
+void add_chart_output_options(CLI::App& app, ChartOutputFlags& flags, const std::string& default_dir) {
+  app.add_option("--out-dir", flags.out_dir, "Output directory (default " + default_dir + ")");
+  app.add_flag("--no-grid", flags.no_grid, "Skip the labelled grid image (no Python)");
+  add_scripts_dir_option(app, flags.scripts_dir);
 }
 
 std::filesystem::path find_script(const std::string& name, const std::string& scripts_dir) {

@@ -16,6 +16,8 @@
 #include <CLI/CLI.hpp>
 
 #include <filesystem>
+#include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -55,17 +57,45 @@ void add_scene_options(CLI::App& app, std::string& scene, std::vector<std::strin
 /// Adds the repeatable --param SPEC (1 to 8), required.
 void add_param_option(CLI::App& app, std::vector<std::string>& params);
 
-/// Adds --sppi R, alias --boundary-spp (secondary boundary-term samples per shading point on average over a
-/// pixel's samples; 0: the method's default; EstimatorConfig::sppi).
-void add_sppi_option(CLI::App& app, double& sppi);
-
-/// Adds --primary-samples R (primary boundary-term edge samples per pixel sample,
+/// Adds --sppi R, alias --boundary-spp (secondary boundary-term samples per shading point on
+/// average over a pixel's samples; 0: the method's default; EstimatorConfig::sppi), and --sppp R,
+/// alias --primary-samples (primary boundary-term edge samples per pixel sample,
 /// EstimatorConfig::sppp).
-void add_sppp_option(CLI::App& app, double& sppp);
+void add_sample_rate_options(CLI::App& app, double& sppi, double& sppp);
 
-/// Adds --no-intersection-curves, which sets `intersection_curves` to false
-/// (EstimatorConfig::intersection_curves).
-void add_intersection_curves_flag(CLI::App& app, bool& intersection_curves);
+/// The boundary-term flags of `grad`, `reverse` and `reference`.
+struct BoundaryFlags {
+  std::string method = "quadric";  ///< a --boundary (or --method) name, parse_method
+  double sppi = 0;
+  double sppp = kDefaultSppp;
+  bool intersection_curves = true;  ///< false: --no-intersection-curves
+};
+
+/// Adds the method option `method_option` (e.g. "--boundary") with `method_help`, --sppi and
+/// --sppp, and with `curves_flag` --no-intersection-curves (EstimatorConfig::intersection_curves).
+void add_boundary_flags(CLI::App& app, BoundaryFlags& flags, const std::string& method_option,
+                        const std::string& method_help, bool curves_flag);
+
+/// The gradient configuration of `params` with `method` and the rates and switches of `flags`.
+EstimatorConfig gradient_config(std::vector<ParameterSpec> params, Method method, const BoundaryFlags& flags);
+
+/// A scene and an estimator over it (set_up_estimator). The estimator refers to the scene: the
+/// struct is neither copied nor moved.
+struct SceneEstimator {
+  SceneEstimator() = default;
+  SceneEstimator(const SceneEstimator&) = delete;
+  SceneEstimator& operator=(const SceneEstimator&) = delete;
+  std::optional<Scene> scene;
+  std::vector<ParameterSpec> params;
+  std::optional<Estimator> estimator;
+};
+
+/// Collective: loads the scene of `flags`, parses `param_specs` against it and builds the
+/// estimator of `make_config(scene, params)` into `out`, on every rank of the process group or on
+/// none (ProcessGroup::all_or_none: a failure on any rank ends every rank with its message).
+void set_up_estimator(const CommonFlags& flags, const std::vector<std::string>& param_specs,
+                      const std::function<EstimatorConfig(const Scene&, const std::vector<ParameterSpec>&)>& make_config,
+                      SceneEstimator& out);
 
 /// Adds --h H (finite-difference steps: one for all, or one per --param).
 void add_fd_step_option(CLI::App& app, std::vector<double>& h);
@@ -101,6 +131,17 @@ void write_gradient_outputs(const CommonFlags& flags, const std::vector<Paramete
 
 /// Adds `--scripts-dir DIR` (where the chart scripts are, see find_script) to `app`.
 void add_scripts_dir_option(CLI::App& app, std::string& scripts_dir);
+
+/// Where a study command (`candidates`, `slices`) writes its pictures, and whether it draws the
+/// labelled grid with its chart script.
+struct ChartOutputFlags {
+  std::string out_dir;  ///< "" = the command's default
+  bool no_grid = false;
+  std::string scripts_dir;
+};
+
+/// Adds --out-dir (`default_dir` named in the help), --no-grid and --scripts-dir.
+void add_chart_output_options(CLI::App& app, ChartOutputFlags& flags, const std::string& default_dir);
 
 /// The chart script `name` (e.g. "plot_compare.py"), looked up in this order, independent of the
 /// working directory and of where the source tree was: `scripts_dir` (--scripts-dir) if

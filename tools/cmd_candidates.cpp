@@ -25,9 +25,7 @@ struct Flags {
   CandidatesOptions study;
   std::vector<std::string> methods;
   int size = 768;
-  std::string out_dir;
-  bool no_grid = false;
-  std::string scripts_dir;
+  ChartOutputFlags chart;
 };
 
 int run(const Flags& f) {
@@ -39,7 +37,7 @@ int run(const Flags& f) {
   const Scene scene = load_scene_with_flags(f.scene, f.defines);
   const CandidatesReport rep = find_candidates(scene, o);
   const std::filesystem::path dir =
-      f.out_dir.empty() ? std::filesystem::path("out") / "candidates" : std::filesystem::path(f.out_dir);
+      f.chart.out_dir.empty() ? std::filesystem::path("out") / "candidates" : std::filesystem::path(f.chart.out_dir);
   write_candidates(scene, rep, f.scene, dir, f.size);
   for (const MethodCandidates& m : rep.methods)
     std::printf(
@@ -47,9 +45,9 @@ int run(const Flags& f) {
         "non-silhouette mass %.4f, dead-end mass %.4f%s\n",
         std::string(method_name(m.method)).c_str(), m.candidates, m.silhouettes, m.upper, m.non_silhouette_mass,
         m.dead_end_mass, m.leaf_edges >= 0 ? (", leaf edges tested " + std::to_string(m.leaf_edges)).c_str() : "");
-  if (!f.no_grid &&
+  if (!f.chart.no_grid &&
       run_python_script("candidates", "candidates_grid.py",
-                        {(dir / "summary.json").string(), (dir / "grid.png").string()}, f.scripts_dir) != 0)
+                        {(dir / "summary.json").string(), (dir / "grid.png").string()}, f.chart.scripts_dir) != 0)
     std::fprintf(stderr, "candidates: warning: the grid image was not drawn\n");
   std::printf("candidates: %s at %s, p = (%.4f, %.4f, %.4f), %lld true silhouettes (%lld upper) -> %s\n",
               f.scene.c_str(), rep.where.c_str(), rep.p.x(), rep.p.y(), rep.p.z(), rep.true_silhouettes, rep.true_upper,
@@ -74,9 +72,7 @@ const CommandRegistrar registrar{
        app.add_option("--size", f->size, "Larger side of the pictures in pixels")
            ->capture_default_str()
            ->check(qsil::cli::positive_number());
-       app.add_option("--out-dir", f->out_dir, "Output directory (default out/candidates)");
-       app.add_flag("--no-grid", f->no_grid, "Skip the labelled grid image (no Python)");
-       add_scripts_dir_option(app, f->scripts_dir);
+       add_chart_output_options(app, f->chart, "out/candidates");
        return [f] { return run(*f); };
      }}};
 

@@ -61,8 +61,7 @@ void add_options(CLI::App& app, Flags& f) {
       ->capture_default_str()
       ->check(qsil::cli::positive_number());
   add_fd_step_option(app, f.h);
-  add_sppi_option(app, f.sppi);
-  add_sppp_option(app, f.sppp);
+  add_sample_rate_options(app, f.sppi, f.sppp);
   app.add_option("--out", f.out, "Output directory")->required();
   app.add_flag("--no-plot", f.no_plot, "Do not call plot_compare.py (the charts)");
   add_scripts_dir_option(app, f.scripts_dir);

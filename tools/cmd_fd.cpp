@@ -26,14 +26,12 @@ const CommandRegistrar registrar{
        app.add_option("--preview-dir", flags->preview_dir, "Write primal.png and one diverging PNG per parameter here");
        return [flags]() {
          const ProcessGroup& group = process_group();
-         std::optional<Scene> scene;
-         std::optional<Estimator> estimator;
-         std::vector<ParameterSpec> params;
-         group.all_or_none([&] {
-           scene.emplace(load_scene_with_flags(flags->scene, flags->defines));
-           params = parse_parameters(flags->params, *scene);
-           estimator.emplace(*scene, EstimatorConfig::finite_differences(params, fd_steps(*scene, params, flags->h)));
-         });
+         SceneEstimator set_up;
+         set_up_estimator(*flags, flags->params, [&](const Scene& scene, const std::vector<ParameterSpec>& params) {
+           return EstimatorConfig::finite_differences(params, fd_steps(scene, params, flags->h));
+         }, set_up);
+         const std::vector<ParameterSpec>& params = set_up.params;
+         const std::optional<Estimator>& estimator = set_up.estimator;
          const RenderResult r = group.run(*estimator, flags->render);
          const uint64_t invalid_rays = group_invalid_rays();
          on_root([&] {

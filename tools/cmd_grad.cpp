@@ -18,37 +18,27 @@ const CommandRegistrar registrar{
      [](CLI::App& app) -> std::function<int()> {
        struct Flags : CommonFlags {
          std::vector<std::string> params;
-         std::string boundary = "quadric";
-         double sppi = 0;
-         double sppp = kDefaultSppp;
-         bool intersection_curves = true;
+         BoundaryFlags boundary;
          std::string preview_dir;
        };
        auto flags = std::make_shared<Flags>();
        add_common_flags(app, *flags, "grad.exr");
        add_param_option(app, flags->params);
-       app.add_option("--boundary", flags->boundary,
-                      "Boundary-term estimator: quadric (edge forest, dual box + bounding quadrics [QSS]), "
-                      "quadric-box (dual box only), vsphere (Li 2019's Hough-space tree, hollow v-sphere test), "
-                      "vsphere-solid (redner's original solid v-sphere test), uniform (no rejection, length x "
-                      "dihedral angle), none (interior term only: misses silhouettes, shadows, outlines)")
-           ->capture_default_str();
-       add_sppi_option(app, flags->sppi);
-       add_sppp_option(app, flags->sppp);
-       add_intersection_curves_flag(app, flags->intersection_curves);
+       add_boundary_flags(app, flags->boundary, "--boundary",
+                          "Boundary-term estimator: quadric (edge forest, dual box + bounding quadrics [QSS]), "
+                          "quadric-box (dual box only), vsphere (Li 2019's Hough-space tree, hollow v-sphere test), "
+                          "vsphere-solid (redner's original solid v-sphere test), uniform (no rejection, length x "
+                          "dihedral angle), none (interior term only: misses silhouettes, shadows, outlines)",
+                          true);
        app.add_option("--preview-dir", flags->preview_dir, "Write primal.png and one diverging PNG per parameter here");
        return [flags]() {
          const ProcessGroup& group = process_group();
-         std::optional<Scene> scene;
-         std::optional<Estimator> estimator;
-         group.all_or_none([&] {
-           const Method method = parse_method(flags->boundary, "--boundary", kBoundaryMethods);
-           scene.emplace(load_scene_with_flags(flags->scene, flags->defines));
-           EstimatorConfig config = EstimatorConfig::gradient(parse_parameters(flags->params, *scene), method,
-                                                              flags->sppi, flags->sppp);
-           config.intersection_curves = flags->intersection_curves;
-           estimator.emplace(*scene, std::move(config));
-         });
+         SceneEstimator set_up;
+         set_up_estimator(*flags, flags->params, [&](const Scene&, const std::vector<ParameterSpec>& params) {
+           return gradient_config(params, parse_method(flags->boundary.method, "--boundary", kBoundaryMethods),
+                                  flags->boundary);
+         }, set_up);
+         const std::optional<Estimator>& estimator = set_up.estimator;
          const RenderResult r = group.run(*estimator, flags->render);
          const uint64_t invalid_rays = group_invalid_rays();
          on_root([&] {
@@ -58,12 +48,12 @@ const CommandRegistrar registrar{
                "grad: %s %dx%d, %d spp%s, %zu parameter(s), boundary %s, %.3f s (set-up %.3f s, interior %.3f s, "
                "boundary %.3f s), %.2f Mrays/s, %llu traversals, %.1f%% zero-contribution -> %s\n",
                flags->scene.c_str(), r.film.width(), r.film.height(), r.spp, processes_note().c_str(),
-               estimator->config().params.size(), flags->boundary.c_str(), setup.seconds + r.seconds, setup.seconds,
+               estimator->config().params.size(), flags->boundary.method.c_str(), setup.seconds + r.seconds, setup.seconds,
                r.seconds - r.boundary_seconds, r.boundary_seconds, mrays_per_second(r),
                (unsigned long long)r.traversals,
                r.traversals ? 100.0 * double(r.zero_traversals) / double(r.traversals) : 0.0, flags->output.c_str());
            std::printf("  set-up: %s\n", setup.describe().c_str());
-           write_gradient_outputs(*flags, estimator->config().params, r, flags->preview_dir, "grad/" + flags->boundary);
+           write_gradient_outputs(*flags, estimator->config().params, r, flags->preview_dir, "grad/" + flags->boundary.method);
          });
          return 0;
        };

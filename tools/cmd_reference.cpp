@@ -18,10 +18,8 @@ namespace {
 
 struct Flags : CommonFlags {
   std::vector<std::string> params;
-  std::string method = "quadric";
+  BoundaryFlags boundary;  ///< method: --method (an edge sampler or fd)
   std::vector<double> h;
-  double sppi = 0;
-  double sppp = kDefaultSppp;
 };
 
 /// Writes the reference EXR (and preview) of run `r` and prints its summary (rank 0).
@@ -33,7 +31,7 @@ void write_reference(const Flags& flags, const std::vector<ParameterSpec>& param
   ref.image = reference_image(r);
   ref.num_params = K;
   add_render_attributes(ref.image, flags, r);
-  ref.image.attributes["qsil:method"] = "reference/" + flags.method;
+  ref.image.attributes["qsil:method"] = "reference/" + flags.boundary.method;
   for (int k = 0; k < K; ++k) ref.image.attributes["qsil:param" + std::to_string(k)] = params[size_t(k)].text;
   for (size_t k = 0; k < estimator.fd_steps().size(); ++k)
     ref.image.attributes["qsil:h" + std::to_string(k)] = std::to_string(estimator.fd_steps()[k]);
@@ -43,7 +41,7 @@ void write_reference(const Flags& flags, const std::vector<ParameterSpec>& param
   std::printf(
       "reference: %s %dx%d, %d spp%s, %d parameter(s), method %s, %.3f s, %.2f Mrays/s, "
       "noise floor (mean se^2) %.4g = %.3g x mean(ref^2) -> %s\n",
-      flags.scene.c_str(), r.film.width(), r.film.height(), r.spp, processes_note().c_str(), K, flags.method.c_str(),
+      flags.scene.c_str(), r.film.width(), r.film.height(), r.spp, processes_note().c_str(), K, flags.boundary.method.c_str(),
       r.seconds + estimator.setup().seconds, mrays_per_second(r), ref.noise_floor,
       ref.mean_sq > 0 ? ref.noise_floor / ref.mean_sq : 0.0, flags.output.c_str());
   for (int k = 0; k < K; ++k)
@@ -57,31 +55,24 @@ const CommandRegistrar registrar{
        auto flags = std::make_shared<Flags>();
        add_common_flags(app, *flags, "reference.exr");
        add_param_option(app, flags->params);
-       app.add_option("--method", flags->method,
-                      "Unbiased estimator: quadric, quadric-box, vsphere, vsphere-solid, uniform (boundary term "
-                      "of `qsil grad`), or fd (central finite differences; biased by O(h^2))")
-           ->capture_default_str();
+       add_boundary_flags(app, flags->boundary, "--method",
+                          "Unbiased estimator: quadric, quadric-box, vsphere, vsphere-solid, uniform (boundary term "
+                          "of `qsil grad`), or fd (central finite differences; biased by O(h^2))",
+                          false);
        add_fd_step_option(app, flags->h);
-       add_sppi_option(app, flags->sppi);
-       add_sppp_option(app, flags->sppp);
        return [flags]() {
          const ProcessGroup& group = process_group();
-         std::optional<Scene> scene;
-         std::optional<Estimator> estimator;
-         std::vector<ParameterSpec> params;
-         group.all_or_none([&] {
-           const Method method = parse_method(flags->method, "--method", kReferenceMethods);
-           scene.emplace(load_scene_with_flags(flags->scene, flags->defines));
-           params = parse_parameters(flags->params, *scene);
-           estimator.emplace(
-               *scene, method == Method::FiniteDifferences
-                           ? EstimatorConfig::finite_differences(params, fd_steps(*scene, params, flags->h))
-                           : EstimatorConfig::gradient(params, method, flags->sppi, flags->sppp));
-         });
+         SceneEstimator set_up;
+         set_up_estimator(*flags, flags->params, [&](const Scene& scene, const std::vector<ParameterSpec>& params) {
+           const Method method = parse_method(flags->boundary.method, "--method", kReferenceMethods);
+           return method == Method::FiniteDifferences
+                      ? EstimatorConfig::finite_differences(params, fd_steps(scene, params, flags->h))
+                      : gradient_config(params, method, flags->boundary);
+         }, set_up);
          // One run with the progress bar (a reference is one long run, not passes).
-         const RenderResult r = group.run(*estimator, flags->render);
+         const RenderResult r = group.run(*set_up.estimator, flags->render);
          const uint64_t invalid_rays = group_invalid_rays();
-         on_root([&] { write_reference(*flags, params, *estimator, r, invalid_rays); });
+         on_root([&] { write_reference(*flags, set_up.params, *set_up.estimator, r, invalid_rays); });
          return 0;
        };
      }}};

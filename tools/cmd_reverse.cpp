@@ -51,10 +51,7 @@ const CommandRegistrar registrar{
        struct Flags : CommonFlags {
          std::vector<std::string> shapes;
          std::string adjoint, target, image;
-         std::string boundary = "quadric";
-         double sppi = 0;
-         double sppp = kDefaultSppp;
-         bool intersection_curves = true;
+         BoundaryFlags boundary;
        };
        auto flags = std::make_shared<Flags>();
        add_common_flags(app, *flags, "grad.npy");
@@ -65,23 +62,20 @@ const CommandRegistrar registrar{
        auto* tgt = app.add_option("--target", flags->target, "Target image T (EXR, R, G, B): L = mean (I - T)^2");
        adj->excludes(tgt);
        tgt->excludes(adj);
-       app.add_option("--boundary", flags->boundary,
-                      "Boundary-term estimator: quadric, quadric-box, vsphere, vsphere-solid, uniform, or none "
-                      "(interior term only)")
-           ->capture_default_str();
-       add_sppi_option(app, flags->sppi);
-       add_sppp_option(app, flags->sppp);
-       add_intersection_curves_flag(app, flags->intersection_curves);
+       add_boundary_flags(app, flags->boundary, "--boundary",
+                          "Boundary-term estimator: quadric, quadric-box, vsphere, vsphere-solid, uniform, or none "
+                          "(interior term only)",
+                          true);
        app.add_option("--image", flags->image, "Also write the primal image of the same paths (EXR)");
        return [flags]() {
          if (process_group().size() > 1) throw Error("reverse: runs in one process (no MPI launcher)");
          if (flags->adjoint.empty() && flags->target.empty()) throw Error("reverse: give --adjoint or --target");
-         const Method method = parse_method(flags->boundary, "--boundary", kBoundaryMethods);
+         const Method method = parse_method(flags->boundary.method, "--boundary", kBoundaryMethods);
          const Scene scene = load_scene_with_flags(flags->scene, flags->defines);
          const Camera& cam = scene.camera;
          const ReverseEstimator reverse(scene,
-                                        ReverseConfig{resolve_shapes(scene, flags->shapes), method, flags->sppi,
-                                                      flags->sppp, flags->intersection_curves});
+                                        ReverseConfig{resolve_shapes(scene, flags->shapes), method, flags->boundary.sppi,
+                                                      flags->boundary.sppp, flags->boundary.intersection_curves});
          std::vector<double> w;
          double l2 = NAN;
          if (!flags->adjoint.empty()) {
@@ -124,7 +118,7 @@ const CommandRegistrar registrar{
          double norm = 0;
          for (double v : rows) norm += v * v;
          std::printf("reverse: %s %dx%d, %d spp, boundary %s, %.3f s (set-up %.3f s), %llu traversals, %llu replays\n",
-                     flags->scene.c_str(), cam.width, cam.height, r.spp, flags->boundary.c_str(),
+                     flags->scene.c_str(), cam.width, cam.height, r.spp, flags->boundary.method.c_str(),
                      reverse.setup().seconds + r.seconds, reverse.setup().seconds, (unsigned long long)r.traversals,
                      (unsigned long long)r.replays);
          if (std::isnan(l2))

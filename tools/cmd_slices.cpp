@@ -22,15 +22,13 @@ namespace {
 
 struct Flags {
   edgetree::SliceStudyOptions study;
-  std::string out_dir;
-  bool no_grid = false;
-  std::string scripts_dir;
+  ChartOutputFlags chart;
 };
 
 int run(const Flags& f) {
   const edgetree::SliceStudy s = edgetree::run_slice_study(f.study);
   const std::filesystem::path dir =
-      f.out_dir.empty() ? std::filesystem::path("out") / ("slices-" + s.label) : std::filesystem::path(f.out_dir);
+      f.chart.out_dir.empty() ? std::filesystem::path("out") / ("slices-" + s.label) : std::filesystem::path(f.chart.out_dir);
   edgetree::write_slice_study(s, dir);
   for (int k = 0; k < 2; ++k) {
     const edgetree::PlaneStats& st = s.planes[size_t(k)];
@@ -45,9 +43,9 @@ int run(const Flags& f) {
                  "slices: warning: %d edges are silhouettes from the Hough origin: the v-sphere methods keep "
                  "them in a plain tree and accept every point\n",
                  s.origin_silhouettes);
-  if (!f.no_grid &&
+  if (!f.chart.no_grid &&
       run_python_script("slices", "slices_grid.py", {(dir / "summary.json").string(), (dir / "grid.png").string()},
-                        f.scripts_dir) != 0)
+                        f.chart.scripts_dir) != 0)
     std::fprintf(stderr, "slices: warning: the grid image was not drawn\n");
   std::printf("slices: %s, %d edges, %dx%d points per plane -> %s\n", s.label.c_str(), s.edges, s.resolution,
               s.resolution, dir.string().c_str());
@@ -84,9 +82,7 @@ const CommandRegistrar registrar{
            ->expected(3);
        app.add_option("--extent", s.extent, "Side of the square on each plane (scene units)");
        app.add_option("--resolution", s.resolution, "Points per side")->capture_default_str()->check(qsil::cli::positive_number());
-       app.add_option("--out-dir", f->out_dir, "Output directory (default out/slices-<patch>)");
-       app.add_flag("--no-grid", f->no_grid, "Skip the labelled grid image (no Python)");
-       add_scripts_dir_option(app, f->scripts_dir);
+       add_chart_output_options(app, f->chart, "out/slices-<patch>");
        return [f] { return run(*f); };
      }}};
 

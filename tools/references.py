@@ -60,6 +60,16 @@ SCENES = {
 }
 
 
+def argument_parser(doc, res, threads=2):
+    """The command line every study and benchmark script starts from: its docstring as the help,
+    --qsil (the program, default build/qsil), --res (image side, default `res`) and --threads."""
+    ap = argparse.ArgumentParser(description=doc, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--qsil", default=os.path.join(ROOT, "build", "qsil"))
+    ap.add_argument("--res", type=int, default=res)
+    ap.add_argument("--threads", type=int, default=threads)
+    return ap
+
+
 def param_set(scene, which):
     """The --param specs of a chart scene: k1 (the chart parameter) or k8 (eight parameters)."""
     shape, first = SCENES[scene]

@@ -25,7 +25,6 @@ and map it names), parameter, resolution, spp, steps and threads; --force-refere
 them. FD references use the primal renderer alone, so an estimator change leaves them valid; after
 a change to the primal renderer, force them. The record keeps the commit that rendered it.
 """
-import argparse
 import json
 import os
 import shutil
@@ -33,7 +32,7 @@ import subprocess
 import sys
 import time
 
-from references import JUDGE_FLOOR_SHARE, default_steps, git_commit, scene_digest
+from references import JUDGE_FLOOR_SHARE, argument_parser, default_steps, git_commit, scene_digest
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 METHODS = ["quadric", "quadric-box", "vsphere", "uniform", "fd"]
@@ -193,14 +192,11 @@ def write_record(args, table, img_root, commit, date):
 
 def main():
     """Runs the study and writes docs/stability.md and its record, docs/images/stability/results.json."""
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--qsil", default=os.path.join(ROOT, "build", "qsil"))
+    ap = argument_parser(__doc__, res=48)
     ap.add_argument("--budget", type=float, default=2.0)
-    ap.add_argument("--res", type=int, default=48)
     ap.add_argument("--ref-spp", type=int, default=32768)
     ap.add_argument("--ref-step-factor", type=float, default=0.25,
                     help="the reference's FD step over qsil's default step h0 (FD in the table uses h0)")
-    ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--only", default="")
     ap.add_argument("--force-references", action="store_true",
                     help="re-render the FD references even where a cached one matches")

@@ -19,7 +19,6 @@ target: at most 2). With --record FILE, the tables as data (JSON, written whole 
 the settings, CPU, date and the commit of the qsil measured): docs/images/cost/grad_cost.json is
 the record tools/results_report.py judges issue 16's cost targets from.
 """
-import argparse
 import json
 import os
 import re
@@ -29,7 +28,7 @@ import tempfile
 import time
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
-from references import cpu_model, git_commit  # noqa: E402
+from references import argument_parser, cpu_model, git_commit  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 SCENES = [("spot-mirror", "spot:translate:0,1,0"), ("shadow-quad", "object:translate:0,1,0"),
@@ -118,11 +117,8 @@ def embree_share(qsil, xml, param, common):
 
 def main():
     """Prints the table."""
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--qsil", default=os.path.join(ROOT, "build", "qsil"))
-    ap.add_argument("--res", type=int, default=256)
+    ap = argument_parser(__doc__, res=256)
     ap.add_argument("--spp", type=int, default=16)
-    ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--perf", action="store_true", help="also the share of grad's time inside Embree (perf)")
     ap.add_argument("--flat", action="store_true", help="also grad of each mesh flat-shaded against smooth-shaded")
     ap.add_argument("--record", default="", help="also write the tables as data (JSON) to this file")
