@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <string>
 
 namespace qsil {
@@ -70,18 +71,24 @@ void sample_chunk(const PathContext& ctx, const PrimaryEdges& primary, long long
       continue;
     }
     const double W = fx * fy / (cos_theta * cos_theta * cos_theta);
-    Color jump;
     Vec3 g;
-    const bool ok =
-        edge_jump_with(ctx, *pe.edge, t, o, o, false, OwnFace{}, 0, sampler, stats, jump, [&](const Vec3& gv) {
-          g = gv;
-          return accept(*pe.edge, t, gv);
-        });
-    if (!ok || (jump == 0).all()) {
+    // Seen from the camera centre: no surface to offset from or pass below, no own face, depth 0.
+    const EdgeJumpInputs in{.edge = *pe.edge,
+                            .t = t,
+                            .p = o,
+                            .vis_origin = o,
+                            .through_back_faces = false,
+                            .own = OwnFace{},
+                            .segments = 0};
+    const std::optional<Color> jump = edge_jump_with(ctx, in, sampler, stats, [&](const Vec3& gv) {
+      g = gv;
+      return accept(*pe.edge, t, gv);
+    });
+    if (!jump || (*jump == 0).all()) {
       ++stats.boundary_zero;
       continue;
     }
-    emit(px, py, *pe.edge, t, Color(jump * (W * per_sample / pdf)), g);
+    emit(px, py, *pe.edge, t, Color(*jump * (W * per_sample / pdf)), g);
   }
 }
 

@@ -161,8 +161,15 @@ struct ReverseBoundaryHook {
     edgetree::SilhouetteQuery q = boundary_query(*bctx, si, sp, wo_local);
     q.eligible = tape->moving ? &bctx->all : &bctx->moving;
     q.velocities = nullptr;  // a parameter per vertex: no normal-velocity factor
+    const BoundaryVertex<RDual> vertex{.si = si,
+                                       .sp = sp,
+                                       .query = q,
+                                       .wo_local = wo_local,
+                                       .throughput = value(beta),
+                                       .segments = seg,
+                                       .traversals = traversals};
     for_each_boundary_sample(
-        *ctx, *bctx, *sampler, si, sp, q, wo_local, value(beta), seg, traversals, stats,
+        *ctx, *bctx, vertex, *sampler, stats,
         [](const edgetree::ForestEdge&, double, const Vec3&) { return true; },
         [&](const edgetree::ForestEdge& e, double t, const Color& weight, const Vec3& g) {
           // p's share: J = g . (v_edge - dp), the -g . dp part through L's slots.

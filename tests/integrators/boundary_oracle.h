@@ -173,10 +173,16 @@ inline Estimate boundary_estimate(const Scene& scene, Method method, const std::
       const edgetree::SilhouetteSample& s = set.samples[size_t(k)];
       const Vec3 w = (s.edge->p0 + s.t * (s.edge->p1 - s.edge->p0) - p).normalized();
       const Color f = bsdf_eval<double>(scene.bsdfs[0], q.frame.to_local(w), wo_local);
-      Color jump;
       Eigen::Matrix<double, 1, 1> J;
-      if (edge_jump<1>(ctx, vel, *s.edge, s.t, p, p + Vec3(0, 0, 1e-6), false, dpm, 1, sampler, stats, jump, J))
-        v += f[0] * jump[0] * J[0] / s.pdf;
+      const EdgeJumpInputs in{.edge = *s.edge,
+                              .t = s.t,
+                              .p = p,
+                              .vis_origin = p + Vec3(0, 0, 1e-6),
+                              .through_back_faces = false,
+                              .own = OwnFace{},
+                              .segments = 1};
+      if (const std::optional<Color> jump = edge_jump<1>(ctx, vel, in, dpm, sampler, stats, J))
+        v += f[0] * (*jump)[0] * J[0] / s.pdf;
     }
     sum += v;
     sum2 += v * v;

@@ -159,12 +159,18 @@ OracleResult run_oracle(const Scene& scene, const Vec3& p_velocity = Vec3::Zero(
   auto integrand = [&](const edgetree::ForestEdge& e, double t) {
     const Vec3 w = (e.p0 + t * (e.p1 - e.p0) - p).normalized();
     const Color f = bsdf_eval<double>(*sp.bsdf, sp.frame_value.to_local(w), wo_local);
-    Color jump;
+    if ((f == 0).all()) return 0.0;
     Eigen::Matrix<double, 1, 1> J;
-    if ((f == 0).all() || !edge_jump<1>(ctx, vel, e, t, p, spawn_origin(si, w), leaves_below(si, Vec3(-dir), w), dp, 1,
-                                        rng, stats, jump, J))
-      return 0.0;
-    return f[0] * jump[0] * J[0];
+    const EdgeJumpInputs in{.edge = e,
+                            .t = t,
+                            .p = p,
+                            .vis_origin = spawn_origin(si, w),
+                            .through_back_faces = leaves_below(si, Vec3(-dir), w),
+                            .own = OwnFace{},
+                            .segments = 1};
+    const std::optional<Color> jump = edge_jump<1>(ctx, vel, in, dp, rng, stats, J);
+    if (!jump) return 0.0;
+    return f[0] * (*jump)[0] * J[0];
   };
   auto quadrature = [&](const edgetree::ForestEdge& e, int n) {
     double sum = 0;
@@ -200,8 +206,15 @@ OracleResult run_oracle(const Scene& scene, const Vec3& p_velocity = Vec3::Zero(
     for (int i = 0; i < n; ++i) {
       double v = 0;
       Eigen::Matrix<double, 1, 1> J;
+      const BoundaryVertex<double> vertex{.si = si,
+                                          .sp = sp,
+                                          .query = q,
+                                          .wo_local = wo_local,
+                                          .throughput = Color::Ones(),
+                                          .segments = 1,
+                                          .traversals = int(b.sppi)};
       for_each_boundary_sample(
-          ctx, b, sampler, si, sp, q, wo_local, Color::Ones(), 1, int(b.sppi), st,
+          ctx, b, vertex, sampler, st,
           [&](const edgetree::ForestEdge& e, double t, const Vec3& gv) {
             J = edge_point_jacobian<1>(vel, e, t, gv, dp);
             return !J.isZero(0.0);

@@ -410,14 +410,20 @@ TEST(SmoothShading, EdgesInTheShadingPointsPlaneSeeTheSkyBelowItAtEveryPoint) {
     ++edges;
     for (int i = 0; i < 4096; ++i) {
       const double t = (i + 0.5) / 4096;
-      Color jump = Color::Zero();
       ++points;
-      if (!edge_jump_with(tr.ctx, e, t, p, spawn_origin(si, Vec3(-up)), true, own, 1, sampler, stats, jump,
-                          [](const Vec3&) { return true; })) {
+      const EdgeJumpInputs in{.edge = e,
+                              .t = t,
+                              .p = p,
+                              .vis_origin = spawn_origin(si, Vec3(-up)),
+                              .through_back_faces = true,
+                              .own = own,
+                              .segments = 1};
+      const std::optional<Color> jump = edge_jump_with(tr.ctx, in, sampler, stats, [](const Vec3&) { return true; });
+      if (!jump) {
         ++hidden;
         continue;
       }
-      wrong_jump += !((jump.abs() - 1.0).abs() < 1e-12).all();
+      wrong_jump += !((jump->abs() - 1.0).abs() < 1e-12).all();
     }
   }
   std::printf("%d edges, %ld points: %ld hidden, %ld with a jump other than 1\n", edges, points, hidden, wrong_jump);

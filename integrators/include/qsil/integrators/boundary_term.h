@@ -38,6 +38,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <optional>
 #include <vector>
 
 namespace qsil {
@@ -83,29 +84,6 @@ inline edgetree::LTC bsdf_ltc(const BSDFDesc& b, Vec3 wo_local) {
   return ltc;
 }
 
-/// The shading point's own triangle, for an edge that bounds it or otherwise lies in its plane
-/// (face_in_plane; edge_jump_with).
-///
-/// p lies in the plane of its own triangle T (up to rounding), and so does every edge of T (and
-/// every edge of a coplanar neighbour: a flat wall of several triangles): the
-/// plane (p, edge) is T's plane, and the silhouette and crease predicates, which take the sign of
-/// p against T's plane, are rounding noise there. What the integrand does across T's plane in the
-/// directions toward the edge depends only on the other face T' of the edge:
-/// - T' on the viewer's side of T's plane (a concave edge seen from the front): the directions
-///   just on that side meet T' near the edge, those just beyond pass below T (the sliver rays of
-///   docs/design-notes.md "Smooth shading", item 1) and see what lies beyond: a silhouette of T'
-///   with foreground T' and that background;
-/// - T' on the other side, in the plane, or no T' (a convex, flat or boundary edge): neither side
-///   meets anything near the edge; the radiance is continuous there and the contribution is 0.
-/// With face normals f_s cos vanishes in T's plane and so does the contribution anyway; with
-/// smooth shading the shading normal tilts away from T's and it does not: treating these edges as
-/// silhouettes made grad 60 % high for a vertex of a smooth bunny (docs/gradient-checks.md).
-struct OwnFace {
-  int face = -1;  ///< the edge's face in p's plane (face_in_plane: p's triangle when the edge bounds it), else -1
-  Vec3 up = Vec3::Zero();  ///< T's unit geometric normal turned toward p's viewer (world); for a
-                           ///< segment of an intersection curve always set at a path vertex (crossing_jump)
-};
-
 /// The vertex of face `face` (one of edge `e`'s two faces) that is not on the edge (world).
 inline const Vec3& opposite_vertex(const TriangleMesh& mesh, const edgetree::ForestEdge& e, int face) {
   return mesh.positions[size_t(edgetree::opposite_vertex_index(mesh, e, face))];
@@ -146,22 +124,133 @@ inline IgnoreSet edge_faces(const edgetree::ForestEdge& e, bool through_back_fac
   return ignore;
 }
 
+/// How the rays of the boundary term run for a non-crossing edge point (edge_jump_with): the ray
+/// filter and, for an edge in p's plane (OwnFace), the other face and the offset below that plane.
+struct EdgeRays {
+  IgnoreSet ignore;           ///< edge_faces; through back faces for an edge in p's plane
+  int own_occluder = -1;      ///< for an edge in p's plane: the other face, when it occludes; else -1
+  Vec3 below = Vec3::Zero();  ///< for an edge in p's plane: the offset of its rays below that plane (world)
+};
+
+/// The rays of edge point `in` (not a crossing; `mesh` its shape's mesh), or nothing for a zero
+/// contribution: an edge in p's plane whose other face T' is missing, below p's plane or in it.
+inline std::optional<EdgeRays> edge_rays(const PathContext& ctx, const EdgeJumpInputs& in, const TriangleMesh& mesh) {
+  const edgetree::ForestEdge& e = in.edge;
+  const Vec3& p = in.p;
+  const OwnFace& own = in.own;
+  EdgeRays rays;
+  rays.ignore = edge_faces(e, in.through_back_faces);
+  if (own.face >= 0) {
+    // ---- An edge in p's plane (OwnFace): a silhouette of the other face T' when T' lies on the
+    // viewer's side of p's plane; beyond the edge on the far side of that plane the background is
+    // a sliver ray. Its rays (visibility and background) run parallel to p's plane, just below
+    // it, on the sliver rays' side (through back faces, as they do): in the plane itself they
+    // would lie in the plane of p's triangle and its coplanar neighbours, where Embree's test is
+    // degenerate and meets one of them at random (open-box-point under a constant sky: ~24 % of
+    // the background rays and ~1 % of the visibility rays near a corner of the wall, the own
+    // edges' term 23-29 % short). The offset is vis_origin's (below p's plane, from p's triangle),
+    // or larger where the edge's coordinates ask for more.
+    rays.own_occluder = e.f0 == own.face ? e.f1 : e.f0;
+    if (rays.own_occluder < 0) return std::nullopt;
+    if (!((opposite_vertex(mesh, e, rays.own_occluder) - p).dot(own.up) > 0))
+      return std::nullopt;  // T' below p's plane or in it
+    rays.ignore.through_back_faces = true;
+    const Vec3& c = ctx.tracer->local_origin();
+    const double edge_scale = std::max((e.p0 - c).cwiseAbs().maxCoeff(), (e.p1 - c).cwiseAbs().maxCoeff());
+    rays.below = -std::max((p - in.vis_origin).dot(own.up), kRayOffsetRelative * edge_scale) * own.up;
+  }
+  return rays;
+}
+
+/// The side of the plane (p, edge) on which face `face` of the edge lies: the sign of
+/// (w0 x w1).(x_opp - p) for the face's third vertex x_opp (n01 = w0 x w1, EdgeSight; world).
+inline double plane_side(const Vec3& n01, const TriangleMesh& mesh, const edgetree::ForestEdge& e, int face,
+                         const Vec3& p) {
+  return n01.dot(opposite_vertex(mesh, e, face) - p);
+}
+
+/// Radiance leaving face `face` of edge point `in`'s edge (not a crossing) exactly at the edge
+/// point toward p, along the unit direction w from p, continued with the remaining depth and the
+/// random numbers of `rng`. The point is known: barycentrics (1-t at v0, t at v1) in the face's
+/// vertex order (the face may be seen edge-on from p, where a ray-plane intersection degenerates).
+inline Color edge_face_radiance(const PathContext& ctx, const EdgeJumpInputs& in, const Vec3& w, int face, Sampler& rng,
+                                PathStats& stats) {
+  const edgetree::ForestEdge& e = in.edge;
+  const double t = in.t;
+  const PrimalView pv{ctx.scene};
+  Hit h;
+  h.shape = e.shape;
+  h.triangle = face;
+  const Eigen::Vector3i& tri = ctx.scene->shapes[e.shape].mesh.triangles[face];
+  auto weight = [&](int k) { return tri[k] == e.v0 ? 1.0 - t : (tri[k] == e.v1 ? t : 0.0); };
+  h.u = weight(1);
+  h.v = weight(2);
+  h.exact = true;
+  return Color(trace_path(ctx, pv, {in.p, w, h, in.segments}, rng, stats));
+}
+
+/// The jump across a crease (edgetree::CreaseSet; both faces facing p) at edge point `in` seen
+/// along `sight`: the two faces lie on opposite sides of the plane (p, edge); the radiance jumps
+/// from one face's to the other's. Reynolds transport: jump = L(side -) - L(side +), + the side
+/// (w0 x w1) points to. Nothing (a zero contribution) when the first face lies in that plane.
+inline std::optional<Color> crease_jump(const PathContext& ctx, const EdgeJumpInputs& in, const EdgeSight& sight,
+                                        Sampler& sampler, PathStats& stats) {
+  const edgetree::ForestEdge& e = in.edge;
+  const double s0 = plane_side(sight.n01, ctx.scene->shapes[e.shape].mesh, e, e.f0, in.p);
+  if (s0 == 0) return std::nullopt;
+  // Common random numbers: both faces continue their paths with the same random numbers, so
+  // the difference is the jump itself (where the two paths differ), not two independent noises.
+  Sampler same = sampler;
+  const Color L0 = edge_face_radiance(ctx, in, sight.w, e.f0, sampler, stats),
+              L1 = edge_face_radiance(ctx, in, sight.w, e.f1, same, stats);
+  return s0 > 0 ? Color(L1 - L0) : Color(L0 - L1);
+}
+
+/// The jump across a silhouette or boundary edge (or an edge in p's plane, rays.own_occluder set)
+/// at edge point `in` seen along `sight`: s (L_bg - L_fg), both faces on the occluder's side s.
+/// Nothing (a zero contribution) when the occluding face lies in the plane (p, edge).
+inline std::optional<Color> silhouette_jump(const PathContext& ctx, const EdgeJumpInputs& in, const EdgeSight& sight,
+                                            const EdgeRays& rays, Sampler& sampler, PathStats& stats) {
+  const edgetree::ForestEdge& e = in.edge;
+  const Vec3& p = in.p;
+  const int own_occluder = rays.own_occluder;
+  const double side =
+      plane_side(sight.n01, ctx.scene->shapes[e.shape].mesh, e, own_occluder >= 0 ? own_occluder : e.f0, p);
+  if (side == 0) return std::nullopt;
+  const double s = side > 0 ? 1.0 : -1.0;
+  // Foreground: the face that faces p. Background: beyond the edge along the same direction
+  // (escaping rays see the environment).
+  const Vec4 x(p.x(), p.y(), p.z(), 1.0);
+  const int face = own_occluder >= 0 ? own_occluder : ((e.f1 < 0 || e.q0.dot(x) > 0) ? e.f0 : e.f1);
+  const Color L_fg = edge_face_radiance(ctx, in, sight.w, face, sampler, stats);
+  // The background ray starts at the edge point (for an edge in p's plane, below it: see
+  // edge_rays).
+  const Vec3 xe = p + sight.wt;
+  const Vec3 bg_origin = xe + rays.below;
+  ++stats.rays;
+  const Hit bg = ctx.tracer->intersect(bg_origin, sight.w, kInf, rays.ignore);
+  const PrimalView pv{ctx.scene};
+  const Color L_bg = trace_path(ctx, pv, {bg_origin, sight.w, bg, in.segments}, sampler, stats);
+  return Color(s * (L_bg - L_fg));
+}
+
 /// The radiance jump and the Jacobian at a point of a discontinuity edge seen from p (shared by
-/// the secondary and the primary boundary terms). On success (returns true):
+/// the secondary and the primary boundary terms), for edge point `in` (EdgeJumpInputs), drawing
+/// from `sampler` and counting rays in `stats`. On success (returns the jump):
 /// - jump = s (L_bg - L_fg): the occluder-side sign times background minus foreground radiance
 ///   for a silhouette or boundary edge; for a crease (edgetree::CreaseSet; an edge whose two
 ///   faces both face p), the radiance on the minus side minus that on the plus side of the plane
 ///   (p, edge), the plus side being where w0 x w1 points, both with the same random numbers;
 /// - the Jacobian J = det(w0, w1, v_t) / |w_t|^3 = g . v_t (per unit t), v_t the edge point's
 ///   velocity relative to p, through `accept` (below; edge_jump computes J per parameter).
-/// Returns false for a zero contribution: p on the edge's line, no relative velocity, or the edge
-/// point hidden from p. `vis_origin` starts the visibility ray (p, offset off its surface), which
+/// Returns nothing for a zero contribution: p on the edge's line, no relative velocity, or the edge
+/// point hidden from p. `in.vis_origin` starts the visibility ray (p, offset off its surface), which
 /// aims at the edge point from there (not along w) and stops 1/4096 of the distance short of it.
-/// `through_back_faces`: the direction from p to the edge point leaves p's surface on the side
+/// `in.through_back_faces`: the direction from p to the edge point leaves p's surface on the side
 /// opposite to p's viewer (leaves_below), so that ray and its continuation beyond the edge pass
 /// through back faces, as every such ray of the path tracer does.
 ///
-/// `own`: the edge's face in p's plane (OwnFace, face_in_plane; face -1 otherwise, and for the
+/// `in.own`: the edge's face in p's plane (OwnFace, face_in_plane; face -1 otherwise, and for the
 /// camera): then the plane (p, edge) is p's triangle's plane and the edge is treated as
 /// OwnFace says, not by the silhouette or crease rule; its visibility and background rays run
 /// parallel to that plane just below it (on the side opposite own.up), vis_origin must be p's
@@ -175,97 +264,30 @@ inline IgnoreSet edge_faces(const edgetree::ForestEdge& e, bool through_back_fac
 ///
 /// A segment of an intersection curve (e.crossing) is evaluated by crossing_jump, with own.up.
 template <class Accept>
-bool edge_jump_with(const PathContext& ctx, const edgetree::ForestEdge& e, double t, const Vec3& p,
-                    const Vec3& vis_origin, bool through_back_faces, const OwnFace& own, int seg, Sampler& sampler,
-                    PathStats& stats, Color& jump, Accept&& accept) {
-  if (e.crossing)
-    return crossing_jump(ctx, e, t, p, vis_origin, through_back_faces, own.up, seg, sampler, stats, jump, accept);
-  const Scene& scene = *ctx.scene;
-  const std::optional<EdgeSight> sight = edge_sight(e, t, p);
-  if (!sight) return false;
-  const Vec3 &w = sight->w, &wt = sight->wt, &n01 = sight->n01;
-  if (!accept(sight->jacobian_form())) return false;
-  const TriangleMesh& mesh = scene.shapes[e.shape].mesh;
-  IgnoreSet ignore = edge_faces(e, through_back_faces);
-  int own_occluder = -1;      // for an edge in p's plane: the other face, when it occludes
-  Vec3 below = Vec3::Zero();  // for an edge in p's plane: the offset of its rays below that plane
-  if (own.face >= 0) {
-    // ---- An edge in p's plane (OwnFace): a silhouette of the other face T' when T' lies on the
-    // viewer's side of p's plane; beyond the edge on the far side of that plane the background is
-    // a sliver ray. Its rays (visibility and background) run parallel to p's plane, just below
-    // it, on the sliver rays' side (through back faces, as they do): in the plane itself they
-    // would lie in the plane of p's triangle and its coplanar neighbours, where Embree's test is
-    // degenerate and meets one of them at random (open-box-point under a constant sky: ~24 % of
-    // the background rays and ~1 % of the visibility rays near a corner of the wall, the own
-    // edges' term 23-29 % short). The offset is vis_origin's (below p's plane, from p's triangle),
-    // or larger where the edge's coordinates ask for more.
-    own_occluder = e.f0 == own.face ? e.f1 : e.f0;
-    if (own_occluder < 0) return false;
-    if (!((opposite_vertex(mesh, e, own_occluder) - p).dot(own.up) > 0)) return false;  // T' below p's plane or in it
-    ignore.through_back_faces = true;
-    const Vec3& c = ctx.tracer->local_origin();
-    const double edge_scale = std::max((e.p0 - c).cwiseAbs().maxCoeff(), (e.p1 - c).cwiseAbs().maxCoeff());
-    below = -std::max((p - vis_origin).dot(own.up), kRayOffsetRelative * edge_scale) * own.up;
-  }
+std::optional<Color> edge_jump_with(const PathContext& ctx, const EdgeJumpInputs& in, Sampler& sampler,
+                                    PathStats& stats, Accept&& accept) {
+  const edgetree::ForestEdge& e = in.edge;
+  if (e.crossing) return crossing_jump(ctx, in, sampler, stats, accept);
+  const Vec3& p = in.p;
+  const std::optional<EdgeSight> sight = edge_sight(e, in.t, p);
+  if (!sight) return std::nullopt;
+  if (!accept(sight->jacobian_form())) return std::nullopt;
+  const std::optional<EdgeRays> rays = edge_rays(ctx, in, ctx.scene->shapes[e.shape].mesh);
+  if (!rays) return std::nullopt;
   // ---- Visibility of the edge point from p (ignoring the edge's own faces).
   // The ray aims from vis_origin at the edge point itself. Along w, from an origin offset off
   // p's surface, it would pass the edge point at the offset's distance (2^-20 of the coordinate
   // magnitude: 0.01 for a unit-size object 1e4 from the origin), inside the occluder's outline
   // for about half of the grazing directions, and meet the faces next to the edge. For an edge
   // in p's plane, from p + below at the edge point + below.
-  const Vec3 edge_point = e.p0 + t * (e.p1 - e.p0);
-  const Vec3 origin = own_occluder >= 0 ? Vec3(p + below) : vis_origin;
-  if (!((edge_point + below - origin).norm() > 0)) return false;
+  const Vec3 edge_point = e.p0 + in.t * (e.p1 - e.p0);
+  const Vec3 origin = rays->own_occluder >= 0 ? Vec3(p + rays->below) : in.vis_origin;
+  if (!((edge_point + rays->below - origin).norm() > 0)) return std::nullopt;
   ++stats.rays;
-  if (!point_visible(*ctx.tracer, origin, edge_point + below, ignore)) return false;
-  // The side of the plane (p, edge) on which a face lies: the sign of (w0 x w1).(x_opp - p) for
-  // the face's third vertex.
-  auto side_of = [&](int face) { return n01.dot(opposite_vertex(mesh, e, face) - p); };
-  // Radiance leaving face `face` exactly at x_e toward p, continued with the remaining depth.
-  // The point is known: barycentrics (1-t at v0, t at v1) in the face's vertex order (the face
-  // may be seen edge-on from p, where a ray-plane intersection degenerates).
-  const PrimalView pv{&scene};
-  auto face_radiance = [&](int face, Sampler& rng) {
-    Hit h;
-    h.shape = e.shape;
-    h.triangle = face;
-    const Eigen::Vector3i& tri = mesh.triangles[face];
-    auto weight = [&](int k) { return tri[k] == e.v0 ? 1.0 - t : (tri[k] == e.v1 ? t : 0.0); };
-    h.u = weight(1);
-    h.v = weight(2);
-    h.exact = true;
-    return Color(trace_path(ctx, pv, {p, w, h, seg}, rng, stats));
-  };
-  if (own_occluder < 0 && e.crease && !edgetree::edge_is_silhouette(e, p)) {
-    // ---- A crease (edgetree::CreaseSet), both faces facing p: the two faces lie on opposite
-    // sides of the plane (p, edge); the radiance jumps from one face's to the other's.
-    // Reynolds transport: jump = L(side -) - L(side +), + the side (w0 x w1) points to.
-    const double s0 = side_of(e.f0);
-    if (s0 == 0) return false;
-    // Common random numbers: both faces continue their paths with the same random numbers, so
-    // the difference is the jump itself (where the two paths differ), not two independent noises.
-    Sampler same = sampler;
-    const Color L0 = face_radiance(e.f0, sampler), L1 = face_radiance(e.f1, same);
-    jump = s0 > 0 ? Color(L1 - L0) : Color(L0 - L1);
-    return true;
-  }
-  // ---- A silhouette or boundary edge: both faces on the occluder's side s.
-  const double side = side_of(own_occluder >= 0 ? own_occluder : e.f0);
-  if (side == 0) return false;
-  const double s = side > 0 ? 1.0 : -1.0;
-  // Foreground: the face that faces p. Background: beyond the edge along the same direction
-  // (escaping rays see the environment).
-  const Vec4 x(p.x(), p.y(), p.z(), 1.0);
-  const int face = own_occluder >= 0 ? own_occluder : ((e.f1 < 0 || e.q0.dot(x) > 0) ? e.f0 : e.f1);
-  const Color L_fg = face_radiance(face, sampler);
-  // The background ray starts at the edge point (for an edge in p's plane, below it: see above).
-  const Vec3 xe = p + wt;
-  const Vec3 bg_origin = xe + below;
-  ++stats.rays;
-  const Hit bg = ctx.tracer->intersect(bg_origin, w, kInf, ignore);
-  const Color L_bg = trace_path(ctx, pv, {bg_origin, w, bg, seg}, sampler, stats);
-  jump = s * (L_bg - L_fg);
-  return true;
+  if (!point_visible(*ctx.tracer, origin, edge_point + rays->below, rays->ignore)) return std::nullopt;
+  if (rays->own_occluder < 0 && e.crease && !edgetree::edge_is_silhouette(e, p))
+    return crease_jump(ctx, in, *sight, sampler, stats);
+  return silhouette_jump(ctx, in, *sight, *rays, sampler, stats);
 }
 
 /// Forward mode's Jacobian of an edge point: J[k] = g . v_t for every parameter k, v_t the velocity
@@ -283,17 +305,17 @@ Eigen::Matrix<double, 1, N> edge_point_jacobian(const SceneVelocities& vel, cons
   return g.transpose() * ((1 - t) * V[e.v0].template leftCols<N>() + t * V[e.v1].template leftCols<N>() - dp);
 }
 
-/// edge_jump_with for forward mode: J = edge_point_jacobian; a zero J is a zero contribution (no
-/// rays traced).
+/// edge_jump_with for forward mode: J = edge_point_jacobian (1 x N, per parameter, written to `J`
+/// whenever the edge point has a direction from p); a zero J is a zero contribution (no rays
+/// traced). `dp`: p's velocity (3 x N). Returns the jump, or nothing for a zero contribution.
 template <int N>
-bool edge_jump(const PathContext& ctx, const SceneVelocities& vel, const edgetree::ForestEdge& e, double t,
-               const Vec3& p, const Vec3& vis_origin, bool through_back_faces, const Eigen::Matrix<double, 3, N>& dp,
-               int seg, Sampler& sampler, PathStats& stats, Color& jump, Eigen::Matrix<double, 1, N>& J) {
-  return edge_jump_with(ctx, e, t, p, vis_origin, through_back_faces, OwnFace{}, seg, sampler, stats, jump,
-                        [&](const Vec3& g) {
-                          J = edge_point_jacobian<N>(vel, e, t, g, dp);
-                          return !J.isZero(0.0);
-                        });
+std::optional<Color> edge_jump(const PathContext& ctx, const SceneVelocities& vel, const EdgeJumpInputs& in,
+                               const Eigen::Matrix<double, 3, N>& dp, Sampler& sampler, PathStats& stats,
+                               Eigen::Matrix<double, 1, N>& J) {
+  return edge_jump_with(ctx, in, sampler, stats, [&](const Vec3& g) {
+    J = edge_point_jacobian<N>(vel, in.edge, in.t, g, dp);
+    return !J.isZero(0.0);
+  });
 }
 
 /// The core of a light contour set (qsil/edgetree/contour_set.h "Light contour sets") for query
@@ -454,22 +476,42 @@ inline int boundary_split(const BoundaryContext& bctx, const edgetree::Silhouett
   return int(std::clamp(std::ceil(speed / bctx.split_speed), 1.0, double(kMaxBoundarySplit)));
 }
 
+/// A path vertex at which the secondary boundary term is sampled (for_each_boundary_sample). T is
+/// the path's real type (double or a dual; only values are read). References are to the caller's
+/// objects and must outlive the call.
+template <class T>
+struct BoundaryVertex {
+  const SurfaceInteraction<T>& si;  ///< the vertex's surface interaction (world)
+  const ShadingPoint<T>& sp;        ///< its shading point: BSDF and shading frame
+  /// The boundary query, set up by the caller (boundary_query; eligibility, velocities); copied,
+  /// and the copy's contour set made, by for_each_boundary_sample.
+  const edgetree::SilhouetteQuery& query;
+  Vec3 wo_local = Vec3::Zero();      ///< unit direction toward the vertex's viewer, in sp's shading frame
+  Color throughput = Color::Zero();  ///< T: the detached throughput from the camera to the vertex
+  int segments = 0;                  ///< segments of the path before the vertex (trace_path's `segments`)
+  int traversals = 0;                ///< boundary traversals at the vertex (boundary_traversals; <= 0: none)
+};
+
 /// The secondary boundary term's samples at one path vertex (shared by forward mode, BoundaryHook,
-/// and reverse mode, integrators/reverse.cpp): `traversals` traversals of bctx.sampler
-/// (boundary_traversals) for query `q` (set up by the caller: eligibility, velocities; its
-/// contour set is made here when bctx.contours is set: contour_probe,
-/// ContourIndex::contour_edges), each split into m = boundary_split(bctx, q), drawing from
+/// and reverse mode, integrators/reverse.cpp) `vertex` (BoundaryVertex): vertex.traversals
+/// traversals of bctx.sampler (boundary_traversals) for query q = vertex.query (set up by the
+/// caller: eligibility, velocities; its contour set is made here when bctx.contours is set:
+/// contour_probe, ContourIndex::contour_edges), each split into m = boundary_split(bctx, q), drawing from
 /// `sampler`; for each edge point with f_s != 0, `accept(edge, t, g)` decides before any ray
 /// whether it can contribute (edge_jump_with), and each contributing one is handed to
 /// `visit(edge, t, weight, g)` with weight = T f_s jump / (pdf r m), r = bctx.sppi
 /// and T the detached throughput (the vertex's derivative gains weight (g . v_t)). Counts
 /// traversals (the split ones each), zero traversals and thread time.
 template <class T, class Accept, class Visit>
-void for_each_boundary_sample(const PathContext& ctx, const BoundaryContext& bctx, Sampler& sampler,
-                              const SurfaceInteraction<T>& si, const ShadingPoint<T>& sp, edgetree::SilhouetteQuery q,
-                              const Vec3& wo_local, const Color& throughput, int seg, int traversals, PathStats& stats,
-                              Accept&& accept, Visit&& visit) {
+void for_each_boundary_sample(const PathContext& ctx, const BoundaryContext& bctx, const BoundaryVertex<T>& vertex,
+                              Sampler& sampler, PathStats& stats, Accept&& accept, Visit&& visit) {
+  const SurfaceInteraction<T>& si = vertex.si;
+  const ShadingPoint<T>& sp = vertex.sp;
+  const Vec3& wo_local = vertex.wo_local;
+  const Color& throughput = vertex.throughput;
+  int traversals = vertex.traversals;
   if (traversals <= 0) return;
+  edgetree::SilhouetteQuery q = vertex.query;
   const int split = boundary_split(bctx, q);
   traversals *= split;
   const double rate = bctx.sppi * double(split);
@@ -501,7 +543,6 @@ void for_each_boundary_sample(const PathContext& ctx, const BoundaryContext& bct
       const Vec3 w = (e.p0 + s.t * (e.p1 - e.p0) - q.p).normalized();
       const Color f = bsdf_eval<double>(*sp.bsdf, q.frame.to_local(w), wo_local);
       if ((f == 0).all()) continue;
-      Color jump;
       Vec3 g;
       OwnFace own;
       if (e.crossing) {
@@ -512,15 +553,20 @@ void for_each_boundary_sample(const PathContext& ctx, const BoundaryContext& bct
       }
       // An edge in p's plane takes its rays below that plane (edge_jump_with): its origin there.
       const Vec3 vis_origin = spawn_origin(si, own.face >= 0 ? Vec3(-own.up) : w);
-      if (!edge_jump_with(ctx, e, s.t, q.p, vis_origin, leaves_below(si, wo_world, w), own, seg, sampler, stats, jump,
-                          [&](const Vec3& gv) {
-                            g = gv;
-                            return accept(e, s.t, gv);
-                          }) ||
-          (jump == 0).all())
-        continue;
+      const EdgeJumpInputs in{.edge = e,
+                              .t = s.t,
+                              .p = q.p,
+                              .vis_origin = vis_origin,
+                              .through_back_faces = leaves_below(si, wo_world, w),
+                              .own = own,
+                              .segments = vertex.segments};
+      const std::optional<Color> jump = edge_jump_with(ctx, in, sampler, stats, [&](const Vec3& gv) {
+        g = gv;
+        return accept(e, s.t, gv);
+      });
+      if (!jump || (*jump == 0).all()) continue;
       contributed = true;
-      visit(e, s.t, Color(throughput * f * jump / (s.pdf * rate)), g);
+      visit(e, s.t, Color(throughput * f * *jump / (s.pdf * rate)), g);
     }
     stats.boundary_zero += !contributed;
   }
@@ -562,8 +608,15 @@ struct BoundaryHook {
     q.dp.template leftCols<N>() = dp;
     q.velocity_scale = bctx->velocity_scale;
     Eigen::Matrix<double, 1, N> J;  // of the sample being evaluated
+    const BoundaryVertex<Dual<N>> vertex{.si = si,
+                                         .sp = sp,
+                                         .query = q,
+                                         .wo_local = wo_local,
+                                         .throughput = value(beta),
+                                         .segments = seg,
+                                         .traversals = traversals};
     for_each_boundary_sample(
-        *ctx, *bctx, *sampler, si, sp, q, wo_local, value(beta), seg, traversals, stats,
+        *ctx, *bctx, vertex, *sampler, stats,
         [&](const edgetree::ForestEdge& e, double t, const Vec3& g) {
           J = edge_point_jacobian<N>(*bctx->velocities, e, t, g, dp);
           return !J.isZero(0.0);

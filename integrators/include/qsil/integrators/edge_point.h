@@ -2,8 +2,8 @@
 /// @file edge_point.h
 /// A point of a discontinuity edge seen from a point p, as the boundary term evaluates it
 /// (docs/architecture.md §5 "Evaluation"): its direction from p, the Jacobian's linear form, and
-/// whether it is visible. Shared by edge_jump_with (boundary_term.h) and crossing_jump
-/// (crossing_jump.h).
+/// whether it is visible; and the inputs of one evaluation there (OwnFace, EdgeJumpInputs). Shared
+/// by edge_jump_with (boundary_term.h) and crossing_jump (crossing_jump.h).
 
 #include "qsil/edgetree/edge_set.h"
 #include "qsil/math.h"
@@ -12,6 +12,49 @@
 #include <optional>
 
 namespace qsil {
+
+/// The shading point's own triangle, for an edge that bounds it or otherwise lies in its plane
+/// (face_in_plane; edge_jump_with).
+///
+/// p lies in the plane of its own triangle T (up to rounding), and so does every edge of T (and
+/// every edge of a coplanar neighbour: a flat wall of several triangles): the
+/// plane (p, edge) is T's plane, and the silhouette and crease predicates, which take the sign of
+/// p against T's plane, are rounding noise there. What the integrand does across T's plane in the
+/// directions toward the edge depends only on the other face T' of the edge:
+/// - T' on the viewer's side of T's plane (a concave edge seen from the front): the directions
+///   just on that side meet T' near the edge, those just beyond pass below T (the sliver rays of
+///   docs/design-notes.md "Smooth shading", item 1) and see what lies beyond: a silhouette of T'
+///   with foreground T' and that background;
+/// - T' on the other side, in the plane, or no T' (a convex, flat or boundary edge): neither side
+///   meets anything near the edge; the radiance is continuous there and the contribution is 0.
+/// With face normals f_s cos vanishes in T's plane and so does the contribution anyway; with
+/// smooth shading the shading normal tilts away from T's and it does not: treating these edges as
+/// silhouettes made grad 60 % high for a vertex of a smooth bunny (docs/gradient-checks.md).
+struct OwnFace {
+  int face = -1;  ///< the edge's face in p's plane (face_in_plane: p's triangle when the edge bounds it), else -1
+  Vec3 up = Vec3::Zero();  ///< T's unit geometric normal turned toward p's viewer (world); for a
+                           ///< segment of an intersection curve always set at a path vertex (crossing_jump)
+};
+
+/// The inputs of one evaluation of the boundary term's integrand at an edge point (edge_jump_with,
+/// crossing_jump) that travel together: which point of which edge, seen from where, how its rays
+/// start and pass back faces, the face rule for an edge in p's plane, and the path depth. World
+/// coordinates, scene units. Read-only; the random numbers and the counters are passed beside it.
+struct EdgeJumpInputs {
+  const edgetree::ForestEdge& edge;  ///< the sampled discontinuity edge (or segment of an intersection curve)
+  double t = 0;                      ///< the edge point's parameter: edge.p0 + t (edge.p1 - edge.p0), t in [0, 1]
+  Vec3 p = Vec3::Zero();             ///< the point the edge is seen from: a path vertex, or the camera centre
+  /// The visibility ray's origin: p, or p offset off its surface (spawn_origin); for an edge in
+  /// p's plane, p's offset origin below that plane (edge_jump_with, `own`).
+  Vec3 vis_origin = Vec3::Zero();
+  /// The direction from p to the edge point leaves p's surface on the side opposite to p's viewer
+  /// (leaves_below): its rays pass through back faces. False for the camera.
+  bool through_back_faces = false;
+  OwnFace own;  ///< the edge's face in p's plane (face -1: none; always so for the camera)
+  /// Segments of the path before p (trace_path's `segments`; 0 for the camera): the radiance
+  /// paths started at the edge point continue with the remaining depth.
+  int segments = 0;
+};
 
 /// The point at t of edge e seen from p (world, scene units): w0, w1 the edge's ends relative to p,
 /// w_t = w0 + t (w1 - w0) the point relative to p, at distance dist along the unit direction w,
