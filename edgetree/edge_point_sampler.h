@@ -18,18 +18,15 @@
 /// LTC part vanishes on the whole edge (integral(g) = 0). When p lies on the edge's line
 /// (|w0 x w1| = 0, Phi = 0) the density is uniform in t (p(t) = 1); the integrand is 0 there anyway.
 ///
-/// Method (closed-form CDF; the returned pdf is the exact density of the procedure):
-/// the LTC maps the edge to the segment u_t = M^-1 w_t; with psi the angle subtended in that
-/// space from u(t_a), g(t) dt = C * (omega'.z) * (omega'.m) dpsi, where omega'(psi) is the unit
-/// direction in the plane of the transformed segment, m the unit normal of the segment's line in
-/// that plane and C a constant: a product of two sinusoids in psi, whose integral F(psi) is
-/// closed-form (psi, sin 2psi, sin^2 psi). [t_a, t_b] is the interval (linear constraints) where
-/// w_t.z > 0 and u_t.z > 0. psi is found from F(psi) = u F(Psi) by Newton's method safeguarded by
-/// bisection (F is monotone on [0, Psi]), and t from psi in closed form. The angle-uniform part
-/// inverts exactly. This is chosen over a tabulated CDF because it is exact for any roughness
-/// (alpha = 1e-4 lobes are far narrower than any fixed table over t) at the cost of a few Newton
-/// steps. Sources: [QSS] Eq. 4; Heitz et al. 2016 (LTC); the same product-of-sinusoids structure
-/// as Li et al. 2018 / Peters 2021's LTC line integrals (derived here independently).
+/// Method (closed-form CDF; the returned pdf is the exact density of the procedure): mapped by
+/// the LTC to u_t = M^-1 w_t, g dt is a product of two sinusoids in the angle psi subtended in
+/// that space, over the interval [t_a, t_b] where w_t.z > 0 and u_t.z > 0; F(psi) = u F(Psi) is
+/// solved by Newton's method safeguarded by bisection, t follows from psi in closed form, and the
+/// angle-uniform part inverts exactly (derivation: docs/experiments/2026-11-25-header-notes.md,
+/// "edge_point_sampler.h: the method"). Why not a tabulated CDF: exact for any roughness (alpha =
+/// 1e-4 lobes are far narrower than any fixed table over t) for a few Newton steps. Sources:
+/// [QSS] Eq. 4; Heitz et al. 2016 (LTC); the structure of Li et al. 2018 / Peters 2021's LTC line
+/// integrals (derived here independently).
 ///
 /// Units: t is dimensionless, pdf(t) per unit t, target(t) and target_integral() per scene unit.
 

@@ -6,16 +6,13 @@
 /// silhouettes from o (exact per-edge test) and their always-candidate (boundary) edges, each
 /// clipped against the near plane and the four frustum planes and projected to the image.
 ///
-/// A pixel's value is (1/A) integral over the pixel of L dx (box filter, x in pixels, A = 1).
-/// In solid angle, dx = W(w) dw with W(w) = f_x f_y / cos^3(theta) (pinhole; f the focal lengths
-/// in pixels, theta the angle to the optical axis), so the boundary term of [QSS Eq. 3] applies
-/// with W in place of the cosine-weighted BSDF:
+/// Estimator: a pixel's value is the integral of L over the pixel (box filter, pixel units), and
+/// dx = W(w) dw with W(w) = f_x f_y / cos^3(theta) (pinhole; f the focal lengths in pixels, theta
+/// the angle to the optical axis), so [QSS Eq. 3] applies with W in place of f_s cos:
 ///   dI_pixel/dtheta = sum_e integral s (L_bg - L_fg) W(w(t)) det(w0, w1, v_t)/|w_t|^3 dt
-/// restricted to the t whose image point lies in the pixel. A piece of an edge is chosen with
-/// probability proportional to its weight (projected length, times angle/pi for a crease, times
-/// kPrimaryHiddenShare where it is hidden from the camera: PrimaryEdges) and a point uniformly
-/// along its projected part (so the density in t carries the perspective Jacobian ds/dt); each
-/// sample is splatted into the pixel it lands in.
+/// over the t whose image point lies in the pixel: a piece of an edge with probability ∝ its
+/// weight (PrimaryEdges), a point uniformly along its projected part (so the density in t carries
+/// the perspective Jacobian ds/dt), splatted into the pixel it lands in.
 
 #include "qsil/edgetree/edge_set.h"
 #include "qsil/film.h"
@@ -86,9 +83,9 @@ struct PrimaryEdges {
 /// (the edge set's tree and always-candidate edges; the edges point into `edges`), cut into pieces
 /// of at most kPrimaryPieceLength pixels whose visibility from the camera is tested at their ends
 /// and middle with `tracer` (the same test as the boundary term's: a ray to the edge point that
-/// ignores the edge's own faces). A hidden piece keeps kPrimaryHiddenShare of its weight: about
-/// 40 % of primary samples fell on hidden contour edges before (shadow-quad, direct, the stability
-/// scenes), each a visibility ray for nothing. The camera is fixed, so this is done once per set-up.
+/// ignores the edge's own faces). A hidden piece keeps kPrimaryHiddenShare of its weight, so few
+/// samples are spent on hidden contour edges (measured: docs/experiments/2026-11-25-sample-allocation.md
+/// §6 "How many primary samples"). The camera is fixed, so this is done once per set-up.
 /// `hidden_share` in (0, 1] replaces kPrimaryHiddenShare (tests; 1 weighs every piece by its length
 /// alone).
 PrimaryEdges find_primary_edges(const Scene& scene, const edgetree::EdgeSet& edges, const std::vector<bool>& moving,
@@ -106,11 +103,9 @@ long long primary_samples_per_index(int width, int height, double ratio);
 /// primary_samples_per_index(W, H, ratio) edge samples per sample index. The samples are numbered
 /// globally (sample index s owns numbers [s n, (s + 1) n)) and drawn in chunks of 1024 numbers,
 /// chunk c from the stream Sampler(seed, c, 0, 2) whichever run draws it (n is a whole number of
-/// chunks, so no chunk straddles two sample indices). So a run over [0, spp) draws what a single
-/// run of spp samples always drew; runs over disjoint ranges draw independent samples; runs over
-/// ranges that partition [0, spp) draw exactly the samples of the run over [0, spp) (their films
-/// merge into its film up to the rounding of the sums). Deterministic for a seed whatever the
-/// thread count (chunks are merged in order). Counts rays and zero contributions in `stats`.
+/// chunks, so no chunk straddles two sample indices): the sample-range guarantees of estimator.h
+/// hold. Deterministic for a seed whatever the thread count (chunks are merged in order). Counts
+/// rays and zero contributions in `stats`.
 /// Part `part` of `parts` (RenderOptions::parts) draws only the part-th of `parts` contiguous
 /// shares of the range's chunks (each exactly as the whole run draws it); with `deferred` its
 /// splats are appended there in the order the whole run adds them, instead of to `film`.

@@ -150,17 +150,13 @@ struct BSDFSample {
 /// Share of a diffuse BSDF's directions that paths carrying derivatives (the interior term's
 /// dual paths in forward and reverse mode, integrators/path_tracer.h) draw uniformly over the
 /// hemisphere instead of cosine-weighted: a defensive mixture (Hesterberg 1995, "Weighted average
-/// importance sampling and defensive mixture distributions", Technometrics 37(2)). With
-/// directions fixed and the pdf detached (docs/architecture.md §4), the throughput
-/// (albedo/pi) cos_i / pdf of a sampled direction has the derivative (albedo/pi) (dn_s . wi) / pdf
-/// where the shading normal n_s moves; under the cosine density that is albedo (dn_s . wi) / cos_i,
-/// unbounded at grazing wi, with a variance that diverges logarithmically (∫ cos_i^-2 cos_i dω).
-/// The mixture bounds (dn_s . wi) / pdf by 2 pi |dn_s| / share, and the primal throughput
-/// albedo cos_i / (share/2 + (1 - share) cos_i) by albedo / (1 - share/2). Measured (256²,
-/// relative MSE of the whole gradient against independent FD references, same seeds and times):
-/// docs/design-notes.md "Sampling for derivatives, measured". Primal paths (`render`, and so FD,
-/// and the boundary term's radiance sub-paths) keep share 0: their weight is exactly the albedo.
-/// So `grad`'s primal channels are unbiased but not equal to `render`'s for the same seed.
+/// importance sampling and defensive mixture distributions", Technometrics 37(2)). Why: with
+/// directions fixed and pdfs detached, a moving shading normal gives the throughput the derivative
+/// albedo (dn_s . wi) / cos_i under the cosine density, of diverging variance; the mixture bounds
+/// it by 2 pi |dn_s| / share (docs/architecture.md §4 "Sampling for derivatives"; measured:
+/// docs/design-notes.md "Sampling for derivatives, measured"). Primal paths (`render`, FD, the
+/// boundary term's radiance sub-paths) keep share 0, so `grad`'s primal channels are unbiased but
+/// not equal to `render`'s for the same seed.
 inline constexpr double kDerivativeDiffuseUniformShare = 0.25;
 
 /// Samples wi given wo (local frame, unit), u in [0,1)^2.

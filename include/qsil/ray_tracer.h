@@ -38,14 +38,10 @@ struct Hit {
 /// triangle the ray starts on; shape = -1 marks an unused slot), and optionally the back side of
 /// every one-sided surface (`through_back_faces`).
 ///
-/// Why rays pass through back faces: a ray that leaves a surface on the side opposite to the
-/// viewer (possible only through a shading normal that tilts past the geometric one: a "sliver"
-/// direction) starts inside the mesh, where it could only meet back faces. Which directions are
-/// slivers depends on the geometric normal, which jumps at every edge of a smooth-shaded mesh; if
-/// back faces stopped such rays, the radiance would jump at every such edge, a discontinuity on
-/// no silhouette that no edge sampler finds (the smooth-mesh bias: the main job's derivative was
-/// 10 % low against finite differences). Passing through back faces of one-sided surfaces makes
-/// the sliver see what lies beyond the mesh, continuously across edges (docs/design-notes.md).
+/// Why rays pass through back faces: a "sliver" ray (leaving a surface on the side opposite to
+/// the viewer, through a shading normal tilted past the geometric one) starts inside the mesh;
+/// if back faces stopped it, the radiance would jump at every edge of a smooth-shaded mesh, a
+/// discontinuity on no silhouette that no edge sampler finds (docs/design-notes.md "Smooth shading").
 struct IgnoreSet {
   std::array<std::pair<int, int>, 2> prims{{{-1, -1}, {-1, -1}}};
   bool through_back_faces = false;  ///< skip hits on the back side of one-sided surfaces
@@ -59,11 +55,9 @@ struct IgnoreSet {
 /// Embree scene over all shapes of a Scene. Thread-safe for queries after construction.
 ///
 /// Embree works relative to a local origin c (embree_local_origin): vertices and ray origins are
-/// translated by -c in double, then converted to float. Embree's float geometry is then accurate
-/// relative to the scene's own size, not to its distance from the world origin: a unit-size object
-/// 1e4 from the origin is otherwise rounded by half a float ulp there, 5e-4, about 2 % of its
-/// triangles' size, and rays grazing its silhouettes (every visibility ray of a boundary-term edge
-/// point) meet the rounded neighbouring faces (stability scene `far`).
+/// translated by -c in double, then converted to float, so Embree's float geometry is accurate
+/// relative to the scene's own size, not to its distance from the world origin
+/// (docs/architecture.md §3 "Precision").
 class RayTracer {
  public:
   /// Builds the acceleration structure over `scene.shapes` (positions translated by
@@ -110,12 +104,10 @@ struct TrianglePair {
 /// The broad phase of intersection curves (qsil/edgetree/intersection_curves.h): calls
 /// `visit(pair)` once for every pair of distinct triangles of `meshes` (between two meshes and
 /// within one) whose axis-aligned bounding boxes overlap (closed boxes, in double), from several
-/// threads at once and in no particular order. Embree's rtcCollide intersects the BVH of one
-/// user-geometry scene (a geometry per mesh, one box per triangle, rounded outward to float around
-/// the boxes' common centre) with itself; it reports each pair in both orders, and the one with
-/// (mesh0, triangle0) < (mesh1, triangle1) that passes the exact box test is visited. Nothing is
-/// stored per pair (a million-triangle mesh has tens of millions). Meshes with non-finite
-/// coordinates or degenerate triangles are accepted (a non-finite box overlaps nothing).
+/// threads at once and in no particular order (Embree's rtcCollide over one box per triangle,
+/// rounded outward to float, then the exact box test in double). Nothing is stored per pair (a
+/// million-triangle mesh has tens of millions). Meshes with non-finite coordinates or degenerate
+/// triangles are accepted (a non-finite box overlaps nothing).
 /// `build_seconds` (optional) receives the time of Embree's BVH build. Throws qsil::Error if
 /// Embree cannot be initialised.
 void for_each_overlapping_triangle_pair(std::span<const TriangleMesh* const> meshes,
@@ -149,18 +141,15 @@ Vec3 embree_local_origin(const Scene& scene);
 /// along ±ng by a distance relative to the coordinate magnitude max(`scale`, |p - local_origin|)
 /// (`scale`: the largest absolute vertex coordinate of the triangle relative to `local_origin`,
 /// the ray tracer's RayTracer::local_origin), which bounds the float error of Embree's geometry,
-/// itself relative to the local origin. No absolute epsilon (docs/architecture.md §5): scenes span
-/// 1e-3 to 1e4 units. Relative to the world origin instead, the offset was 1 % of a unit-size
-/// object 1e4 from the origin (stability scene `far`: image sum -29.2 and -45.2 for seeds 5 and 9
-/// at 48², 1024 spp, against -42.6 and -49.3 for the same scene scaled by 1e-3 with the same
-/// seeds; now -42.2 and -49.4).
+/// itself relative to the local origin. No absolute epsilon (docs/architecture.md §3 "Precision"):
+/// scenes span 1e-3 to 1e4 units (history: docs/experiments/2026-11-25-readme-figures.md,
+/// "Coordinates far from the origin").
 Vec3 offset_ray_origin(const Vec3& p, const Vec3& ng, const Vec3& dir, double scale,
                        const Vec3& local_origin = Vec3::Zero());
 
 /// Relative size of the offset used by offset_ray_origin (times the coordinate magnitude): 2^-20,
-/// 8 float ulps of the coordinates. It was 2^-15: 0.3 units 1e4 from the origin, which moved ray
-/// origins off a unit-size object and biased the interior term there (stability scene `far`,
-/// 48², 256 spp: -101 +- 9 vs -143 +- 9 for the same scene scaled; with 2^-20: -142 +- 9).
+/// 8 float ulps of the coordinates (2^-15 biased scenes far from the origin: measurements in
+/// docs/experiments/2026-11-25-header-notes.md, "ray_tracer.h: kRayOffsetRelative").
 inline constexpr double kRayOffsetRelative = 1.0 / 1048576.0;
 
 }  // namespace qsil

@@ -16,15 +16,10 @@ namespace qsil {
 
 /// Largest magnitude of a coordinate in a scene (scene units): load_obj() rejects vertex
 /// coordinates beyond it, load_scene() vertices moved beyond it by to_world and a camera placed
-/// beyond it, each with a one-line error naming the file, line and value. Why 1e12:
-/// - Embree intersects in float and aborts the process on a ray whose origin or direction
-///   component exceeds 1.844e18 (its `ray.valid()` assertion), e.g. a ray leaving a point on a
-///   triangle with a vertex at 1e30;
-/// - its watertight triangle test forms products of three coordinate differences (Plücker:
-///   T = 2 v0.(e1 x e2)); with every coordinate within 1e12, differences stay within 3.5e12 and
-///   |T| < 2 (3.5e12)^3 ~ 1e38, below float's largest value 3.4e38 (1e13 would overflow it);
-/// - the renderer's own distances and |w|^3 (boundary term) are double and far from overflow.
-/// Real scenes stay far below (the bundled ones within 1e4).
+/// beyond it, each with a one-line error naming the file, line and value. Why 1e12: Embree's
+/// float triangle test forms products of three coordinate differences (Plücker T = 2 v0.(e1 x e2)),
+/// |T| < 2 (3.5e12)^3 ~ 1e38 below float's 3.4e38 (1e13 would overflow), and Embree aborts on a
+/// ray component beyond 1.844e18; qsil's own arithmetic is double. Bundled scenes stay within 1e4.
 inline constexpr double kMaxCoordinate = 1e12;
 
 /// A welded triangle mesh in world space.

@@ -4,17 +4,13 @@
 /// "Contour sets"): the silhouette edges of the surface that a ray along the lobe's axis (or
 /// toward the light) meets, found by walking over that mesh, within the lobe's (the light's) core.
 ///
-/// Why: at a glossy vertex (GGX alpha 0.01, the mirror of scenes/spot-mirror.xml) the boundary
+/// Why: at a glossy vertex (the GGX alpha 0.01 mirror of scenes/spot-mirror.xml) the boundary
 /// integral is carried by a few visible silhouette edges where the lobe crosses the outline of
-/// what it sees, while the traversal's importance (the LTC integral over a box, or over an
-/// edge) cannot tell a visible silhouette from the hidden ones just behind the surface that
-/// the lobe's axis meets, whose BSDF value is larger. Measured at the worst pixels of
-/// spot-mirror (128², 50k traversals at the pixel centre): 4 edges held 94 % of the integral
-/// with a probability of about 1 % between them; a flat choice over all 2900 discontinuity
-/// edges by their exact per-edge importance was no better than the traversal; with an oracle's
-/// visibility the second moment fell 20-30×. The visible outline near the lobe is found
-/// instead from the mesh itself: it bounds the connected region of faces, facing p as the face
-/// the axis meets does, around that face.
+/// what it sees, which the traversal's importance (the LTC integral over a box, or over an edge)
+/// cannot tell from the hidden ones just behind the surface the lobe's axis meets. The visible
+/// outline is found from the mesh instead: it bounds the connected region of faces, facing p as
+/// the face the axis meets does, around that face. Measured:
+/// docs/experiments/2026-11-25-edge-choice.md §5 "Contour sets ...", "Light cores".
 ///
 /// Construction (for shading point p, the lobe's core (ContourProbe) and the first hits of the
 /// probe rays on faces of eligible shapes):
@@ -29,11 +25,9 @@
 ///    kMaxContourVisits), except concave ones: on a closed, opaque, consistently wound mesh seen
 ///    from outside, where the faces of a valley face p differently, the one facing away is
 ///    behind the other, so such an edge is a silhouette of no visible outline (why [QSS 4.1]
-///    culls them; on a smooth mesh they are creases, always candidates of the traversal). They
-///    were 12 % of a contour set's probability at one of spot-mirror's worst pixels, every
-///    sample zero. On an open or inside-out mesh this leaves visible outlines to the traversal
-///    (variance, not bias). The following still passes through them: a contour on a triangle
-///    mesh may turn there.
+///    culls them; on a smooth mesh they are creases, always candidates of the traversal). On an
+///    open or inside-out mesh this leaves visible outlines to the traversal (variance, not bias).
+///    The following still passes through them: a contour on a triangle mesh may turn there.
 /// The set is a deterministic function of p, the core and the hits; it holds only edges that
 /// are discontinuities for p.
 ///
@@ -41,12 +35,9 @@
 /// no core (a diffuse vertex, or a lobe wider than kContourMaxHalfAngle), the core is the cone
 /// from p that bounds a small quad light instead (boundary_term.h light_core: the light facing p
 /// with the largest radiance × solid angle, a circular cone of half-angle at most
-/// kContourMaxHalfAngle), and the probe rays go toward the light. In a penumbra the boundary
-/// integral is carried by the outline of the occluder in front of the light, an edge that may be
-/// millimetres from p (a self-shadow) while the traversal weighs its box by the light spread over
-/// the box's whole sphere of directions (on the teapot an edge holding 99.7 % of the importance
-/// was chosen with probability 0.023). The walks from the probe's hit find that outline the same
-/// way.
+/// kContourMaxHalfAngle), and the probe rays go toward the light: in a penumbra the boundary
+/// integral is carried by the outline of the occluder in front of it, which may be millimetres
+/// from p, and the walks find it the same way.
 ///
 /// Unbiasedness does not depend on how well the set is chosen: the boundary term is the sum over
 /// the set (estimated by a choice among its edges, each with positive probability) plus the sum
@@ -74,10 +65,9 @@ inline constexpr int kMaxContourEdges = 64;
 /// that its cost per query is bounded on any mesh.
 inline constexpr int kMaxContourVisits = 512;
 
-/// Share of the BSDF lobe's LTC mass inside its core (ContourProbe), where the contour set lives.
-/// Measured on spot-mirror (GGX alpha 0.01; 128², 24 seeds of 16 spp, per-pixel variance of the
-/// whole gradient relative to its mean square, and grad's time, against 3.51 without contour
-/// sets): 0.9: 1.75, +25 % time; 0.95: 1.60, +12 %; 0.97: 1.60, +17 %; 0.99: 1.62, +35 %.
+/// Share of the BSDF lobe's LTC mass inside its core (ContourProbe), where the contour set lives:
+/// a larger core finds more of the outline for more time. Value measured on spot-mirror
+/// (docs/experiments/2026-11-25-header-notes.md, "contour_set.h: kContourConeMass").
 inline constexpr double kContourConeMass = 0.95;
 /// Lobes (and lights, seen from p) whose core cone is wider than this half-angle (radians) get no
 /// contour set: their visible outline is too long for one set of at most kMaxContourEdges edges to

@@ -1,17 +1,13 @@
 #pragma once
 /// @file edge_set.h
 /// The scene's candidate edges [QSS 4.1; docs/architecture.md §5 "Edges", "Tree"]: per shape,
-/// its edges extracted and classified (mesh_edges.h), split into silhouette-tree candidates
-/// (convex, optionally concave) and always-candidates (boundary, non-manifold, inconsistent,
-/// creases), each group ordered by a top-down 4-wide SAH hierarchy (binned SAH splits, three
-/// binary splits per level; each shape's root is discarded so it contributes up to four roots).
-/// Nodes carry the primal box B_p and the weighted length L_w only: no dual bound.
-///
-/// Every boundary method starts from the edge set: the baselines (vsphere, uniform) use its edges
-/// as they are (their order is the hierarchy's leaf order, so their sampling tables and sorts see
-/// the same edges in the same order as the forest's), and EdgeForest (edge_forest.h) fits dual
-/// bounds to its inner nodes for the quadric methods. Building an edge set fits nothing.
-/// Nodes live in one flat array; children of a node are contiguous.
+/// its edges classified (mesh_edges.h) into silhouette-tree candidates (convex, optionally
+/// concave) and always-candidates (boundary, non-manifold, inconsistent, creases), each group
+/// ordered by a top-down 4-wide binned-SAH hierarchy (each shape's root is discarded, so it
+/// contributes up to four roots) whose nodes carry B_p and L_w only, no dual bound. Nodes live in
+/// one flat array; a node's children are contiguous. The baselines (vsphere, uniform) use the
+/// edges as they are, in the hierarchy's leaf order (so their tables and sorts see the forest's
+/// order); EdgeForest (edge_forest.h) fits dual bounds for the quadric methods.
 
 #include "qsil/check.h"
 #include "qsil/edgetree/intersection_curves.h"

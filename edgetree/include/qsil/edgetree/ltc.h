@@ -11,21 +11,16 @@
 /// and its integral over a spherical polygon P equals the integral of D_o over the polygon
 /// M^-1 P, i.e. the Lambert form factor of M^-1 P clipped to z >= 0 ([LTC] Eq. 11; Arvo 1995).
 ///
-/// Frame: every direction and point here is in the LOCAL shading frame of the shading point p
-/// (z = shading normal). The table is fitted in the canonical frame where wo lies in the xz-plane
-/// with wo.x >= 0; ltc_ggx rotates the result about z to wo's azimuth, so the returned LTC is in
-/// the caller's local frame (any azimuth). Directions need not be unit length for the polygon
-/// routines: a "polygon" is a list of points relative to p (or directions), and the spherical
-/// polygon is their central projection onto the unit sphere, edges being great arcs (each edge
-/// must subtend less than pi).
+/// Frame: every direction and point is in the LOCAL shading frame of p (z = shading normal); the
+/// table is fitted with wo in the xz-plane (wo.x >= 0) and ltc_ggx rotates the LTC about z to wo's
+/// azimuth. A "polygon" is a list of points relative to p (or directions, not necessarily unit),
+/// projected centrally onto the unit sphere, with great-arc edges each subtending less than pi.
 ///
-/// Support: the approximated quantity is f_s(wi, wo) cos(theta_i), which vanishes below the
-/// shading horizon. ltc_eval and ltc_polygon_integral therefore restrict D to the upper shading
-/// hemisphere (w.z > 0) AND to the LTC's own support (M^-1 w).z > 0. The fitted lobe can put a
-/// little mass below the shading horizon (grazing wo); that mass is dropped, which is what the
-/// true BSDF does too. Both supports are narrower than the sphere: callers that need a density
-/// that is > 0 wherever the true integrand can be (docs/architecture.md §5 pitfalls) must mix in a defensive
-/// term (edge_point_sampler does).
+/// Support: f_s cos vanishes below the shading horizon, so ltc_eval and ltc_polygon_integral
+/// restrict D to w.z > 0 AND to the LTC's own support (M^-1 w).z > 0 (the fitted lobe's mass below
+/// the horizon at grazing wo is dropped, as the true BSDF drops it). Callers that need a density
+/// > 0 wherever the true integrand can be (docs/architecture.md §5 "Pitfalls") must mix in a
+/// defensive term (edge_point_sampler does).
 
 #include "qsil/math.h"
 

@@ -1,76 +1,24 @@
 #pragma once
 /// @file silhouette_sampler.h
-/// Stochastic top-down traversal of the edge forest for one shading point [QSS 3.4-3.5, 4.1;
-/// docs/architecture.md §5 "Importance", "Point on the edge"]: sample one discontinuity edge and a point on
-/// it, with the exact probability of having done so.
+/// Stochastic top-down traversal of the edge forest for one shading point [QSS 3.4-3.6, 4.1;
+/// docs/architecture.md §5 "Importance", "Point on the edge"]: sample one discontinuity edge and a
+/// point on it, with the exact probability of having done so.
 ///
 /// At every level (the forest roots included) children that the rejection test rejects get
 /// probability 0; the others are chosen with probability
-///   P(i) = (1 - eps) I_i / sum I + eps * G_i / sum G,
-///   I_i = L_w / H^2 * fbar (importance [QSS 3.5]),  G_i = L_w / H^2 (defensive share),
-/// where H is the distance from p to the centre of the node's primal box B_p (clamped below by
-/// half the box diagonal) and fbar the average cosine-weighted BSDF over the solid angle of B_p
-/// (the LTC integral over the box outline divided by its solid angle; exact for diffuse),
-/// weighted by the environment's intensity, plus the light-aware terms of every quad light
-/// (I_light, [QSS 3.6]: the same integral over the box's solid angle clipped to the light's);
-/// for far boxes under a diffuse lobe, a cheaper form over the box's bounding cone (NodeWeight). The
-/// defensive share keeps P(i) > 0 for every accepted child even where fbar = 0 (a box below the
-/// LTC horizon), because the true integrand need not vanish there. A leaf chooses among its
-/// silhouette edges (exact per-edge test) the same way with I_e = the LTC line integral of the
-/// edge's [QSS Eq. 4] integrand and G_e = length / |midpoint - p|^2; the point on the edge comes
-/// from EdgePointSampler (itself defensive). Always-candidate edges (boundary edges: the outlines
-/// of rectangles, area lights, open meshes; creases) compete with the forest roots at the top
-/// level: a shape's many always-candidates through the roots of its always-candidate tree, whose
-/// nodes are never rejected and are weighed like the forest's (L_w = always_edge_weight, less
-/// under the cosine lobe for a smooth shape's creases: kSmoothCreaseWeight), a shape's few (e.g.
-/// a rectangle's outline) one by one.
-///
-/// Flat choice (NodeTest::DualBoxAndQuadrics only; DualBox keeps the paper's traversal): a chosen inner
-/// node with at most 64 edges below it does not descend through its children but chooses among
-/// all the discontinuity edges below it at once, each weighed as a leaf weighs its edges (I_e
-/// with the normal-velocity factor, G_e). The box importance of its subtree's nodes spreads a
-/// narrow BSDF lobe's or a light's weight over every box that overlaps it, whether or not the
-/// box's silhouette edges cross it; the edges' own weights do not. Measured (256², 64 spp,
-/// 3 seeds, against the per-pixel FD references of docs/results.md): relative MSE spot-mirror
-/// 1.157 → 0.996, shadow-quad 0.538 → 0.442 (0.30 → 0.19 without the seed whose one outlier
-/// dominates both), at +8–10 % boundary time (128², 16 spp, one thread); with 16 edges
-/// 1.058 / 0.489 at +2–4 %, with 256 edges +50–80 % time.
-///
-/// Near field: a chosen inner node with at most 1024 edges whose box's bounding sphere contains p
-/// chooses flat as well. A box near p weighs L_w / H² with H clamped below by half its
-/// diagonal, so it cannot follow the 1/distance² of an edge a few millimetres from p (a point on
-/// a moving mesh seeing its own nearby silhouette in front of a light), while the edges' own
-/// weights do. Measured on shadow-quad (256², 16 seeds of 16 spp, relative MSE against an
-/// independent FD reference, same seeds): 512 edges cut the mean from 1.74 to 0.87 (the mean
-/// over seeds was 2.3× the median, from single samples: one pixel held 96 % of a seed's squared
-/// error, an edge 5 mm from p chosen with probability 0.012) at +6 % time; 1024 edges (one more
-/// of the bunny's forest roots goes flat) to 0.58 (worst seed 3.3 → 0.91) at +5 % more, once the
-/// far edges' weights were made cheap (leaf_edge_weight); direct +9–15 % time at the same error,
-/// spot-mirror unchanged. A sphere 0.7× as large lost shadow-quad's gain. Numbers:
-/// docs/architecture.md §5 "Flat choice in the near field".
-///
-/// Splitting (sample_silhouette_set, what the renderer uses): a loose always-candidate edge whose
-/// top-level probability is at least kSplitShare (at most kMaxSplitEdges of them, the most
-/// probable) is not chosen but estimated at every traversal with a point of its own (discrete
-/// probability 1), and the traversal chooses among the remaining candidates afresh (their
-/// importance and defensive weights normalised over them alone, the defensive share eps as at
-/// every choice). The estimate Σ_split g/pdf_t + g/pdf of
-/// the traversal's sample stays unbiased (every edge is covered by exactly one of the two, with
-/// a positive probability), and a bright outline seen from a moving p (an area light's, whose
-/// jump is the light's radiance) no longer takes most traversals away from the forest: on
-/// shadow-quad the light's outline held ≈ 85 % of the top-level probability at points of the
-/// moving bunny, whose self-shadow edges in front of the light got ≈ 1/7 of the probability
-/// their share of the integrand asks for. The split set depends on p alone (not on random
-/// numbers), so the partition is fixed for each query. The choice among the rest is made afresh,
-/// not by dividing the old probabilities by 1 − (the split sum): that kept the defensive part at
-/// its old size while the split edges had taken most of the importance part, so the rest's
-/// choice was up to ~40 % defensive (the forest root holding the teapot's self-shadow edges 3 cm
-/// from p chosen with probability 0.32, ~0.6 now; docs/architecture.md §5 "Splitting").
-///
-/// Contour sets (sample_silhouette_set, at glossy vertices and under small quad lights;
-/// contour_set.h): the edges of the query's contour set that are not split are estimated by one
-/// more point of their own, and the traversal's points on them are dropped; another partition,
-/// fixed for each query.
+///   P(i) = (1 - eps) I_i / sum I + eps * G_i / sum G,  I_i = L_w / H^2 * fbar,  G_i = L_w / H^2,
+/// H the distance from p to the centre of B_p (at least half its diagonal), fbar the mean
+/// cosine-weighted BSDF over B_p's solid angle times the radiance (environment, every quad light;
+/// NodeWeight). The defensive share keeps P(i) > 0 where fbar = 0 but the integrand need not be.
+/// A leaf chooses among its silhouette edges the same way (leaf_edge_weight); t comes from
+/// EdgeMixture. Always-candidate edges compete with the forest roots at the top level, through
+/// their always-candidate tree (never rejected) or, when few, one by one (loose_edge_weight).
+/// Beyond the paper (NodeTest::DualBoxAndQuadrics only; each keeps every probability > 0):
+/// - flat choice: a chosen node of <= 64 edges, or of <= 1024 whose box's bounding sphere holds p,
+///   chooses among all its edges at once by their leaf weights (a box spreads a narrow lobe's or a
+///   light's weight over every box it overlaps, and cannot follow 1/distance² near p);
+/// - splitting and contour sets (sample_silhouette_set): fixed per query, each edge estimated by
+///   exactly one strategy. Measured: docs/experiments/2026-11-25-edge-choice.md, -header-notes.md.
 
 #include "qsil/edgetree/contour_set.h"
 #include "qsil/edgetree/edge_forest.h"
@@ -163,10 +111,9 @@ struct SilhouetteSample {
   int rejection_tests = 0;           ///< number of node tests performed
 };
 
-/// Loose always-candidate edges at or above this top-level probability are split (see the file
-/// comment). A split edge costs one evaluation (a visibility ray and two radiance paths) at every
-/// traversal, about a tenth of a traversal; on shadow-quad (256², 8 spp, 8 seeds) shares 1/100,
-/// 1/32, 1/10 and 1/3 gave relative MSE 5.1, 5.2, 6.9 and 12.2 at equal time against 12.9 unsplit.
+/// Loose always-candidate edges at or above this top-level probability are split
+/// (sample_silhouette_set); a split edge costs about a tenth of a traversal at every traversal.
+/// Value measured on shadow-quad: docs/experiments/2026-11-25-edge-choice.md §5 "Splitting".
 inline constexpr double kSplitShare = 1.0 / 32.0;
 /// At most this many edges are split per traversal (the most probable ones).
 inline constexpr int kMaxSplitEdges = 8;
@@ -181,9 +128,13 @@ struct SilhouetteSampleSet {
   void push(const SilhouetteSample& s) { samples[size_t(count++)] = s; }
 };
 
-/// Samples with splitting (see the file comment): the split edges' points, then one sample of
-/// the traversal among the other candidates (omitted when it finds no edge). `next` as for
-/// sample_silhouette. Output in `out` (cleared first).
+/// Samples with splitting: a loose always-candidate edge whose top-level probability (that of
+/// sample_silhouette) is at least kSplitShare (at most kMaxSplitEdges, the most probable) gets a
+/// point of its own (discrete probability 1), and the traversal chooses among the other
+/// candidates afresh (their weights normalised over them alone, eps as at every choice; not the
+/// old probabilities rescaled, which left the rest's choice mostly defensive). The split set
+/// depends on p alone. Output in `out` (cleared first): the split edges' points, then the
+/// traversal's (omitted when it finds no edge); `next` as for sample_silhouette.
 ///
 /// With a contour set (query.contour; contour_set.h) the boundary term splits into the sum over
 /// the set's edges that are not split and the sum over every other edge: the traversal and the
@@ -217,47 +168,32 @@ SilhouetteSample sample_on_edge(const ForestEdge& e, double pmf, const Silhouett
                                 int rejection_tests = 0);
 
 /// Boxes seen under a bounding cone of sin(half-angle) = half diagonal / distance below this are
-/// weighed by the cone (see NodeWeight; under a glossy lobe where the cone's image is narrow),
-/// and, when the query's LTC is the cosine lobe, edges whose
-/// half length / distance is below it by EdgeMixture::far_total (see leaf_edge_weight). The value
-/// and its measurement (0.7 and 0.9 cost error for little time): docs/architecture.md §5
-/// "Importance".
+/// weighed by the cone (NodeWeight), and under the cosine lobe edges whose half length / distance
+/// is below it by EdgeMixture::far_total (leaf_edge_weight): time for accuracy. Value measured in
+/// docs/experiments/2026-11-25-edge-choice.md §5 "Importance".
 inline constexpr double kConeImportanceSin = 0.5;
 
 /// Factor on both weights (importance and defensive) of a smooth crease (ForestEdge::smooth_crease)
 /// that is no silhouette for p, under the cosine lobe, at a leaf or flat choice and as a loose
 /// always-candidate; and on a node's L_w, the part of its concave smooth creases
-/// (ForestNode::lw_smooth), silhouettes or not (a node cannot tell: a concave crease of a closed
-/// one-sided mesh is rarely one, 5–6 % of the crease samples on the chart scenes). Such a crease's
-/// radiance jumps only in the slivers where a face's shading and geometric normals disagree, and
-/// the two paths with common random numbers that estimate the jump differ rarely: 97–98 % of the
-/// crease samples contributed nothing, and at diffuse vertices the creases held ≤ 1 % of the
-/// boundary term's second moment (docs/design-notes.md "Crease samples"). A weight below 1 keeps
-/// the choice unbiased (every probability stays positive). Not under glossy lobes: seen through
-/// a narrow lobe the sliver jumps carry more (a global factor cost the glossy-mirror reverse-mode
-/// test its power). Measured (256², 16 spp, 23 seeds, the same seeds with factor 1, relative MSE
-/// against the FD references of docs/results.md times time): efficiency shadow-quad 1.25×, direct
-/// 1.11×, spot-mirror 1.07× with 0.1; 1.20×, 1.10×, 1.04× with 0.3.
+/// (ForestNode::lw_smooth, silhouettes or not: a node cannot tell). Such a crease's radiance jumps
+/// only in the slivers where a face's shading and geometric normals disagree, which few paths
+/// find. Below 1 keeps the choice unbiased (every probability stays positive); glossy lobes keep
+/// full weight (seen through a narrow lobe the sliver jumps carry more). Measured:
+/// docs/design-notes.md "Crease samples".
 inline constexpr double kSmoothCreaseWeight = 0.1;
 
-/// Importance I and defensive weight G of a node for the query (see the file comment).
-/// fbar is the mean of f_s cos times the radiance over the box's solid angle: exactly (LTC
-/// integrals over the box's outline, clipped by each light's pyramid) for near boxes; for a box
-/// far from p (half diagonal < kConeImportanceSin × distance of its centre), from its bounding
-/// cone instead (no outline, clipping or angles). Under the cosine lobe: with X = n . w taken as
-/// uniform on its exact range over the cone, E[max(0, X)]/π for n = the shading normal, times
-/// the environment's radiance plus each light's times the product over its 4 side planes of
-/// P(X > 0). Under a glossy lobe: the LTC integral over the cone is the form factor of its image
-/// under M⁻¹ ([LTC] Eq. 11), taken as a spherical ellipse from the images of 4 rim directions
-/// (area / π times the mean of max(0, z) over its z range), times the fraction of the cone above
-/// the horizon and the same radiance; where that image may reach 90° from its centre (a lobe
-/// narrow against the cone) the exact form is taken. Zero only where the cone misses the upper
-/// hemisphere or (for a light's term) a side plane, or (glossy) the ellipse's z range misses the
-/// LTC's support: only where the exact fbar is zero, up to the ellipse approximation (the test
-/// below finds no exception; the defensive share covers any); within 3 % of it for boxes under
-/// sin α ≤ 0.05 wholly above the horizon and wholly in or out of each light
-/// (tests/edgetree/node_importance_test.cpp). Both weights use L_w with its concave smooth
-/// creases' part (lw_smooth) times kSmoothCreaseWeight under the cosine lobe.
+/// Importance I and defensive weight G of a node for the query (see the file comment). fbar is
+/// the mean of f_s cos times the radiance over the box's solid angle: exact (LTC integrals over
+/// the box's outline, clipped by each light's pyramid) for near boxes; for a box far from p (half
+/// diagonal < kConeImportanceSin × distance of its centre) taken over its bounding cone instead
+/// (cosine lobe: n . w uniform on its range over the cone; glossy lobe: the form factor of the
+/// cone's image under M⁻¹, [LTC] Eq. 11, as a spherical ellipse, or the exact form where that
+/// image may reach 90° from its centre; docs/experiments/2026-11-25-edge-choice.md §5
+/// "Importance"). Zero only where the exact fbar is zero, up to the ellipse approximation (the
+/// defensive share covers any); within 3 % of it for boxes under sin α ≤ 0.05 wholly above the
+/// horizon and wholly in or out of each light (tests/edgetree/node_importance_test.cpp). Both
+/// weights use L_w with its lw_smooth part times kSmoothCreaseWeight under the cosine lobe.
 struct NodeWeight {
   double importance = 0;
   double defensive = 0;

@@ -6,14 +6,11 @@
 ///
 /// The split. Part r of R (RenderOptions::part, parts) renders every sample of the run's range
 /// for the pixels whose index y W + x is r mod R (Film::part_of), and the r-th of R contiguous
-/// shares of the primary boundary term's chunks. A pixel's sums are formed by one process, in the
-/// same order (sample index) as in one process, so they are the same doubles; the primary
-/// boundary term's splats, which land anywhere in the image, are added to the film in the order
-/// one process adds them (chunk by chunk) by passing the film along the ranks: rank r takes the
-/// film of parts 0 .. r - 1, copies its own pixels in (copies, not sums) and adds its splats in
-/// order (merge_part), and hands it on; the last rank sends it to rank 0. Floating-point addition
-/// is not associative, so summing per-process partial films would not be bit-identical; this
-/// split performs every floating-point operation of the single-process run, in its order.
+/// shares of the primary boundary term's chunks. Each pixel's sums are formed by one process in
+/// the single-process order; the film is then passed along the ranks, each copying its pixels in
+/// (copies, not sums) and adding its splats in order (merge_part), the last sending it to rank 0.
+/// Why not sum per-process films: floating-point addition is not associative; this split performs
+/// every floating-point operation of the single-process run, in its order.
 ///
 /// Only this file's implementation (integrators/distributed.cpp) includes MPI; a build without
 /// MPI (CMake option QSIL_MPI) has the same interface with one process.

@@ -3,12 +3,8 @@
 /// The estimator layer (the role of pbrt-v4's Integrator and of Mitsuba 3's integrator plugins):
 /// an Estimator is set up once for a scene and what it estimates — the primal image, its
 /// derivatives with a boundary method, or finite differences — and then run over ranges of sample
-/// indices. Set-up builds everything a run needs and nothing else: parameter velocities, the ray
-/// tracer (one per displaced scene for finite differences), the light samplers, and for an edge
-/// sampling method the scene's edge set, the structure its method samples from (the fitted edge
-/// forest for quadric and quadric-box, the v-sphere tree for vsphere and vsphere-solid, the tables
-/// of uniform; Method in method.h decides), the edge sampler, its importance inputs (rectangle
-/// lights, environment weight) and the primary edges. Every command (`render`, `grad`, `fd`,
+/// indices. Set-up builds what a run needs and nothing else (docs/architecture.md §2, step 4; the
+/// edge structure as Method in method.h decides). Every command (`render`, `grad`, `fd`,
 /// `reference`, `compare`), the progressive passes and the tools drive an Estimator.
 ///
 /// Sample ranges: run() renders samples [first_sample, first_sample + spp) of every pixel. Sample

@@ -69,11 +69,10 @@ bool uses_edge_forest(Method method);
 /// True for quadric only: the forest's nodes carry fitted dual quadrics (the others need none).
 bool uses_quadrics(Method method);
 /// The secondary boundary-term traversals per path vertex a method uses by default
-/// (EstimatorConfig::sppi = 0): 0.5 for quadric and quadric-box, one traversal every
-/// other pixel sample (their boundary term is cheap in variance and dear in time against the
-/// interior term: measured 1.13-1.36x the efficiency of 1 on the three chart scenes, 1.16-1.56x
-/// on the stability scenes, docs/architecture.md §5 "How many traversals"); 1 for the baselines,
-/// whose boundary term holds most of their variance.
+/// (EstimatorConfig::sppi = 0): 0.5 for quadric and quadric-box, one traversal every other pixel
+/// sample (their boundary term is cheap in variance and dear in time against the interior term;
+/// measured: docs/experiments/2026-11-25-sample-allocation.md §5 "How many traversals"); 1 for
+/// the baselines, whose boundary term holds most of their variance.
 double default_sppi(Method method);
 
 /// The shading-point speed per extra secondary traversal a method uses (BoundaryContext::

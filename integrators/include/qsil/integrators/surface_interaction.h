@@ -66,8 +66,8 @@ SurfaceInteraction<T> lift_interaction(const SurfaceInteraction<double>& si) {
 ///
 /// A view that can tell a constant hit (`view.constant_hit(shape, o)`: a shape that does not move
 /// and an origin with zero derivatives, DualView) gets it computed in doubles and lifted (zero
-/// derivatives, the same values): the dual arithmetic would only carry zeros. On shadow-quad with
-/// eight parameters that is every camera ray that meets the floor or the light.
+/// derivatives, the same values): the dual arithmetic would only carry zeros (docs/architecture.md
+/// §4 "Constant interactions").
 template <class View>
 SurfaceInteraction<typename View::Real> make_interaction(const View& view, const Hit& hit,
                                                          const Vec3T<typename View::Real>& o, const Vec3& d,
@@ -132,11 +132,8 @@ SurfaceInteraction<typename View::Real> make_interaction(const View& view, const
 /// surface along the geometric normal (offset_ray_origin), and for a point exactly on the
 /// triangle's boundary also into the triangle by the same relative distance. Why the second
 /// offset: the radiance leaving an edge point (a silhouette's foreground) is the limit from the
-/// face's interior. From an interior point of face A, a direction below A's plane (a shading
-/// normal tilted past the geometric one lets the BSDF send it there) meets the back of the
-/// neighbouring face B at a convex edge, which stops it when B is twosided (one-sided back faces
-/// let such rays through, IgnoreSet::through_back_faces); from the edge point itself the same ray
-/// would slip past the edge (docs/design-notes.md "Smooth shading").
+/// face's interior; from the edge point itself a sliver ray would slip past the edge where one
+/// from inside the face meets the neighbouring face (docs/design-notes.md "Smooth shading").
 template <class T>
 Vec3 spawn_origin(const SurfaceInteraction<T>& si, const Vec3& dir) {
   const Vec3 p = value(si.p);

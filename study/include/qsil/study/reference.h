@@ -73,12 +73,10 @@ ErrorMetrics measure_error(const Film& film, const Reference& ref);
 /// the mean z^2 without them. Such a block's z tests the other reference against 0, not against
 /// a reference that saw the block: an estimator that drew no sample of a rare event there
 /// (finite differences at a small step, whose swept slivers a sample seldom hits) reports an s.e.
-/// of 0 that is no estimate of its spread. Measured (shadow-quad, 8 parameters, 64², 4096 spp):
-/// FD's derivative for one vertex is exactly 0 in 4063 of 4096 pixels, the quadric method's in
-/// 3864; its 82 unseen blocks held every |z| > 3.5 (up to 16, chi²/dof 2.49), chi²/dof 1.21
-/// without them, while two FD or two quadric renders agree (0.94, 1.01). agrees() keeps testing
-/// them: between two noisy references (FD against FD at 128 spp) a third to half of the pixels
-/// are seen by one alone, with |z| ~ 1, and leaving them out would blind the per-pixel test.
+/// of 0 that is no estimate of its spread. agrees() keeps testing them: between two noisy
+/// references a large share of the pixels are seen by one alone, and leaving them out would blind
+/// the per-pixel test. Measured: docs/experiments/2026-11-25-header-notes.md,
+/// "reference.h: Agreement::unseen".
 struct Agreement {
   int block = 8;                ///< block size in pixels
   std::vector<double> sum_z;    ///< per parameter: image-sum z
