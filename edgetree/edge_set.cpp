@@ -96,6 +96,49 @@ std::vector<std::pair<int, int>> build_topology(std::vector<ForestEdge>& edges, 
   return levels;
 }
 
+/// Edge idx of `set` as a forest edge, with its end points (world frame) from `mesh`.
+ForestEdge forest_edge(const MeshEdgeSet& set, const TriangleMesh& mesh, int idx) {
+  ForestEdge fe;
+  static_cast<MeshEdge&>(fe) = set.edges[idx];
+  fe.p0 = mesh.positions[fe.v0];
+  fe.p1 = mesh.positions[fe.v1];
+  return fe;
+}
+
+/// A shape's always-candidate edges: set.always (boundary, non-manifold, inconsistent), then the
+/// creases of `in` (all of them for a flat-shaded shape), marked in is_crease (one entry per edge
+/// of `set`) and counted in st.creases.
+std::vector<ForestEdge> shape_always_edges(const ForestShapeInput& in, const MeshEdgeSet& set,
+                                           std::vector<char>& is_crease, ForestShapeStats& st) {
+  const TriangleMesh& mesh = *in.mesh;
+  const CreaseSet creases = in.face_normals ? CreaseSet::All : in.creases;
+  std::vector<ForestEdge> always;
+  for (int idx : set.always) always.push_back(forest_edge(set, mesh, idx));
+  for (size_t idx = 0; idx < set.edges.size(); ++idx) {
+    const EdgeClass cls = set.edges[idx].cls;
+    if ((cls == EdgeClass::Concave && creases != CreaseSet::None) ||
+        (cls == EdgeClass::Convex && creases == CreaseSet::All)) {
+      is_crease[idx] = 1;
+      always.push_back(forest_edge(set, mesh, int(idx)));
+      always.back().crease = true;
+      always.back().smooth_crease = !in.face_normals;
+      ++st.creases;
+    }
+  }
+  return always;
+}
+
+/// Counts nodes[nbase, end) into st.nodes, st.leaves and st.inner_nodes.
+void count_nodes(const std::vector<ForestNode>& nodes, int nbase, ForestShapeStats& st) {
+  for (int i = nbase; i < int(nodes.size()); ++i) {
+    st.nodes++;
+    if (nodes[size_t(i)].is_leaf())
+      st.leaves++;
+    else
+      st.inner_nodes++;
+  }
+}
+
 }  // namespace
 
 EdgeSet EdgeSet::build(std::span<const ForestShapeInput> shapes, const EdgeSetOptions& options) {
@@ -114,29 +157,9 @@ EdgeSet EdgeSet::build(std::span<const ForestShapeInput> shapes, const EdgeSetOp
     st.edges_total = int(set.edges.size());
     st.edges_kept = int(set.kept.size());
     st.edges_always = int(set.always.size());
-    auto make = [&](int idx) {
-      ForestEdge fe;
-      static_cast<MeshEdge&>(fe) = set.edges[idx];
-      fe.p0 = mesh.positions[fe.v0];
-      fe.p1 = mesh.positions[fe.v1];
-      return fe;
-    };
     // ---- always-candidate edges: boundary, non-manifold, inconsistent, and the creases
-    const CreaseSet creases = in.face_normals ? CreaseSet::All : in.creases;
-    std::vector<ForestEdge> always;
-    for (int idx : set.always) always.push_back(make(idx));
     std::vector<char> is_crease(set.edges.size(), 0);
-    for (size_t idx = 0; idx < set.edges.size(); ++idx) {
-      const EdgeClass cls = set.edges[idx].cls;
-      if ((cls == EdgeClass::Concave && creases != CreaseSet::None) ||
-          (cls == EdgeClass::Convex && creases == CreaseSet::All)) {
-        is_crease[idx] = 1;
-        always.push_back(make(int(idx)));
-        always.back().crease = true;
-        always.back().smooth_crease = !in.face_normals;
-        ++st.creases;
-      }
-    }
+    const std::vector<ForestEdge> always = shape_always_edges(in, set, is_crease, st);
     st.edges_always = int(always.size());
     const int abase = int(f.always_.size());
     f.always_.insert(f.always_.end(), always.begin(), always.end());
@@ -155,7 +178,7 @@ EdgeSet EdgeSet::build(std::span<const ForestShapeInput> shapes, const EdgeSetOp
     const int ebase = int(f.edges_.size());
     if (!in.face_normals)
       for (int idx : set.kept)
-        if (!is_crease[size_t(idx)]) f.edges_.push_back(make(idx));
+        if (!is_crease[size_t(idx)]) f.edges_.push_back(forest_edge(set, mesh, idx));
     const int eend = int(f.edges_.size());
     st.edges_kept = eend - ebase;
 
@@ -169,13 +192,7 @@ EdgeSet EdgeSet::build(std::span<const ForestShapeInput> shapes, const EdgeSetOp
     f.trees_.push_back(std::move(tree));
     st.roots = int(f.roots_.size() - roots_before);
     st.depth = depth;
-    for (int i = nbase; i < int(f.nodes_.size()); ++i) {
-      st.nodes++;
-      if (f.nodes_[size_t(i)].is_leaf())
-        st.leaves++;
-      else
-        st.inner_nodes++;
-    }
+    count_nodes(f.nodes_, nbase, st);
     st.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     f.stats_.push_back(st);
   }

@@ -121,7 +121,7 @@ Sharing sharing(const Tri& A, const Tri& B) {
 
 /// How a triangle meets the other's plane: strictly on both sides (Cross), with exactly one edge
 /// in the plane and its third vertex strictly in front of it (EdgeInPlane: a crossing only if
-/// the triangle across that edge lies strictly behind, find_intersection_curves), or neither.
+/// the triangle across that edge lies strictly behind, pending_segment), or neither.
 enum class Meets { None, Cross, EdgeInPlane };
 
 struct Sides {
@@ -221,6 +221,88 @@ std::vector<std::array<int, 3>> edge_table(const TriangleMesh& mesh) {
   return t;
 }
 
+/// Triangle f of meshes[mesh]: its vertex positions (world frame) and references.
+Tri triangle(std::span<const CurveMesh> meshes, int mesh, int f) {
+  const CurveMesh& m = meshes[size_t(mesh)];
+  Tri t;
+  for (int k = 0; k < 3; ++k) {
+    const int v = m.mesh->triangles[size_t(f)][k];
+    t.x[size_t(k)] = m.mesh->positions[size_t(v)];
+    t.ref[size_t(k)] = {m.shape, v};
+  }
+  return t;
+}
+
+/// Labels the segment of pair p with the pair's shapes and faces.
+void finish(std::span<const CurveMesh> meshes, const TrianglePair& p, CrossingSegment& seg) {
+  seg.shape = {meshes[size_t(p.mesh0)].shape, meshes[size_t(p.mesh1)].shape};
+  seg.face = {p.triangle0, p.triangle1};
+}
+
+/// The order of pairs: by (mesh0, triangle0, mesh1, triangle1).
+auto pair_key(const TrianglePair& p) { return std::tie(p.mesh0, p.triangle0, p.mesh1, p.triangle1); }
+
+/// What the narrow phase found on one thread: the crossing pairs, the pairs that depend on a
+/// neighbouring triangle (Pending), and how many pairs it saw.
+struct NarrowResults {
+  std::vector<std::pair<TrianglePair, CrossingSegment>> found;
+  std::vector<Pending> pending;
+  long long pairs = 0;
+};
+
+/// The narrow phase of one candidate pair p: its segment into out.found when both triangles
+/// cross the other's plane, or into out.pending when one lies on the other's plane with an edge.
+void narrow_phase(std::span<const CurveMesh> meshes, const TrianglePair& p, NarrowResults& out) {
+  ++out.pairs;
+  const Tri A = triangle(meshes, p.mesh0, p.triangle0), B = triangle(meshes, p.mesh1, p.triangle1);
+  const Sharing sh = sharing(A, B);
+  if (sh.count >= 2) return;  // an edge (or the triangle) in common: no crossing
+  const Sides sd = sides(A, B, sh);
+  if (sd.meets[0] == Meets::Cross && sd.meets[1] == Meets::Cross) {
+    std::optional<CrossingSegment> seg = segment(A, B, sd);
+    if (!seg) return;
+    finish(meshes, p, *seg);
+    out.found.emplace_back(p, *seg);
+  } else {
+    for (int t = 0; t < 2; ++t)
+      if (sd.meets[size_t(t)] == Meets::EdgeInPlane && sd.meets[size_t(1 - t)] == Meets::Cross) {
+        const auto& sgn = sd.side[size_t(t)];
+        const int k = sgn[0] > 0 ? 0 : (sgn[1] > 0 ? 1 : 2);  // the vertex in front; the edge is the other two
+        out.pending.push_back({p, t, (k + 1) % 3, (k + 2) % 3});
+      }
+  }
+}
+
+/// The segment of a pending pair, if it crosses: a triangle with an edge in the other's plane
+/// crosses it along that edge when the triangle across the edge lies strictly behind the plane
+/// (a ring of vertices exactly in the other surface); with it in front or in the plane, the
+/// surfaces only touch there. `tables`: each mesh's edge_table, built on first use.
+std::optional<CrossingSegment> pending_segment(std::span<const CurveMesh> meshes, const Pending& pd,
+                                               std::vector<std::vector<std::array<int, 3>>>& tables) {
+  const TrianglePair& p = pd.pair;
+  const int mesh = pd.which == 0 ? p.mesh0 : p.mesh1, face = pd.which == 0 ? p.triangle0 : p.triangle1;
+  const TriangleMesh& m = *meshes[size_t(mesh)].mesh;
+  if (tables[size_t(mesh)].empty()) tables[size_t(mesh)] = edge_table(m);
+  const auto& table = tables[size_t(mesh)];
+  const int a = m.triangles[size_t(face)][pd.i], c = m.triangles[size_t(face)][pd.j];
+  const std::array<int, 3> edge{std::min(a, c), std::max(a, c), -1};
+  auto it = std::lower_bound(table.begin(), table.end(), edge);
+  std::vector<int> across;
+  for (; it != table.end() && (*it)[0] == edge[0] && (*it)[1] == edge[1]; ++it)
+    if ((*it)[2] != face) across.push_back((*it)[2]);
+  if (across.size() != 1) return std::nullopt;  // a boundary or non-manifold edge
+  const Tri A = triangle(meshes, p.mesh0, p.triangle0), B = triangle(meshes, p.mesh1, p.triangle1);
+  const Tri& other = pd.which == 0 ? B : A;
+  const Tri N = triangle(meshes, mesh, across[0]);
+  int third = 0;
+  for (int k = 0; k < 3; ++k)
+    if (m.triangles[size_t(across[0])][k] != a && m.triangles[size_t(across[0])][k] != c) third = k;
+  if (orientation(other.x[0], other.x[1], other.x[2], N.x[size_t(third)]) >= 0) return std::nullopt;
+  std::optional<CrossingSegment> seg = segment(A, B, sides(A, B, sharing(A, B)));
+  if (seg) finish(meshes, p, *seg);
+  return seg;
+}
+
 }  // namespace
 
 SceneVelocities::Block crossing_end_velocity(const CrossingEnd& end, const SceneVelocities& velocities) {
@@ -240,95 +322,32 @@ std::vector<CrossingSegment> find_intersection_curves(std::span<const CurveMesh>
   const auto t0 = std::chrono::steady_clock::now();
   std::vector<const TriangleMesh*> ptrs;
   for (const CurveMesh& m : meshes) ptrs.push_back(m.mesh);
-  auto triangle = [&](int mesh, int f) {
-    const CurveMesh& m = meshes[size_t(mesh)];
-    Tri t;
-    for (int k = 0; k < 3; ++k) {
-      const int v = m.mesh->triangles[size_t(f)][k];
-      t.x[size_t(k)] = m.mesh->positions[size_t(v)];
-      t.ref[size_t(k)] = {m.shape, v};
-    }
-    return t;
-  };
-  auto finish = [&](const TrianglePair& p, CrossingSegment& seg) {
-    seg.shape = {meshes[size_t(p.mesh0)].shape, meshes[size_t(p.mesh1)].shape};
-    seg.face = {p.triangle0, p.triangle1};
-  };
   // ---- The narrow phase inside the broad phase's callback (Embree's threads), per thread.
-  struct Local {
-    std::vector<std::pair<TrianglePair, CrossingSegment>> found;
-    std::vector<Pending> pending;
-    long long pairs = 0;
-  };
-  tbb::enumerable_thread_specific<Local> local;
+  tbb::enumerable_thread_specific<NarrowResults> local;
   double build_seconds = 0;
   for_each_overlapping_triangle_pair(
-      ptrs,
-      [&](const TrianglePair& p) {
-        Local& out = local.local();
-        ++out.pairs;
-        const Tri A = triangle(p.mesh0, p.triangle0), B = triangle(p.mesh1, p.triangle1);
-        const Sharing sh = sharing(A, B);
-        if (sh.count >= 2) return;  // an edge (or the triangle) in common: no crossing
-        const Sides sd = sides(A, B, sh);
-        if (sd.meets[0] == Meets::Cross && sd.meets[1] == Meets::Cross) {
-          std::optional<CrossingSegment> seg = segment(A, B, sd);
-          if (!seg) return;
-          finish(p, *seg);
-          out.found.emplace_back(p, *seg);
-        } else {
-          for (int t = 0; t < 2; ++t)
-            if (sd.meets[size_t(t)] == Meets::EdgeInPlane && sd.meets[size_t(1 - t)] == Meets::Cross) {
-              const auto& sgn = sd.side[size_t(t)];
-              const int k = sgn[0] > 0 ? 0 : (sgn[1] > 0 ? 1 : 2);  // the vertex in front; the edge is the other two
-              out.pending.push_back({p, t, (k + 1) % 3, (k + 2) % 3});
-            }
-        }
-      },
-      &build_seconds);
+      ptrs, [&](const TrianglePair& p) { narrow_phase(meshes, p, local.local()); }, &build_seconds);
   std::vector<std::pair<TrianglePair, CrossingSegment>> found;
   std::vector<Pending> pending;
   long long candidate_pairs = 0;
-  for (Local& l : local) {
+  for (NarrowResults& l : local) {
     found.insert(found.end(), l.found.begin(), l.found.end());
     pending.insert(pending.end(), l.pending.begin(), l.pending.end());
     candidate_pairs += l.pairs;
   }
-  auto key = [](const TrianglePair& p) { return std::tie(p.mesh0, p.triangle0, p.mesh1, p.triangle1); };
   std::sort(pending.begin(), pending.end(), [&](const Pending& a, const Pending& b) {
-    return std::tuple_cat(key(a.pair), std::tie(a.which)) < std::tuple_cat(key(b.pair), std::tie(b.which));
+    return std::tuple_cat(pair_key(a.pair), std::tie(a.which)) < std::tuple_cat(pair_key(b.pair), std::tie(b.which));
   });
-  // ---- A triangle with an edge in the other's plane crosses it along that edge when the
-  // triangle across the edge lies strictly behind the plane (a ring of vertices exactly in the
-  // other surface); with it in front or in the plane, the surfaces only touch there.
+  // ---- The pairs with a triangle's edge in the other's plane (see pending_segment).
   std::vector<std::vector<std::array<int, 3>>> tables(meshes.size());
   for (const Pending& pd : pending) {
-    const TrianglePair& p = pd.pair;
-    const int mesh = pd.which == 0 ? p.mesh0 : p.mesh1, face = pd.which == 0 ? p.triangle0 : p.triangle1;
-    const TriangleMesh& m = *meshes[size_t(mesh)].mesh;
-    if (tables[size_t(mesh)].empty()) tables[size_t(mesh)] = edge_table(m);
-    const auto& table = tables[size_t(mesh)];
-    const int a = m.triangles[size_t(face)][pd.i], c = m.triangles[size_t(face)][pd.j];
-    const std::array<int, 3> edge{std::min(a, c), std::max(a, c), -1};
-    auto it = std::lower_bound(table.begin(), table.end(), edge);
-    std::vector<int> across;
-    for (; it != table.end() && (*it)[0] == edge[0] && (*it)[1] == edge[1]; ++it)
-      if ((*it)[2] != face) across.push_back((*it)[2]);
-    if (across.size() != 1) continue;  // a boundary or non-manifold edge
-    const Tri A = triangle(p.mesh0, p.triangle0), B = triangle(p.mesh1, p.triangle1);
-    const Tri& other = pd.which == 0 ? B : A;
-    const Tri N = triangle(mesh, across[0]);
-    int third = 0;
-    for (int k = 0; k < 3; ++k)
-      if (m.triangles[size_t(across[0])][k] != a && m.triangles[size_t(across[0])][k] != c) third = k;
-    if (orientation(other.x[0], other.x[1], other.x[2], N.x[size_t(third)]) >= 0) continue;
-    std::optional<CrossingSegment> seg = segment(A, B, sides(A, B, sharing(A, B)));
+    std::optional<CrossingSegment> seg = pending_segment(meshes, pd, tables);
     if (!seg) continue;
-    finish(p, *seg);
-    found.emplace_back(p, *seg);
+    found.emplace_back(pd.pair, *seg);
   }
   // ---- A deterministic order, whatever the threads did: by the pair.
-  std::sort(found.begin(), found.end(), [&](const auto& a, const auto& b) { return key(a.first) < key(b.first); });
+  std::sort(found.begin(), found.end(),
+            [&](const auto& a, const auto& b) { return pair_key(a.first) < pair_key(b.first); });
   std::vector<CrossingSegment> out;
   out.reserve(found.size());
   for (auto& f : found) out.push_back(f.second);

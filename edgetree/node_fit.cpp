@@ -13,6 +13,95 @@
 
 namespace qsil::edgetree {
 
+namespace {
+
+/// The dual box B_q [QSS 3.2] of the local-frame planes `local` in the basis b.A, padded, into
+/// b.bq_lo, b.bq_hi; false (the node is unrejectable) if a plane has Z.q <= 0 or it is not finite.
+bool fit_dual_box(std::span<const Vec4> local, NodeBound& b) {
+  const Vec4 Z = b.A.col(3);
+  // The endpoints suffice (central projection maps each wedge segment into the hull of its
+  // endpoints' images).
+  b.bq_lo = Vec3::Constant(kInf);
+  b.bq_hi = Vec3::Constant(-kInf);
+  for (const Vec4& q : local) {
+    const double zq = Z.dot(q);
+    if (!(zq > 0.0)) return false;  // cannot happen after the guard; stay sound if it does
+    const Vec3 r = (b.A.transpose() * q).head<3>() / zq;
+    b.bq_lo = b.bq_lo.cwiseMin(r);
+    b.bq_hi = b.bq_hi.cwiseMax(r);
+  }
+  const double rmag = std::max(b.bq_lo.cwiseAbs().maxCoeff(), b.bq_hi.cwiseAbs().maxCoeff());
+  if (!std::isfinite(rmag)) return false;
+  const double pad = kFitPad * (rmag + 1.0);
+  b.bq_lo.array() -= pad;
+  b.bq_hi.array() += pad;
+  return true;
+}
+
+/// The node's quadric Q_f in out.bound.frame [QSS 4.3] into `qf`: fitted to the local planes if
+/// there are at least options.min_fit_planes, else the parent's (max |entry| = 1, kNodeInherited).
+/// Sets out.has_qf and out.qf; false: none (the node is box-only).
+bool node_quadric(std::span<const Vec4> local, const NodeFit* parent, const NodeFitOptions& options, NodeFit& out,
+                  Mat4& qf) {
+  bool have = false;
+  if (int(local.size()) >= options.min_fit_planes) have = fit_dual_quadric(local, &qf);
+  if (have) {
+    out.has_qf = true;
+    out.qf = qf;
+  } else if (parent && parent->has_qf) {
+    qf = transfer_dual_quadric(parent->qf, parent->bound.frame, out.bound.frame);
+    const double mx = qf.cwiseAbs().maxCoeff();
+    if (mx > 0.0 && qf.allFinite()) {
+      qf /= mx;
+      have = true;
+      out.flags |= kNodeInherited;
+      out.has_qf = true;
+      out.qf = qf;
+    }
+  }
+  return have;
+}
+
+/// The offsets lambda0, lambda1 of Q_f along b.D over every wedge (world frame) [QSS 4.2,
+/// Appendix D], padded, and from them b.G0 = A^T Q0 A and b.delta (local frame); false: the node
+/// must be box-only (b.G0 and b.delta then zero).
+bool fit_offsets(const Mat4& qf, std::span<const Wedge> wedges, NodeBound& b) {
+  const Vec4& D = b.D;
+  double l0 = kInf, l1 = -kInf, lscale = 0.0;
+  const double qmax = qf.cwiseAbs().maxCoeff();
+  for (const Wedge& w : wedges) {
+    const Vec4 q0 = b.frame.plane(w.q0), q1 = b.frame.plane(w.q1);
+    const double d0 = D.dot(q0), d1 = D.dot(q1);
+    if (!(d0 > 0.0 && d1 > 0.0)) return false;
+    const Vec2 r = wedge_lambda_range(qf, D, q0, q1);
+    l0 = std::min(l0, r[0]);
+    l1 = std::max(l1, r[1]);
+    // Magnitude of lambda's terms on the wedge: |Qf| |q|_1^2 / (D.q)^2 (D.q is linear in t,
+    // so its minimum over the wedge is at an endpoint).
+    const double qn = std::max(q0.cwiseAbs().sum(), q1.cwiseAbs().sum());
+    const double dmin = std::min(d0, d1);
+    lscale = std::max(lscale, qmax * qn * qn / (dmin * dmin));
+  }
+  if (!(std::isfinite(l0) && std::isfinite(l1) && std::isfinite(lscale))) return false;
+  const double lpad = kFitPad * (lscale + std::max(std::abs(l0), std::abs(l1)));
+  l0 -= lpad;
+  l1 += lpad;
+  b.lambda0 = l0;
+  b.lambda1 = l1;
+  const Mat4 Q0 = qf + l0 * D * D.transpose();
+  b.G0 = b.A.transpose() * Q0 * b.A;
+  b.G0 = 0.5 * (b.G0 + b.G0.transpose()).eval();
+  b.delta = (l1 - l0) * D.squaredNorm();
+  if (!b.G0.allFinite() || !std::isfinite(b.delta) || !(b.delta >= 0.0)) {
+    b.G0.setZero();
+    b.delta = 0.0;
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
 NodeFit fit_node(std::span<const Vec4> planes, std::span<const Wedge> wedges, const Box3& bp, const NodeFit* parent,
                  const NodeFitOptions& options) {
   NodeFit out;
@@ -35,96 +124,22 @@ NodeFit fit_node(std::span<const Vec4> planes, std::span<const Wedge> wedges, co
   }
   b.D = od.D;
   b.A = basis_from_direction(od.D);
-  const Vec4 Z = b.A.col(3);
 
-  // ---- dual box B_q [QSS 3.2]: the endpoints suffice (central projection maps each wedge
-  // segment into the hull of its endpoints' images).
-  b.bq_lo = Vec3::Constant(kInf);
-  b.bq_hi = Vec3::Constant(-kInf);
-  for (const Vec4& q : local) {
-    const double zq = Z.dot(q);
-    if (!(zq > 0.0)) {  // cannot happen after the guard; stay sound if it does
-      out.flags |= kNodeUnrejectable;
-      return out;
-    }
-    const Vec3 r = (b.A.transpose() * q).head<3>() / zq;
-    b.bq_lo = b.bq_lo.cwiseMin(r);
-    b.bq_hi = b.bq_hi.cwiseMax(r);
-  }
-  const double rmag = std::max(b.bq_lo.cwiseAbs().maxCoeff(), b.bq_hi.cwiseAbs().maxCoeff());
-  if (!std::isfinite(rmag)) {
+  // ---- dual box B_q [QSS 3.2]
+  if (!fit_dual_box(local, b)) {
     out.flags |= kNodeUnrejectable;
     return out;
   }
-  const double pad = kFitPad * (rmag + 1.0);
-  b.bq_lo.array() -= pad;
-  b.bq_hi.array() += pad;
 
   // ---- fitted quadric Q_f [QSS 4.3], or the parent's, or none
-  if (!options.fit_quadrics) {
-    out.flags |= kNodeBoxOnly;
-    return out;
-  }
   Mat4 qf;
-  bool have = false;
-  if (int(planes.size()) >= options.min_fit_planes) have = fit_dual_quadric(local, &qf);
-  if (have) {
-    out.has_qf = true;
-    out.qf = qf;
-  } else if (parent && parent->has_qf) {
-    qf = transfer_dual_quadric(parent->qf, parent->bound.frame, b.frame);
-    const double mx = qf.cwiseAbs().maxCoeff();
-    if (mx > 0.0 && qf.allFinite()) {
-      qf /= mx;
-      have = true;
-      out.flags |= kNodeInherited;
-      out.has_qf = true;
-      out.qf = qf;
-    }
-  }
-  if (!have) {
+  if (!options.fit_quadrics || !node_quadric(local, parent, options, out, qf)) {
     out.flags |= kNodeBoxOnly;
     return out;
   }
 
   // ---- offsets lambda0, lambda1 over every wedge [QSS 4.2, Appendix D]
-  const Vec4& D = b.D;
-  double l0 = kInf, l1 = -kInf, lscale = 0.0;
-  const double qmax = qf.cwiseAbs().maxCoeff();
-  for (const Wedge& w : wedges) {
-    const Vec4 q0 = b.frame.plane(w.q0), q1 = b.frame.plane(w.q1);
-    const double d0 = D.dot(q0), d1 = D.dot(q1);
-    if (!(d0 > 0.0 && d1 > 0.0)) {
-      out.flags |= kNodeBoxOnly;
-      return out;
-    }
-    const Vec2 r = wedge_lambda_range(qf, D, q0, q1);
-    l0 = std::min(l0, r[0]);
-    l1 = std::max(l1, r[1]);
-    // Magnitude of lambda's terms on the wedge: |Qf| |q|_1^2 / (D.q)^2 (D.q is linear in t,
-    // so its minimum over the wedge is at an endpoint).
-    const double qn = std::max(q0.cwiseAbs().sum(), q1.cwiseAbs().sum());
-    const double dmin = std::min(d0, d1);
-    lscale = std::max(lscale, qmax * qn * qn / (dmin * dmin));
-  }
-  if (!(std::isfinite(l0) && std::isfinite(l1) && std::isfinite(lscale))) {
-    out.flags |= kNodeBoxOnly;
-    return out;
-  }
-  const double lpad = kFitPad * (lscale + std::max(std::abs(l0), std::abs(l1)));
-  l0 -= lpad;
-  l1 += lpad;
-  b.lambda0 = l0;
-  b.lambda1 = l1;
-  const Mat4 Q0 = qf + l0 * D * D.transpose();
-  b.G0 = b.A.transpose() * Q0 * b.A;
-  b.G0 = 0.5 * (b.G0 + b.G0.transpose()).eval();
-  b.delta = (l1 - l0) * D.squaredNorm();
-  if (!b.G0.allFinite() || !std::isfinite(b.delta) || !(b.delta >= 0.0)) {
-    b.G0.setZero();
-    b.delta = 0.0;
-    out.flags |= kNodeBoxOnly;
-  }
+  if (!fit_offsets(qf, wedges, b)) out.flags |= kNodeBoxOnly;
   return out;
 }
 

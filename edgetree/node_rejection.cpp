@@ -40,19 +40,13 @@ bool quadratic_has_root(double A, double B, double F, double Fe, double tol) {
   }
   return true;  // NaN
 }
-}  // namespace
+/// The dual plane [r,1].a = 0 (a in the bound's basis, local frame) over the dual box B_q: the
+/// range [fmin, fmax] of its value, the magnitude fmag of its terms, and rb = max |B_q|.
+struct PlaneOverBox {
+  double fmin, fmax, fmag, rb;
+};
 
-bool bound_may_have_silhouette(const NodeBound& b, bool box_only, const Vec3& p) {
-  const LocalFrame& fr = b.frame;
-  const Vec4 x = fr.point(p);
-  if (!x.allFinite()) return true;
-  // Rounding of the world-frame ground truth (q.x evaluated with |p|, |c| ~ m s): relative
-  // tolerance grows with the world magnitude expressed in local units.
-  const double m = 1.0 + (p.cwiseAbs().maxCoeff() + fr.center.cwiseAbs().maxCoeff()) / fr.scale;
-  const double rel = kRejectTol + 64.0 * kEps * m;
-  const Vec4 a = b.A.transpose() * x;
-
-  // ---- 1. does the dual plane [r,1].a = 0 meet the box B_q?
+PlaneOverBox plane_over_box(const NodeBound& b, const Vec4& a) {
   double fmin = a[3], fmax = a[3], fmag = std::abs(a[3]);
   double rb = 0.0;
   for (int i = 0; i < 3; ++i) {
@@ -62,23 +56,19 @@ bool bound_may_have_silhouette(const NodeBound& b, bool box_only, const Vec3& p)
     fmag += std::max(std::abs(u), std::abs(v));
     rb = std::max({rb, std::abs(b.bq_lo[i]), std::abs(b.bq_hi[i])});
   }
-  const double ftol = rel * (fmag + rb + 1.0);
-  if (!(std::isfinite(fmin) && std::isfinite(fmax) && std::isfinite(ftol))) return true;
-  if (fmin > ftol || fmax < -ftol) return false;
-  if (box_only) return true;
+  return {fmin, fmax, fmag, rb};
+}
 
-  // ---- polygon C: the plane's intersections with the box's 12 edges
-  const Vec3 an = a.head<3>();
-  const double an_norm = an.norm();
-  if (!(an_norm > 0.0)) return true;
+/// The points where the plane an.r + a3 = 0 meets the 12 edges of B_q (corners on the plane
+/// included), at most 12, in `pts`; returns how many.
+int plane_box_section(const NodeBound& b, const Vec3& an, double a3, std::array<Vec3, 12>& pts) {
   std::array<Vec3, 8> corner;
   std::array<double, 8> fc;
   for (int k = 0; k < 8; ++k) {
     corner[k] =
         Vec3(k & 1 ? b.bq_hi.x() : b.bq_lo.x(), k & 2 ? b.bq_hi.y() : b.bq_lo.y(), k & 4 ? b.bq_hi.z() : b.bq_lo.z());
-    fc[k] = an.dot(corner[k]) + a[3];
+    fc[k] = an.dot(corner[k]) + a3;
   }
-  std::array<Vec3, 12> pts;
   int np = 0;
   for (int k = 0; k < 8; ++k) {
     if (fc[k] == 0.0 && np < 12) pts[np++] = corner[k];
@@ -91,13 +81,27 @@ bool bound_may_have_silhouette(const NodeBound& b, bool box_only, const Vec3& p)
       }
     }
   }
-  if (np == 0) return true;  // touches within tolerance only: degenerate, accept
+  return np;
+}
 
-  // 2D coordinates in the plane, origin at the vertices' mean (inside the convex polygon).
-  const Frame pf(an / an_norm);
+/// The convex polygon C in its plane: 2D vertices v[0, nv) in the basis (pf.s, pf.t), origin o.
+struct PlanePolygon {
+  Frame pf;
+  Vec3 o;
+  std::array<Vec2, 12> v;
+  int nv = 0;
+};
+
+/// The polygon of the np points `pts` in the plane of unit normal `normal`, origin at their mean
+/// (inside the convex polygon), sorted by angle with (near-)duplicates dropped.
+PlanePolygon plane_polygon(const Vec3& normal, const std::array<Vec3, 12>& pts, int np) {
+  PlanePolygon g;
+  g.pf = Frame(normal);
+  const Frame& pf = g.pf;
   Vec3 o = Vec3::Zero();
   for (int i = 0; i < np; ++i) o += pts[i];
   o /= np;
+  g.o = o;
   std::array<Vec2, 12> poly;
   std::array<double, 12> ang;
   std::array<int, 12> order;
@@ -110,7 +114,7 @@ bool bound_may_have_silhouette(const NodeBound& b, bool box_only, const Vec3& p)
     diam = std::max(diam, poly[i].norm());
   }
   std::sort(order.begin(), order.begin() + np, [&](int i, int j) { return ang[i] < ang[j]; });
-  std::array<Vec2, 12> v;
+  std::array<Vec2, 12>& v = g.v;
   int nv = 0;
   for (int k = 0; k < np; ++k) {
     const Vec2& q = poly[order[k]];
@@ -118,20 +122,26 @@ bool bound_may_have_silhouette(const NodeBound& b, bool box_only, const Vec3& p)
     v[nv++] = q;
   }
   while (nv > 1 && (v[nv - 1] - v[0]).norm() <= 1e-12 * diam) --nv;
+  g.nv = nv;
+  return g;
+}
 
-  // Conic of Q~0 in the plane: [r,1] = P [alpha, 1], P = [[u1, u2, o], [0, 0, 1]].
+/// Conic of Q~0 = G0 in the polygon's plane: [r,1] = P [alpha, 1], P = [[u1, u2, o], [0, 0, 1]].
+Mat3 plane_conic(const Mat4& G0, const PlanePolygon& g) {
   Eigen::Matrix<double, 4, 3> P = Eigen::Matrix<double, 4, 3>::Zero();
-  P.block<3, 1>(0, 0) = pf.s;
-  P.block<3, 1>(0, 1) = pf.t;
-  P.block<3, 1>(0, 2) = o;
+  P.block<3, 1>(0, 0) = g.pf.s;
+  P.block<3, 1>(0, 1) = g.pf.t;
+  P.block<3, 1>(0, 2) = g.o;
   P(3, 2) = 1.0;
-  Mat3 C0 = P.transpose() * b.G0 * P;
+  Mat3 C0 = P.transpose() * G0 * P;
   C0 = 0.5 * (C0 + C0.transpose()).eval();
-  const double delta = b.delta;
-  const double R1 = 3.0 * rb + 1.0;
-  const double kappa = rel * (b.G0.cwiseAbs().maxCoeff() * 16.0 * R1 * R1 + delta);
-  if (!(C0.allFinite() && std::isfinite(kappa))) return true;
+  return C0;
+}
 
+/// Steps 2-4: whether Q~0 <= 0 <= Q~1 = Q~0 + delta somewhere on the polygon v (C0: the conic
+/// of Q~0 in its plane), up to kappa.
+bool conics_meet_polygon(const Mat3& C0, double delta, double kappa, std::span<const Vec2> v) {
+  const int nv = int(v.size());
   // ---- 2. a vertex with Q~0 <= 0 <= Q~1 = Q~0 + delta
   std::array<double, 12> h;
   for (int i = 0; i < nv; ++i) {
@@ -151,7 +161,7 @@ bool bound_may_have_silhouette(const NodeBound& b, bool box_only, const Vec3& p)
   }
   // ---- 4. a point of either conic inside C [QSS Appendix C]
   if (nv >= 3) {
-    const std::span<const Vec2> polygon(v.data(), size_t(nv));
+    const std::span<const Vec2> polygon = v;
     for (int k = 0; k < 2; ++k) {
       Mat3 C = C0;
       if (k == 1) C(2, 2) += delta;
@@ -161,6 +171,48 @@ bool bound_may_have_silhouette(const NodeBound& b, bool box_only, const Vec3& p)
         if (point_in_convex_polygon(polygon, cp[i])) return true;
     }
   }
+  return false;
+}
+}  // namespace
+
+bool bound_may_have_silhouette(const NodeBound& b, bool box_only, const Vec3& p) {
+  const LocalFrame& fr = b.frame;
+  const Vec4 x = fr.point(p);
+  if (!x.allFinite()) return true;
+  // Rounding of the world-frame ground truth (q.x evaluated with |p|, |c| ~ m s): relative
+  // tolerance grows with the world magnitude expressed in local units.
+  const double m = 1.0 + (p.cwiseAbs().maxCoeff() + fr.center.cwiseAbs().maxCoeff()) / fr.scale;
+  const double rel = kRejectTol + 64.0 * kEps * m;
+  const Vec4 a = b.A.transpose() * x;
+
+  // ---- 1. does the dual plane [r,1].a = 0 meet the box B_q?
+  const PlaneOverBox f = plane_over_box(b, a);
+  const double rb = f.rb;
+  const double ftol = rel * (f.fmag + rb + 1.0);
+  if (!(std::isfinite(f.fmin) && std::isfinite(f.fmax) && std::isfinite(ftol))) return true;
+  if (f.fmin > ftol || f.fmax < -ftol) return false;
+  if (box_only) return true;
+
+  // ---- polygon C: the plane's intersections with the box's 12 edges
+  const Vec3 an = a.head<3>();
+  const double an_norm = an.norm();
+  if (!(an_norm > 0.0)) return true;
+  std::array<Vec3, 12> pts;
+  const int np = plane_box_section(b, an, a[3], pts);
+  if (np == 0) return true;  // touches within tolerance only: degenerate, accept
+
+  // 2D coordinates in the plane, origin at the vertices' mean (inside the convex polygon).
+  const PlanePolygon g = plane_polygon(an / an_norm, pts, np);
+
+  // Conic of Q~0 in the plane: [r,1] = P [alpha, 1], P = [[u1, u2, o], [0, 0, 1]].
+  const Mat3 C0 = plane_conic(b.G0, g);
+  const double delta = b.delta;
+  const double R1 = 3.0 * rb + 1.0;
+  const double kappa = rel * (b.G0.cwiseAbs().maxCoeff() * 16.0 * R1 * R1 + delta);
+  if (!(C0.allFinite() && std::isfinite(kappa))) return true;
+
+  // ---- 2.-4. a vertex, an edge or an interior point of C where Q~0 <= 0 <= Q~1
+  if (conics_meet_polygon(C0, delta, kappa, std::span<const Vec2>(g.v.data(), size_t(g.nv)))) return true;
   // ---- 5. no plane of the bound is incident to p
   return false;
 }

@@ -26,13 +26,14 @@ Mat4 unpack(const Vec10& v) {
       v[6], v[8], v[9], v[3];
   return Q;
 }
-}  // namespace
 
-bool fit_dual_quadric(std::span<const Vec4> planes, Mat4* Q) {
-  if (planes.empty()) return false;
+/// The moment matrices of Eq. 5 over the planes (local frame): M = sum s s^T with
+/// q^T Q q = v . s(q), and N = sum g g^T with (Q q)_3 = v . g(q) (both filled in full).
+void accumulate_moments(std::span<const Vec4> planes, Mat10& M, Mat10& N) {
   // Accumulate the upper triangles of M = sum s s^T and N = sum g g^T by hand (55 + 10
   // products per plane; g has only 4 non-zero entries, at 3, 6, 8, 9).
-  Mat10 M = Mat10::Zero(), N = Mat10::Zero();
+  M = Mat10::Zero();
+  N = Mat10::Zero();
   for (const Vec4& q : planes) {
     double s[10];
     // q^T Q q = v . s(q)
@@ -59,6 +60,29 @@ bool fit_dual_quadric(std::span<const Vec4> planes, Mat4* Q) {
       M(j, i) = M(i, j);
       N(j, i) = N(i, j);
     }
+}
+
+/// Pseudo-inverse of M_uu (normals' monomials; rank-deficient for planar or cylindrical
+/// patches), eigenvalues below 1e-12 of the largest dropped, into `pinv`; false if the
+/// eigensolver fails.
+bool pseudo_inverse(const Eigen::Matrix<double, 6, 6>& Muu, Eigen::Matrix<double, 6, 6>& pinv) {
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eu(Muu);
+  if (eu.info() != Eigen::Success) return false;
+  const double emax = eu.eigenvalues().cwiseAbs().maxCoeff();
+  Eigen::Matrix<double, 6, 1> inv;
+  for (int i = 0; i < 6; ++i) {
+    const double e = eu.eigenvalues()[i];
+    inv[i] = e > 1e-12 * emax ? 1.0 / e : 0.0;
+  }
+  pinv = eu.eigenvectors() * inv.asDiagonal() * eu.eigenvectors().transpose();
+  return true;
+}
+}  // namespace
+
+bool fit_dual_quadric(std::span<const Vec4> planes, Mat4* Q) {
+  if (planes.empty()) return false;
+  Mat10 M, N;
+  accumulate_moments(planes, M, N);
   if (!M.allFinite() || !N.allFinite()) return false;
 
   // N only involves w = v[{3,6,8,9}] (the w-row of Q). Split v = [u, w] with u the other six
@@ -80,17 +104,8 @@ bool fit_dual_quadric(std::span<const Vec4> planes, Mat4* Q) {
       Mww(a, b) = M(wi[a], wi[b]);
       Nww(a, b) = N(wi[a], wi[b]);
     }
-  // Pseudo-inverse of M_uu (normals' monomials; rank-deficient for planar or cylindrical
-  // patches), eigenvalues below 1e-12 of the largest dropped.
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eu(Muu);
-  if (eu.info() != Eigen::Success) return false;
-  const double emax = eu.eigenvalues().cwiseAbs().maxCoeff();
-  Eigen::Matrix<double, 6, 1> inv;
-  for (int i = 0; i < 6; ++i) {
-    const double e = eu.eigenvalues()[i];
-    inv[i] = e > 1e-12 * emax ? 1.0 / e : 0.0;
-  }
-  const Eigen::Matrix<double, 6, 6> Muu_pinv = eu.eigenvectors() * inv.asDiagonal() * eu.eigenvectors().transpose();
+  Eigen::Matrix<double, 6, 6> Muu_pinv;  // M_uu^+
+  if (!pseudo_inverse(Muu, Muu_pinv)) return false;
   Eigen::Matrix4d S = Mww - Muw.transpose() * Muu_pinv * Muw;
   S = 0.5 * (S + S.transpose()).eval();
   const double ntr = Nww.trace();
