@@ -8,7 +8,7 @@
 #include "render_setup.h"
 #include "qsil/check.h"
 #include "qsil/error.h"
-#include "qsil/integrators/boundary_term.h"
+#include "qsil/integrators/boundary_hook.h"
 #include "qsil/integrators/geometry_view.h"
 #include "qsil/integrators/path_tracer.h"
 

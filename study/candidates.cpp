@@ -10,6 +10,7 @@
 #include "qsil/edgetree/vsphere_sampler.h"
 #include "qsil/error.h"
 #include "qsil/files.h"
+#include "qsil/edgetree/bsdf_ltc.h"
 #include "qsil/integrators/boundary_term.h"
 #include "qsil/ray_tracer.h"
 #include "qsil/wireframe.h"
@@ -101,7 +102,7 @@ SilhouetteQuery shading_point(const Scene& scene, const CandidatesOptions& o, Ca
   SilhouetteQuery q;
   q.p = rep.p;
   q.frame = Frame(rep.n);
-  q.ltc = bsdf_ltc(bsdf, q.frame.to_local(wo));
+  q.ltc = edgetree::bsdf_ltc(bsdf, q.frame.to_local(wo));
   return q;
 }
 

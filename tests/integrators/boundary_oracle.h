@@ -159,7 +159,7 @@ inline Estimate boundary_estimate(const Scene& scene, Method method, const std::
   q.p = p;
   q.frame = Frame(Vec3(0, 0, 1));
   const Vec3 wo_local = Vec3(0.3, 0.1, 0.9).normalized();
-  q.ltc = bsdf_ltc(scene.bsdfs[0], wo_local);
+  q.ltc = edgetree::bsdf_ltc(scene.bsdfs[0], wo_local);
   q.eligible = dp.isZero() ? &vel.moving : &all;
   const Eigen::Matrix<double, 3, 1> dpm = dp;
   Sampler sampler(1234, 0, 0);

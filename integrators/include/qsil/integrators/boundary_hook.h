@@ -1,0 +1,51 @@
+#pragma once
+/// @file boundary_hook.h
+/// The vertex hook of trace_path with which forward mode adds the secondary boundary term to a
+/// path's derivative (reverse mode's hook is in integrators/reverse.cpp).
+
+#include "qsil/integrators/boundary_term.h"
+#include "qsil/integrators/edge_jump.h"
+
+namespace qsil {
+
+/// The vertex hook of trace_path that adds the secondary boundary term (DualView<N> paths only).
+template <int N>
+struct BoundaryHook {
+  const PathContext* ctx;
+  const BoundaryContext* bctx;
+  Sampler* sampler;  ///< a stream of its own, so the hook leaves the path's own decisions unchanged
+  int traversals;    ///< at every vertex (boundary_traversals of the sample)
+
+  void operator()(const SurfaceInteraction<Dual<N>>& si, const ShadingPoint<Dual<N>>& sp, const Vec3& wo_local,
+                  const ColorT<Dual<N>>& beta, int seg, Sampler&, PathStats& stats, ColorT<Dual<N>>& L) const {
+    // ---- dp/dtheta: does the shading point move?
+    Eigen::Matrix<double, 3, N> dp;
+    for (int i = 0; i < 3; ++i) dp.row(i) = si.p[i].derivatives().transpose();
+    edgetree::SilhouetteQuery q = boundary_query(*bctx, si, sp, wo_local);
+    q.eligible = !dp.isZero(0.0) ? &bctx->all : &bctx->moving;
+    q.velocities = bctx->velocities;
+    q.dp.setZero();
+    q.dp.template leftCols<N>() = dp;
+    q.velocity_scale = bctx->velocity_scale;
+    Eigen::Matrix<double, 1, N> J;  // of the sample being evaluated
+    const BoundaryVertex<Dual<N>> vertex{.si = si,
+                                         .sp = sp,
+                                         .query = q,
+                                         .wo_local = wo_local,
+                                         .throughput = value(beta),
+                                         .segments = seg,
+                                         .traversals = traversals};
+    for_each_boundary_sample(
+        *ctx, *bctx, vertex, *sampler, stats,
+        [&](const edgetree::ForestEdge& e, double t, const Vec3& g) {
+          J = edge_point_jacobian<N>(*bctx->velocities, e, t, g, dp);
+          return !J.isZero(0.0);
+        },
+        [&](const edgetree::ForestEdge&, double, const Color& weight, const Vec3&) {
+          for (int c = 0; c < 3; ++c) L[c] += Dual<N>(0.0, (weight[c] * J).transpose());
+        });
+  }
+};
+
+
+}  // namespace qsil
