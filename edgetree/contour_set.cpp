@@ -72,7 +72,7 @@ ContourIndex ContourIndex::build(std::span<const ForestShapeInput> shapes, const
   }
   // Link every edge of the set to its mesh edge (one pass over the set).
   for (const auto* arr : {&set.edges(), &set.always_edges()})
-    for (const ForestEdge& fe : *arr) {
+    for (const Edge& fe : *arr) {
       if (fe.crossing || fe.shape < 0 || fe.shape >= int(index.meshes_.size())) continue;  // no mesh edge
       Mesh& m = index.meshes_[size_t(fe.shape)];
       if (!m.mesh) continue;
@@ -133,7 +133,7 @@ constexpr double kWalkSin[8] = {0.0, 0.70710678118654757,  1.0,  0.7071067811865
 }  // namespace
 
 void ContourIndex::contour_edges(const ContourProbe& probe, const Vec3& p, const std::vector<bool>* eligible,
-                                 std::vector<const ForestEdge*>& out) const {
+                                 std::vector<const Edge*>& out) const {
   out.clear();
   const Vec4 ph(p.x(), p.y(), p.z(), 1.0);
   auto indexed = [&](int shape) {
@@ -203,7 +203,7 @@ void ContourIndex::contour_edges(const ContourProbe& probe, const Vec3& p, const
     const MeshEdge& e = m.edges[size_t(cur.second)];
     const std::vector<Vec3>& x = m.mesh->positions;
     if (!probe.arc_in_core(x[size_t(e.v0)], x[size_t(e.v1)], p)) continue;
-    const ForestEdge* entry = m.entries[size_t(cur.second)];
+    const Edge* entry = m.entries[size_t(cur.second)];
     if (entry && e.cls != EdgeClass::Concave && edge_is_silhouette(*entry, p)) out.push_back(entry);
     for (int v : {e.v0, e.v1})
       for (int j = m.vertex_begin[size_t(v)]; j < m.vertex_begin[size_t(v) + 1]; ++j) {
@@ -234,7 +234,7 @@ size_t ContourIndex::memory_bytes() const {
   size_t b = meshes_.size() * sizeof(Mesh);
   for (const Mesh& m : meshes_)
     b += m.face_edges.size() * sizeof(std::array<int, 3>) + m.edges.size() * sizeof(MeshEdge) +
-         m.entries.size() * sizeof(const ForestEdge*) + (m.vertex_begin.size() + m.vertex_edges.size()) * sizeof(int);
+         m.entries.size() * sizeof(const Edge*) + (m.vertex_begin.size() + m.vertex_edges.size()) * sizeof(int);
   return b;
 }
 

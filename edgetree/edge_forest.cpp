@@ -13,7 +13,7 @@ namespace qsil::edgetree {
 namespace {
 
 // Fits one inner node from its edge range; `face_planes` are the shape's face planes.
-NodeFit fit_range(const std::vector<ForestEdge>& edges, const std::vector<Vec4>& face_planes, const ForestNode& n,
+NodeFit fit_range(const std::vector<Edge>& edges, const std::vector<Vec4>& face_planes, const ForestNode& n,
                   const NodeFit* parent, const NodeFitOptions& opt) {
   // Unique face planes of the patch (faces identified by index within the shape).
   std::vector<int> faces;
@@ -21,7 +21,7 @@ NodeFit fit_range(const std::vector<ForestEdge>& edges, const std::vector<Vec4>&
   std::vector<Wedge> wedges;
   wedges.reserve(size_t(n.edge_end - n.edge_begin));
   for (int i = n.edge_begin; i < n.edge_end; ++i) {
-    const ForestEdge& e = edges[size_t(i)];
+    const Edge& e = edges[size_t(i)];
     faces.push_back(e.f0);
     faces.push_back(e.f1);
     wedges.push_back({e.q0, e.q1});

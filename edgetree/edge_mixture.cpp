@@ -47,7 +47,7 @@ double component_weight(double radiance, double integral) {
 /// whole edge with the environment's radiance (plus e's emission), then the part in front of each
 /// of the first kMaxLights lights that the edge crosses, with that light's.
 template <bool world = false, class Component>
-void for_each_component(const ForestEdge& e, const SilhouetteQuery& q, std::span<const LocalLight> lights,
+void for_each_component(const Edge& e, const SilhouetteQuery& q, std::span<const LocalLight> lights,
                         const Vec3& w0, const Vec3& w1, Component&& component) {
   double base = q.env_weight;
   if (q.emission && e.shape >= 0 && e.shape < int(q.emission->size())) base += (*q.emission)[size_t(e.shape)];
@@ -65,13 +65,13 @@ void for_each_component(const ForestEdge& e, const SilhouetteQuery& q, std::span
 
 }  // namespace
 
-EdgeMixture::EdgeMixture(const ForestEdge& e, const SilhouetteQuery& q) : EdgeMixture(e, q, [&] {
+EdgeMixture::EdgeMixture(const Edge& e, const SilhouetteQuery& q) : EdgeMixture(e, q, [&] {
   std::vector<LocalLight> lights;
   local_lights(q, lights);
   return lights;
 }()) {}
 
-EdgeMixture::EdgeMixture(const ForestEdge& e, const SilhouetteQuery& q, std::span<const LocalLight> lights)
+EdgeMixture::EdgeMixture(const Edge& e, const SilhouetteQuery& q, std::span<const LocalLight> lights)
     : comp_{kEmpty, kEmpty, kEmpty, kEmpty, kEmpty} {
   const Vec3 w0 = q.frame.to_local(e.p0 - q.p), w1 = q.frame.to_local(e.p1 - q.p);
   for_each_component(e, q, lights, w0, w1, [&](double lo, double hi, double radiance) {
@@ -83,7 +83,7 @@ EdgeMixture::EdgeMixture(const ForestEdge& e, const SilhouetteQuery& q, std::spa
   eps_ = total_ > 0 ? kEdgeDefensiveShare : 1.0;
 }
 
-double EdgeMixture::total(const ForestEdge& e, const SilhouetteQuery& q, std::span<const LocalLight> lights) {
+double EdgeMixture::total(const Edge& e, const SilhouetteQuery& q, std::span<const LocalLight> lights) {
   const Vec3 w0 = q.frame.to_local(e.p0 - q.p), w1 = q.frame.to_local(e.p1 - q.p);
   double total = 0;
   for_each_component(e, q, lights, w0, w1, [&](double lo, double hi, double radiance) {
@@ -105,11 +105,11 @@ double positive_part_integral(double a, double b, double lo, double hi) {
 
 }  // namespace
 
-double EdgeMixture::far_total(const ForestEdge& e, const SilhouetteQuery& q, std::span<const LocalLight> lights) {
+double EdgeMixture::far_total(const Edge& e, const SilhouetteQuery& q, std::span<const LocalLight> lights) {
   return far_total(e, q, lights, EdgeGeometry(e, q.p));
 }
 
-double EdgeMixture::far_total(const ForestEdge& e, const SilhouetteQuery& q, std::span<const LocalLight> lights,
+double EdgeMixture::far_total(const Edge& e, const SilhouetteQuery& q, std::span<const LocalLight> lights,
                               const EdgeGeometry& g) {
   const double d2 = g.mid2;
   if (!(d2 > 0)) return 0.0;

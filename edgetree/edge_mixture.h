@@ -20,7 +20,7 @@ struct EdgeGeometry {
   Vec3 normal;        ///< w0 x w1: normal of the plane through p and the edge, |w0| |w1| sin(angle) long
   double normal_len;  ///< |w0 x w1|
   double mid2;        ///< |midpoint - p|^2
-  EdgeGeometry(const ForestEdge& e, const Vec3& p)
+  EdgeGeometry(const Edge& e, const Vec3& p)
       : w0(e.p0 - p),
         w1(e.p1 - p),
         normal(w0.cross(w1)),
@@ -45,26 +45,26 @@ class EdgeMixture {
   static constexpr int kMaxLights = 4;
 
   /// The mixture of edge e for the query; lights from q.lights (set up here).
-  EdgeMixture(const ForestEdge& e, const SilhouetteQuery& q);
+  EdgeMixture(const Edge& e, const SilhouetteQuery& q);
   /// The same with the query's lights already set up (`lights` = local_lights(q)): what the
   /// traversal uses, once per query instead of once per edge.
-  EdgeMixture(const ForestEdge& e, const SilhouetteQuery& q, std::span<const LocalLight> lights);
+  EdgeMixture(const Edge& e, const SilhouetteQuery& q, std::span<const LocalLight> lights);
 
   /// W: the radiance-weighted LTC integral over the edge (luminance × per scene unit, ≥ 0).
   double total() const { return total_; }
   /// EdgeMixture(e, q, lights).total() without building the mixture (no component samplers, no
   /// angle-uniform part): an edge's importance, computed for every candidate of a leaf or a flat
   /// choice, of which one is sampled. Bit-identical to total().
-  static double total(const ForestEdge& e, const SilhouetteQuery& q, std::span<const LocalLight> lights);
+  static double total(const Edge& e, const SilhouetteQuery& q, std::span<const LocalLight> lights);
   /// total() for the cosine lobe (q.ltc's M_inv = I) with |w_t| taken as the distance d of the
   /// edge's midpoint from p: per component, radiance × |w0 × w1| / d⁴ × norm/π × ∫ max(0, w_t.z) dt
   /// over its interval of t (closed form, no angles). The traversal's importance for edges far
   /// from p (leaf_edge_weight); the relative error is O((half length / d)²). Zero exactly where
   /// total() is (the same components and horizon), up to rounding at the ends of an interval.
-  static double far_total(const ForestEdge& e, const SilhouetteQuery& q, std::span<const LocalLight> lights);
+  static double far_total(const Edge& e, const SilhouetteQuery& q, std::span<const LocalLight> lights);
   /// far_total from the edge's geometry relative to the query point, computed once for it and
   /// velocity_factor (leaf_edge_weight). Equal to far_total(e, q, lights) up to rounding.
-  static double far_total(const ForestEdge& e, const SilhouetteQuery& q, std::span<const LocalLight> lights,
+  static double far_total(const Edge& e, const SilhouetteQuery& q, std::span<const LocalLight> lights,
                           const EdgeGeometry& g);
   /// One sample from u in [0, 1): t in [0, 1] and its density pdf(t) > 0.
   EdgePointSample sample(double u) const;

@@ -19,7 +19,7 @@ namespace {
 
 // Splits [b, e) into 2..4 groups: one binary SAH split, then each half again if it is larger
 // than a leaf [QSS 4.1: three binary splits per level].
-std::vector<std::pair<int, int>> split4(std::vector<ForestEdge>& edges, int b, int e, const EdgeSetOptions& opt) {
+std::vector<std::pair<int, int>> split4(std::vector<Edge>& edges, int b, int e, const EdgeSetOptions& opt) {
   std::vector<std::pair<int, int>> out;
   const int m = b + sah_split(std::span(edges.data() + b, size_t(e - b)), opt.sah_buckets);
   for (auto [lo, hi] : {std::pair{b, m}, std::pair{m, e}}) {
@@ -38,7 +38,7 @@ std::vector<std::pair<int, int>> split4(std::vector<ForestEdge>& edges, int b, i
 /// to `nodes` breadth-first so that every level is a contiguous node range; the root is
 /// discarded, its children become `roots`. Nodes of an always-candidate tree carry kNodeAlways.
 /// Returns the node range of every level; `depth` receives the number of levels.
-std::vector<std::pair<int, int>> build_topology(std::vector<ForestEdge>& edges, int ebase, int eend, int shape,
+std::vector<std::pair<int, int>> build_topology(std::vector<Edge>& edges, int ebase, int eend, int shape,
                                                 bool always, const EdgeSetOptions& opt, std::vector<ForestNode>& nodes,
                                                 std::vector<int>& roots, int& depth) {
   std::vector<std::pair<int, int>> levels;
@@ -97,8 +97,8 @@ std::vector<std::pair<int, int>> build_topology(std::vector<ForestEdge>& edges, 
 }
 
 /// Edge idx of `set` as a forest edge, with its end points (world frame) from `mesh`.
-ForestEdge forest_edge(const MeshEdgeSet& set, const TriangleMesh& mesh, int idx) {
-  ForestEdge fe;
+Edge forest_edge(const MeshEdgeSet& set, const TriangleMesh& mesh, int idx) {
+  Edge fe;
   static_cast<MeshEdge&>(fe) = set.edges[idx];
   fe.p0 = mesh.positions[fe.v0];
   fe.p1 = mesh.positions[fe.v1];
@@ -108,11 +108,11 @@ ForestEdge forest_edge(const MeshEdgeSet& set, const TriangleMesh& mesh, int idx
 /// A shape's always-candidate edges: set.always (boundary, non-manifold, inconsistent), then the
 /// creases of `in` (all of them for a flat-shaded shape), marked in is_crease (one entry per edge
 /// of `set`) and counted in st.creases.
-std::vector<ForestEdge> shape_always_edges(const ForestShapeInput& in, const MeshEdgeSet& set,
+std::vector<Edge> shape_always_edges(const ForestShapeInput& in, const MeshEdgeSet& set,
                                            std::vector<char>& is_crease, ForestShapeStats& st) {
   const TriangleMesh& mesh = *in.mesh;
   const CreaseSet creases = in.face_normals ? CreaseSet::All : in.creases;
-  std::vector<ForestEdge> always;
+  std::vector<Edge> always;
   for (int idx : set.always) always.push_back(forest_edge(set, mesh, idx));
   for (size_t idx = 0; idx < set.edges.size(); ++idx) {
     const EdgeClass cls = set.edges[idx].cls;
@@ -159,7 +159,7 @@ EdgeSet EdgeSet::build(std::span<const ForestShapeInput> shapes, const EdgeSetOp
     st.edges_always = int(set.always.size());
     // ---- always-candidate edges: boundary, non-manifold, inconsistent, and the creases
     std::vector<char> is_crease(set.edges.size(), 0);
-    const std::vector<ForestEdge> always = shape_always_edges(in, set, is_crease, st);
+    const std::vector<Edge> always = shape_always_edges(in, set, is_crease, st);
     st.edges_always = int(always.size());
     const int abase = int(f.always_.size());
     f.always_.insert(f.always_.end(), always.begin(), always.end());
@@ -170,7 +170,7 @@ EdgeSet EdgeSet::build(std::span<const ForestShapeInput> shapes, const EdgeSetOp
       build_topology(f.always_, abase, aend, in.shape, /*always=*/true, opt, f.nodes_, f.always_roots_, always_depth);
       st.always_nodes = int(f.nodes_.size()) - n0;
     } else {
-      for (int i = abase; i < aend; ++i) f.loose_always_.push_back(i);
+      for (int i = abase; i < aend; ++i) f.loose_always_edges_.push_back(i);
     }
 
     // ---- silhouette tree edges: the kept edges that are not creases (a flat-shaded shape has
@@ -227,7 +227,7 @@ void EdgeSet::add_crossings(EdgeSet& f, std::span<const ForestShapeInput> shapes
     const int abase = int(f.always_.size());
     for (size_t k = i; k < j; ++k) {
       const CrossingSegment& c = (*segments)[k];
-      ForestEdge e;
+      Edge e;
       e.cls = EdgeClass::Intersection;
       e.shape = g.id;
       e.f0 = c.face[0];
@@ -246,7 +246,7 @@ void EdgeSet::add_crossings(EdgeSet& f, std::span<const ForestShapeInput> shapes
       int depth = 0;
       build_topology(f.always_, abase, aend, g.id, /*always=*/true, opt, f.nodes_, f.always_roots_, depth);
     } else {
-      for (int a = abase; a < aend; ++a) f.loose_always_.push_back(a);
+      for (int a = abase; a < aend; ++a) f.loose_always_edges_.push_back(a);
     }
     i = j;
   }
@@ -269,9 +269,9 @@ std::vector<ForestShapeInput> forest_inputs(const Scene& scene) {
 }
 
 size_t EdgeSet::memory_bytes() const {
-  return nodes_.capacity() * sizeof(ForestNode) + edges_.capacity() * sizeof(ForestEdge) +
-         always_.capacity() * sizeof(ForestEdge) + (crossings_ ? crossings_->capacity() * sizeof(CrossingSegment) : 0) +
-         (roots_.capacity() + always_roots_.capacity() + loose_always_.capacity()) * sizeof(int);
+  return nodes_.capacity() * sizeof(ForestNode) + edges_.capacity() * sizeof(Edge) +
+         always_.capacity() * sizeof(Edge) + (crossings_ ? crossings_->capacity() * sizeof(CrossingSegment) : 0) +
+         (roots_.capacity() + always_roots_.capacity() + loose_always_edges_.capacity()) * sizeof(int);
 }
 
 }  // namespace qsil::edgetree

@@ -218,7 +218,7 @@ bool bound_may_have_silhouette(const NodeBound& b, bool box_only, const Vec3& p)
 }
 
 bool leaf_has_silhouette(const EdgeSet& edges, int leaf, const Vec3& p) {
-  for (const ForestEdge& e : edges.leaf_edges(leaf))
+  for (const Edge& e : edges.leaf_edges(leaf))
     if (edge_is_silhouette(e, p)) return true;
   return false;
 }
@@ -232,7 +232,7 @@ bool may_have_silhouette(const EdgeForest& forest, int node, const Vec3& p, Node
 }
 
 bool node_has_silhouette(const EdgeSet& edges, int node, const Vec3& p) {
-  for (const ForestEdge& e : edges.node_edges(node))
+  for (const Edge& e : edges.node_edges(node))
     if (edge_is_silhouette(e, p)) return true;
   return false;
 }

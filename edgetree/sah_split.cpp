@@ -16,7 +16,7 @@ double box_area(const Box3& b) {
 }
 }  // namespace
 
-int sah_split(std::span<ForestEdge> edges, int buckets) {
+int sah_split(std::span<Edge> edges, int buckets) {
   const int n = int(edges.size());
   Box3 cb;
   for (const auto& e : edges) cb.expand(0.5 * (e.p0 + e.p1));
@@ -25,7 +25,7 @@ int sah_split(std::span<ForestEdge> edges, int buckets) {
   const double lo = cb.lo[axis], ext = cb.hi[axis] - cb.lo[axis];
   auto median = [&]() {
     const int mid = n / 2;
-    std::stable_sort(edges.begin(), edges.end(), [axis](const ForestEdge& a, const ForestEdge& b) {
+    std::stable_sort(edges.begin(), edges.end(), [axis](const Edge& a, const Edge& b) {
       return a.p0[axis] + a.p1[axis] < b.p0[axis] + b.p1[axis];
     });
     return mid;
@@ -33,7 +33,7 @@ int sah_split(std::span<ForestEdge> edges, int buckets) {
   if (!(ext > 0.0)) return median();
 
   const int B = std::max(2, buckets);
-  auto bucket_of = [&](const ForestEdge& e) {
+  auto bucket_of = [&](const Edge& e) {
     const double c = 0.5 * (e.p0[axis] + e.p1[axis]);
     return std::clamp(int(B * ((c - lo) / ext)), 0, B - 1);
   };
@@ -72,7 +72,7 @@ int sah_split(std::span<ForestEdge> edges, int buckets) {
     }
   }
   if (best_k < 0) return median();
-  auto it = std::partition(edges.begin(), edges.end(), [&](const ForestEdge& e) { return bucket_of(e) < best_k; });
+  auto it = std::partition(edges.begin(), edges.end(), [&](const Edge& e) { return bucket_of(e) < best_k; });
   return int(it - edges.begin());
 }
 

@@ -14,6 +14,6 @@ namespace qsil::edgetree {
 /// area(box of part A) * |A| + area(box of part B) * |B|, with boxes of the edges' endpoints.
 /// If every centroid falls in one bucket (or the centroids coincide), splits at the median along
 /// that axis (ties broken by the original order). Deterministic.
-int sah_split(std::span<ForestEdge> edges, int buckets = 10);
+int sah_split(std::span<Edge> edges, int buckets = 10);
 
 }  // namespace qsil::edgetree

@@ -20,7 +20,7 @@ namespace {
 /// One candidate of a choice: a node (index >= 0) or an edge, with its weights.
 struct Candidate {
   int node = -1;
-  const ForestEdge* edge = nullptr;
+  const Edge* edge = nullptr;
   NodeWeight w;
 };
 
@@ -34,7 +34,7 @@ void choice_probabilities(const Range& c, int n, double* prob) {
 /// G_e = length / d2, d2 the squared distance of the edge's midpoint from p (length where p is at
 /// the midpoint).
 double edge_defensive(double length, double d2) { return d2 > 0 ? length / d2 : length; }
-double edge_defensive(const ForestEdge& e, const Vec3& p) {
+double edge_defensive(const Edge& e, const Vec3& p) {
   return edge_defensive(e.length, (0.5 * (e.p0 + e.p1) - p).squaredNorm());
 }
 
@@ -51,22 +51,22 @@ constexpr int kExactTestEdges = 64;
 constexpr int kFlatEdges = kExactTestEdges;
 
 /// A query with its per-query constants: the lights that face p, in the local frame.
-struct Prepared {
+struct PreparedQuery {
   const SilhouetteQuery& q;
   std::span<const LocalLight> lights;
   bool cosine_lobe;  ///< q.ltc is the clamped cosine (M_inv = I): far boxes use cone_fbar, far edges far_total
 };
 
 /// Per-thread storage of the prepared lights (a traversal is single-threaded).
-Prepared prepare(const SilhouetteQuery& q) {
+PreparedQuery prepare(const SilhouetteQuery& q) {
   thread_local std::vector<LocalLight> storage;
   local_lights(q, storage);
   return {q, storage, is_cosine_lobe(q.ltc)};
 }
 
-NodeWeight node_weight(const ForestNode& node, const Prepared& pq);
-NodeWeight leaf_edge_weight(const ForestEdge& e, const Prepared& pq);
-NodeWeight loose_edge_weight(const ForestEdge& e, const Prepared& pq);
+NodeWeight node_weight(const ForestNode& node, const PreparedQuery& prepared);
+NodeWeight leaf_edge_weight(const Edge& e, const PreparedQuery& prepared);
+NodeWeight loose_edge_weight(const Edge& e, const PreparedQuery& prepared);
 
 /// Whether node n may lead to a silhouette for the query (the test of a non-always node).
 bool accepted(const EdgeForest& f, int n, const SilhouetteQuery& q, NodeTest test) {
@@ -78,21 +78,21 @@ bool accepted(const EdgeForest& f, int n, const SilhouetteQuery& q, NodeTest tes
 
 /// The candidates at the top level: accepted, eligible forest roots, the roots of the
 /// always-candidate trees (never rejected) and the loose always-candidate edges.
-int top_candidates(const EdgeForest& f, const Prepared& pq, NodeTest test, std::vector<Candidate>& out, int& tests) {
-  const SilhouetteQuery& q = pq.q;
+int top_candidates(const EdgeForest& f, const PreparedQuery& prepared, NodeTest test, std::vector<Candidate>& out, int& tests) {
+  const SilhouetteQuery& q = prepared.q;
   out.clear();
   for (int r : f.roots()) {
     if (!q.is_eligible(f.node(r).shape)) continue;
     ++tests;
     if (!accepted(f, r, q, test)) continue;
-    out.push_back({r, nullptr, node_weight(f.node(r), pq)});
+    out.push_back({r, nullptr, node_weight(f.node(r), prepared)});
   }
   for (int r : f.always_roots())
-    if (q.is_eligible(f.node(r).shape)) out.push_back({r, nullptr, node_weight(f.node(r), pq)});
-  for (int i : f.loose_always()) {
-    const ForestEdge& e = f.always_edges()[size_t(i)];
+    if (q.is_eligible(f.node(r).shape)) out.push_back({r, nullptr, node_weight(f.node(r), prepared)});
+  for (int i : f.loose_always_edges()) {
+    const Edge& e = f.always_edges()[size_t(i)];
     if (!q.is_eligible(e.shape)) continue;
-    out.push_back({-1, &e, loose_edge_weight(e, pq)});
+    out.push_back({-1, &e, loose_edge_weight(e, prepared)});
   }
   return int(out.size());
 }
@@ -101,29 +101,29 @@ int top_candidates(const EdgeForest& f, const Prepared& pq, NodeTest test, std::
 /// a single candidate is chosen with probability 1 whatever its weights (choice_probabilities
 /// gives exactly 1 for n = 1), and 17 % of the inner choices and 56 % of the leaf choices on
 /// spot-mirror have one candidate.
-int child_candidates(const EdgeForest& f, int n, const Prepared& pq, NodeTest test, std::array<Candidate, 4>& out,
+int child_candidates(const EdgeForest& f, int n, const PreparedQuery& prepared, NodeTest test, std::array<Candidate, 4>& out,
                      int& tests) {
   int k = 0;
   const ForestNode& node = f.node(n);
   for (int c = node.first; c < node.first + node.count; ++c) {
     if (!f.node(c).always()) {  // always-candidate trees have no rejection test
       ++tests;
-      if (!accepted(f, c, pq.q, test)) continue;
+      if (!accepted(f, c, prepared.q, test)) continue;
     }
     out[k++] = {c, nullptr, {}};
   }
   if (k > 1)
-    for (int i = 0; i < k; ++i) out[size_t(i)].w = node_weight(f.node(out[size_t(i)].node), pq);
+    for (int i = 0; i < k; ++i) out[size_t(i)].w = node_weight(f.node(out[size_t(i)].node), prepared);
   return k;
 }
 
 /// The silhouette edges of leaf `n` (exact per-edge test; up to 4), weighed when two or more.
-int leaf_candidates(const EdgeForest& f, int n, const Prepared& pq, std::array<Candidate, 4>& out) {
+int leaf_candidates(const EdgeForest& f, int n, const PreparedQuery& prepared, std::array<Candidate, 4>& out) {
   int k = 0;
-  for (const ForestEdge& e : f.leaf_edges(n))
-    if (is_discontinuity(e, pq.q.p)) out[k++] = {-1, &e, {}};
+  for (const Edge& e : f.leaf_edges(n))
+    if (is_discontinuity(e, prepared.q.p)) out[k++] = {-1, &e, {}};
   if (k > 1)
-    for (int i = 0; i < k; ++i) out[size_t(i)].w = leaf_edge_weight(*out[size_t(i)].edge, pq);
+    for (int i = 0; i < k; ++i) out[size_t(i)].w = leaf_edge_weight(*out[size_t(i)].edge, prepared);
   return k;
 }
 
@@ -144,16 +144,16 @@ bool is_flat(const ForestNode& node, NodeTest test, const Vec3& p) {
 
 /// The discontinuity edges below node `n` (at most kNearFlatEdges), weighed as a leaf's when two or
 /// more, with their choice probabilities in `prob`. Returns their count (0: none, a false accept).
-int flat_candidates(const EdgeForest& f, int n, const Prepared& pq, std::vector<Candidate>& out,
+int flat_candidates(const EdgeForest& f, int n, const PreparedQuery& prepared, std::vector<Candidate>& out,
                     std::vector<double>& prob) {
   out.clear();
-  for (const ForestEdge& e : f.node_edges(n))
-    if (is_discontinuity(e, pq.q.p)) out.push_back({-1, &e, {}});
+  for (const Edge& e : f.node_edges(n))
+    if (is_discontinuity(e, prepared.q.p)) out.push_back({-1, &e, {}});
   const int k = int(out.size());
   prob.resize(size_t(std::max(k, 1)));
   if (k == 1) prob[0] = 1.0;
   if (k > 1) {
-    for (Candidate& c : out) c.w = leaf_edge_weight(*c.edge, pq);
+    for (Candidate& c : out) c.w = leaf_edge_weight(*c.edge, prepared);
     choice_probabilities(out, k, prob.data());
   }
   return k;
@@ -167,14 +167,14 @@ void level_probabilities(const std::array<Candidate, 4>& cand, int k, std::array
     choice_probabilities(cand, k, prob.data());
 }
 
-SilhouetteSample sample_on_edge(const ForestEdge& e, double pmf, const Prepared& pq, double u, int rejection_tests);
+SilhouetteSample sample_on_edge(const Edge& e, double pmf, const PreparedQuery& prepared, double u, int rejection_tests);
 
 }  // namespace
 
 namespace {
 
 /// velocity_factor from the edge's geometry relative to p (shared with its far_total).
-double velocity_factor(const ForestEdge& e, const SilhouetteQuery& q, const EdgeGeometry& g) {
+double velocity_factor(const Edge& e, const SilhouetteQuery& q, const EdgeGeometry& g) {
   if (!q.velocities) return 1.0;
   if (!(g.normal_len > 0)) return 0.0;  // p on the edge's line: no plane, J = 0
   const SceneVelocities::Block v0 = edge_end_velocity(e, 0, *q.velocities);
@@ -190,7 +190,7 @@ double velocity_factor(const ForestEdge& e, const SilhouetteQuery& q, const Edge
 
 }  // namespace
 
-double velocity_factor(const ForestEdge& e, const SilhouetteQuery& q) {
+double velocity_factor(const Edge& e, const SilhouetteQuery& q) {
   return velocity_factor(e, q, EdgeGeometry(e, q.p));
 }
 
@@ -213,9 +213,9 @@ void local_lights(const SilhouetteQuery& q, std::vector<LocalLight>& out) {
   }
 }
 
-NodeWeight leaf_edge_weight(const ForestEdge& e, const SilhouetteQuery& q) { return leaf_edge_weight(e, prepare(q)); }
+NodeWeight leaf_edge_weight(const Edge& e, const SilhouetteQuery& q) { return leaf_edge_weight(e, prepare(q)); }
 
-NodeWeight loose_edge_weight(const ForestEdge& e, const SilhouetteQuery& q) { return loose_edge_weight(e, prepare(q)); }
+NodeWeight loose_edge_weight(const Edge& e, const SilhouetteQuery& q) { return loose_edge_weight(e, prepare(q)); }
 
 NodeWeight node_weight(const ForestNode& node, const SilhouetteQuery& q) { return node_weight(node, prepare(q)); }
 
@@ -223,24 +223,24 @@ namespace {
 
 /// kSmoothCreaseWeight where it applies (see the header): a smooth crease that is no silhouette
 /// for p, under the cosine lobe.
-double crease_factor(const ForestEdge& e, const Prepared& pq) {
-  return pq.cosine_lobe && e.smooth_crease && !edge_is_silhouette(e, pq.q.p) ? kSmoothCreaseWeight : 1.0;
+double crease_factor(const Edge& e, const PreparedQuery& prepared) {
+  return prepared.cosine_lobe && e.smooth_crease && !edge_is_silhouette(e, prepared.q.p) ? kSmoothCreaseWeight : 1.0;
 }
 
-NodeWeight leaf_edge_weight(const ForestEdge& e, const Prepared& pq) {
-  const SilhouetteQuery& q = pq.q;
+NodeWeight leaf_edge_weight(const Edge& e, const PreparedQuery& prepared) {
+  const SilhouetteQuery& q = prepared.q;
   const EdgeGeometry g(e, q.p);  // once for the importance, its velocity factor and the defensive weight
   const double half = 0.5 * e.length;
-  const bool far = pq.cosine_lobe && half * half < kConeImportanceSin * kConeImportanceSin * g.mid2;
-  const double total = far ? EdgeMixture::far_total(e, q, pq.lights, g) : EdgeMixture::total(e, q, pq.lights);
+  const bool far = prepared.cosine_lobe && half * half < kConeImportanceSin * kConeImportanceSin * g.mid2;
+  const double total = far ? EdgeMixture::far_total(e, q, prepared.lights, g) : EdgeMixture::total(e, q, prepared.lights);
   // velocity_factor is finite, so a zero total needs no factor (below the horizon, outside every light).
-  const double c = crease_factor(e, pq);
+  const double c = crease_factor(e, prepared);
   return {total > 0 ? c * total * velocity_factor(e, q, g) : 0.0, c * edge_defensive(e.length, g.mid2)};
 }
 
-NodeWeight loose_edge_weight(const ForestEdge& e, const Prepared& pq) {
-  const double c = kPi * crease_factor(e, pq);
-  return {c * EdgeMixture::total(e, pq.q, pq.lights), c * edge_defensive(e, pq.q.p)};
+NodeWeight loose_edge_weight(const Edge& e, const PreparedQuery& prepared) {
+  const double c = kPi * crease_factor(e, prepared);
+  return {c * EdgeMixture::total(e, prepared.q, prepared.lights), c * edge_defensive(e, prepared.q.p)};
 }
 
 /// The range [lo, hi] of n . w over the cone of unit directions w at angle at most alpha from a
@@ -255,9 +255,9 @@ void dot_range(double x, double s, double co, double& lo, double& hi) {
 /// The radiance seen over the bounding cone (unit axis, sin and cos of its half-angle s, co): the
 /// environment's plus each light's times the fraction of the cone on the inner side of each of
 /// its 4 side planes (P(X > 0) with X = side normal . w uniform on its range, multiplied).
-double cone_radiance(const Prepared& pq, const Vec3& axis, double s, double co) {
-  double radiance = pq.q.env_weight;
-  for (const LocalLight& light : pq.lights) {
+double cone_radiance(const PreparedQuery& prepared, const Vec3& axis, double s, double co) {
+  double radiance = prepared.q.env_weight;
+  for (const LocalLight& light : prepared.lights) {
     double fraction = 1.0;
     for (int i = 0; i < 4 && fraction > 0; ++i) {
       double lo, hi;
@@ -277,13 +277,13 @@ double cone_radiance(const Prepared& pq, const Vec3& axis, double s, double co) 
 /// each of its 4 side planes (P(X > 0), multiplied). Positive wherever the box's outline can
 /// reach above the horizon into the light (the ranges are exact bounds), so it is zero only
 /// where the exact fbar is; otherwise an approximation, as an importance may be.
-double cone_fbar(const Prepared& pq, const Vec3& axis, double s) {
-  const SilhouetteQuery& q = pq.q;
+double cone_fbar(const PreparedQuery& prepared, const Vec3& axis, double s) {
+  const SilhouetteQuery& q = prepared.q;
   const double co = std::sqrt(1.0 - s * s);
   double lo, hi;
   dot_range(axis.z(), s, co, lo, hi);
   if (!(hi > 0)) return 0.0;
-  return q.ltc.norm * mean_positive_part(lo, hi) / kPi * cone_radiance(pq, axis, s, co);
+  return q.ltc.norm * mean_positive_part(lo, hi) / kPi * cone_radiance(prepared, axis, s, co);
 }
 
 /// Largest |dt|^2 + |db|^2 (see glossy_cone_fbar) for which a cone's image in the LTC's cosine
@@ -308,8 +308,8 @@ constexpr double kGlossyConeImage = 1.0;
 /// the shading horizon (exactly, as for cone_fbar) or the ellipse's z range below 0, which is
 /// the image's up to the ellipse approximation (node_importance_test found no box with a
 /// positive integrand and zero importance; the defensive share of every choice covers any).
-double glossy_cone_fbar(const Prepared& pq, const Vec3& axis, double s) {
-  const SilhouetteQuery& q = pq.q;
+double glossy_cone_fbar(const PreparedQuery& prepared, const Vec3& axis, double s) {
+  const SilhouetteQuery& q = prepared.q;
   const double co = std::sqrt(1.0 - s * s);
   double lo, hi;
   dot_range(axis.z(), s, co, lo, hi);  // the shading normal over the cone
@@ -327,23 +327,23 @@ double glossy_cone_fbar(const Prepared& pq, const Vec3& axis, double s) {
   if (!(cz + h > 0)) return 0.0;
   const double mass = std::min(1.0, dt.cross(db).norm() * mean_positive_part(cz - h, cz + h));
   const double omega = 2.0 * kPi * s * s / (1.0 + co);  // 2 pi (1 - co) without cancellation
-  return q.ltc.norm * above * mass / omega * cone_radiance(pq, axis, s, co);
+  return q.ltc.norm * above * mass / omega * cone_radiance(prepared, axis, s, co);
 }
 
-NodeWeight node_weight(const ForestNode& node, const Prepared& pq) {
-  const SilhouetteQuery& q = pq.q;
+NodeWeight node_weight(const ForestNode& node, const PreparedQuery& prepared) {
+  const SilhouetteQuery& q = prepared.q;
   const Vec3 c = node.bp.center();
   const double half_diag = 0.5 * node.bp.diagonal();
   const double d2 = (c - q.p).squaredNorm();
   const double h2 = std::max(d2, half_diag * half_diag);
   NodeWeight w;
   // L_w with its concave smooth creases' part weighed by kSmoothCreaseWeight under the cosine lobe.
-  const double lw = pq.cosine_lobe ? node.lw - (1.0 - kSmoothCreaseWeight) * node.lw_smooth : node.lw;
+  const double lw = prepared.cosine_lobe ? node.lw - (1.0 - kSmoothCreaseWeight) * node.lw_smooth : node.lw;
   w.defensive = h2 > 0 ? lw / h2 : lw;
   if (half_diag * half_diag < kConeImportanceSin * kConeImportanceSin * d2) {
     const double d = std::sqrt(d2);
     const Vec3 axis = q.frame.to_local((c - q.p) / d);
-    const double fbar = pq.cosine_lobe ? cone_fbar(pq, axis, half_diag / d) : glossy_cone_fbar(pq, axis, half_diag / d);
+    const double fbar = prepared.cosine_lobe ? cone_fbar(prepared, axis, half_diag / d) : glossy_cone_fbar(prepared, axis, half_diag / d);
     if (fbar >= 0) {
       w.importance = w.defensive * fbar;
       return w;
@@ -356,7 +356,7 @@ NodeWeight node_weight(const ForestNode& node, const Prepared& pq) {
     // environment's, and each light's over its own solid angle (its LTC integral; a light can lie
     // anywhere in the box's solid angle).
     double integral = q.env_weight;
-    for (const LocalLight& light : pq.lights)
+    for (const LocalLight& light : prepared.lights)
       integral += light.weight * ltc_polygon_integral(q.ltc, light.corners, true);
     fbar = integral * q.ltc.norm / (4.0 * kPi);
   } else if (sil.polygon.count >= 3) {
@@ -366,7 +366,7 @@ NodeWeight node_weight(const ForestNode& node, const Prepared& pq) {
     const double omega = polygon_solid_angle(local.span(), true);
     if (omega > 0) {
       double integral = q.env_weight > 0 ? q.env_weight * ltc_polygon_integral(q.ltc, local.span(), true) : 0.0;
-      for (const LocalLight& light : pq.lights) {
+      for (const LocalLight& light : prepared.lights) {
         // Only the emitting side of a light is bright; clip the box's cone by the light's.
         SmallPolygon clipped = local;
         for (int i = 0; i < 4 && clipped.count >= 3; ++i)
@@ -392,9 +392,9 @@ struct TopLevel {
   int tests = 0;
 };
 
-void top_level(const EdgeForest& forest, const Prepared& pq, NodeTest test, TopLevel& top) {
+void top_level(const EdgeForest& forest, const PreparedQuery& prepared, NodeTest test, TopLevel& top) {
   top.tests = 0;
-  top.n = top_candidates(forest, pq, test, top.cand, top.tests);
+  top.n = top_candidates(forest, prepared, test, top.cand, top.tests);
   top.prob.resize(size_t(std::max(top.n, 1)));
   if (top.n > 0) choice_probabilities(top.cand, top.n, top.prob.data());
 }
@@ -446,7 +446,7 @@ bool remove_split(TopLevel& top, const std::array<int, kMaxSplitEdges>& idx, int
 }
 
 /// From the top-level candidate `cur` (chosen with probability pmf) down to an edge and a point.
-SilhouetteSample descend(const EdgeForest& forest, const Prepared& pq, const std::function<double()>& next,
+SilhouetteSample descend(const EdgeForest& forest, const PreparedQuery& prepared, const std::function<double()>& next,
                          NodeTest test, Candidate cur, double pmf, int tests) {
   std::array<Candidate, 4> cand;
   std::array<double, 4> p4;
@@ -454,10 +454,10 @@ SilhouetteSample descend(const EdgeForest& forest, const Prepared& pq, const std
   // small nodes among all the discontinuity edges below them.
   while (!cur.edge) {
     const ForestNode& node = forest.node(cur.node);
-    if (is_flat(node, test, pq.q.p)) {
+    if (is_flat(node, test, prepared.q.p)) {
       thread_local std::vector<Candidate> flat;
       thread_local std::vector<double> prob;
-      const int k = flat_candidates(forest, cur.node, pq, flat, prob);
+      const int k = flat_candidates(forest, cur.node, prepared, flat, prob);
       const int i = k > 0 ? choose(prob.data(), k, next()) : -1;
       if (i < 0) {  // a false accept: no discontinuity below
         SilhouetteSample none;
@@ -468,8 +468,8 @@ SilhouetteSample descend(const EdgeForest& forest, const Prepared& pq, const std
       cur = flat[size_t(i)];
       break;
     }
-    const int k = node.is_leaf() ? leaf_candidates(forest, cur.node, pq, cand)
-                                 : child_candidates(forest, cur.node, pq, test, cand, tests);
+    const int k = node.is_leaf() ? leaf_candidates(forest, cur.node, prepared, cand)
+                                 : child_candidates(forest, cur.node, prepared, test, cand, tests);
     if (k == 0) {  // a false accept: no silhouette below (a zero-contribution traversal)
       SilhouetteSample none;
       none.rejection_tests = tests;
@@ -481,46 +481,46 @@ SilhouetteSample descend(const EdgeForest& forest, const Prepared& pq, const std
     cur = cand[size_t(i)];
   }
   // ---- The point on the edge.
-  return sample_on_edge(*cur.edge, pmf, pq, next(), tests);
+  return sample_on_edge(*cur.edge, pmf, prepared, next(), tests);
 }
 
 }  // namespace
 
 SilhouetteSample sample_silhouette(const EdgeForest& forest, const SilhouetteQuery& query,
                                    const std::function<double()>& next, NodeTest test) {
-  const Prepared pq = prepare(query);
+  const PreparedQuery prepared = prepare(query);
   thread_local TopLevel top;
-  top_level(forest, pq, test, top);
+  top_level(forest, prepared, test, top);
   SilhouetteSample s;
   s.rejection_tests = top.tests;
   if (top.n == 0) return s;
   const int i = choose(top.prob.data(), top.n, next());
   if (i < 0) return s;
-  return descend(forest, pq, next, test, top.cand[size_t(i)], top.prob[size_t(i)], top.tests);
+  return descend(forest, prepared, next, test, top.cand[size_t(i)], top.prob[size_t(i)], top.tests);
 }
 
 namespace {
 
 /// The contour set's point (see sample_silhouette_set): an edge of `contour` chosen as a leaf
 /// chooses among its edges, and t on it; no edge when the set is empty.
-SilhouetteSample sample_contour(std::span<const ForestEdge* const> contour, const Prepared& pq, double u_edge,
+SilhouetteSample sample_contour(std::span<const Edge* const> contour, const PreparedQuery& prepared, double u_edge,
                                 double u_t) {
   const int k = int(contour.size());
   if (k == 0) return {};
   thread_local std::vector<Candidate> cand;
   thread_local std::vector<double> prob;
   cand.clear();
-  for (const ForestEdge* e : contour) cand.push_back({-1, e, {}});
+  for (const Edge* e : contour) cand.push_back({-1, e, {}});
   prob.resize(size_t(k));
   if (k == 1) {
     prob[0] = 1.0;
   } else {
-    for (Candidate& c : cand) c.w = leaf_edge_weight(*c.edge, pq);
+    for (Candidate& c : cand) c.w = leaf_edge_weight(*c.edge, prepared);
     choice_probabilities(cand, k, prob.data());
   }
   const int i = choose(prob.data(), k, u_edge);
   if (i < 0) return {};
-  return sample_on_edge(*cand[size_t(i)].edge, prob[size_t(i)], pq, u_t, 0);
+  return sample_on_edge(*cand[size_t(i)].edge, prob[size_t(i)], prepared, u_t, 0);
 }
 
 }  // namespace
@@ -528,21 +528,21 @@ SilhouetteSample sample_contour(std::span<const ForestEdge* const> contour, cons
 void sample_silhouette_set(const EdgeForest& forest, const SilhouetteQuery& query, const std::function<double()>& next,
                            NodeTest test, SilhouetteSampleSet& out) {
   out.count = 0;
-  const Prepared pq = prepare(query);
+  const PreparedQuery prepared = prepare(query);
   thread_local TopLevel top;
-  top_level(forest, pq, test, top);
+  top_level(forest, prepared, test, top);
   std::array<int, kMaxSplitEdges> idx;
   const int n_split = top.n > 0 ? split_indices(top, idx) : 0;
   // ---- The contour set, less the split edges (which keep their point of probability 1).
-  thread_local std::vector<const ForestEdge*> contour;
+  thread_local std::vector<const Edge*> contour;
   contour.clear();
-  for (const ForestEdge* e : query.contour) {
+  for (const Edge* e : query.contour) {
     QSIL_DCHECK_MSG(is_discontinuity(*e, query.p), "a contour edge that is no discontinuity");
     bool split = false;
     for (int j = 0; j < n_split && !split; ++j) split = top.cand[size_t(idx[size_t(j)])].edge == e;
     if (!split) contour.push_back(e);
   }
-  QSIL_DCHECK_MSG(std::set<const ForestEdge*>(contour.begin(), contour.end()).size() == contour.size(),
+  QSIL_DCHECK_MSG(std::set<const Edge*>(contour.begin(), contour.end()).size() == contour.size(),
                   "a contour edge listed twice");
   // Edges of the contour set are the contour strategy's: the traversal's points on them are dropped.
   auto push = [&](const SilhouetteSample& s) {
@@ -552,28 +552,28 @@ void sample_silhouette_set(const EdgeForest& forest, const SilhouetteQuery& quer
   // when the set is empty).
   if (!contour.empty()) {
     const double u_edge = next(), u_t = next();
-    const SilhouetteSample s = sample_contour(contour, pq, u_edge, u_t);
+    const SilhouetteSample s = sample_contour(contour, prepared, u_edge, u_t);
     if (s.edge) out.push(s);
   }
   if (top.n == 0) return;
   for (int j = 0; j < n_split; ++j) {
-    const SilhouetteSample s = sample_on_edge(*top.cand[size_t(idx[size_t(j)])].edge, 1.0, pq, next(), 0);
+    const SilhouetteSample s = sample_on_edge(*top.cand[size_t(idx[size_t(j)])].edge, 1.0, prepared, next(), 0);
     if (s.edge) out.push(s);
   }
   // The traversal chooses among the rest.
   if (n_split > 0 && !remove_split(top, idx, n_split)) return;
   const int i = choose(top.prob.data(), top.n, next());
   if (i < 0) return;
-  push(descend(forest, pq, next, test, top.cand[size_t(i)], top.prob[size_t(i)], top.tests));
+  push(descend(forest, prepared, next, test, top.cand[size_t(i)], top.prob[size_t(i)], top.tests));
 }
 
-std::vector<const ForestEdge*> split_edges(const EdgeForest& forest, const SilhouetteQuery& query, NodeTest test,
+std::vector<const Edge*> split_edges(const EdgeForest& forest, const SilhouetteQuery& query, NodeTest test,
                                            double* split_probability) {
   TopLevel top;
   top_level(forest, prepare(query), test, top);
   std::array<int, kMaxSplitEdges> idx;
   const int n_split = top.n > 0 ? split_indices(top, idx) : 0;
-  std::vector<const ForestEdge*> out;
+  std::vector<const Edge*> out;
   double sum = 0;
   for (int j = 0; j < n_split; ++j) {
     out.push_back(top.cand[size_t(idx[size_t(j)])].edge);
@@ -583,18 +583,18 @@ std::vector<const ForestEdge*> split_edges(const EdgeForest& forest, const Silho
   return out;
 }
 
-SilhouetteSample sample_on_edge(const ForestEdge& e, double pmf, const SilhouetteQuery& query, double u,
+SilhouetteSample sample_on_edge(const Edge& e, double pmf, const SilhouetteQuery& query, double u,
                                 int rejection_tests) {
   return sample_on_edge(e, pmf, prepare(query), u, rejection_tests);
 }
 
 namespace {
 
-SilhouetteSample sample_on_edge(const ForestEdge& e, double pmf, const Prepared& pq, double u, int rejection_tests) {
+SilhouetteSample sample_on_edge(const Edge& e, double pmf, const PreparedQuery& prepared, double u, int rejection_tests) {
   SilhouetteSample s;
   s.rejection_tests = rejection_tests;
-  if (!is_discontinuity(e, pq.q.p)) return s;
-  const EdgePointSample ts = EdgeMixture(e, pq.q, pq.lights).sample(u);
+  if (!is_discontinuity(e, prepared.q.p)) return s;
+  const EdgePointSample ts = EdgeMixture(e, prepared.q, prepared.lights).sample(u);
   QSIL_DCHECK_MSG(pmf > 0 && ts.pdf > 0, "edge probability " << pmf << ", density of t " << ts.pdf);
   s.edge = &e;
   s.t = ts.t;
@@ -608,12 +608,12 @@ namespace {
 
 /// The probability with which a traversal from the top-level choice `top` reaches `edge`, by
 /// walking the same choices (silhouette_edge_probability, traversal_edge_probability).
-double walk_probability(const EdgeForest& forest, const Prepared& pq, NodeTest test, const TopLevel& top,
-                        const ForestEdge* edge) {
+double walk_probability(const EdgeForest& forest, const PreparedQuery& prepared, NodeTest test, const TopLevel& top,
+                        const Edge* edge) {
   // A candidate leads to `edge` when it is that edge or a node whose edge range holds it.
   auto leads_to = [&](const Candidate& c) {
     if (c.edge) return c.edge == edge;
-    const std::span<const ForestEdge> below = forest.node_edges(c.node);
+    const std::span<const Edge> below = forest.node_edges(c.node);
     return edge >= below.data() && edge < below.data() + below.size();
   };
   int tests = top.tests;
@@ -629,16 +629,16 @@ double walk_probability(const EdgeForest& forest, const Prepared& pq, NodeTest t
   std::array<double, 4> p4;
   while (!cur.edge) {
     const ForestNode& node = forest.node(cur.node);
-    if (is_flat(node, test, pq.q.p)) {
+    if (is_flat(node, test, prepared.q.p)) {
       std::vector<Candidate> flat;
       std::vector<double> prob;
-      const int k = flat_candidates(forest, cur.node, pq, flat, prob);
+      const int k = flat_candidates(forest, cur.node, prepared, flat, prob);
       for (int i = 0; i < k; ++i)
         if (flat[size_t(i)].edge == edge) return pmf * prob[size_t(i)];
       return 0;
     }
-    const int k = node.is_leaf() ? leaf_candidates(forest, cur.node, pq, cand)
-                                 : child_candidates(forest, cur.node, pq, test, cand, tests);
+    const int k = node.is_leaf() ? leaf_candidates(forest, cur.node, prepared, cand)
+                                 : child_candidates(forest, cur.node, prepared, test, cand, tests);
     if (k == 0) return 0;
     level_probabilities(cand, k, p4);
     bool found = false;
@@ -656,23 +656,23 @@ double walk_probability(const EdgeForest& forest, const Prepared& pq, NodeTest t
 
 }  // namespace
 
-double silhouette_edge_probability(const EdgeForest& forest, const SilhouetteQuery& query, const ForestEdge* edge,
+double silhouette_edge_probability(const EdgeForest& forest, const SilhouetteQuery& query, const Edge* edge,
                                    NodeTest test) {
-  const Prepared pq = prepare(query);
+  const PreparedQuery prepared = prepare(query);
   TopLevel top;
-  top_level(forest, pq, test, top);
-  return walk_probability(forest, pq, test, top, edge);
+  top_level(forest, prepared, test, top);
+  return walk_probability(forest, prepared, test, top, edge);
 }
 
-double traversal_edge_probability(const EdgeForest& forest, const SilhouetteQuery& query, const ForestEdge* edge,
+double traversal_edge_probability(const EdgeForest& forest, const SilhouetteQuery& query, const Edge* edge,
                                   NodeTest test) {
-  const Prepared pq = prepare(query);
+  const PreparedQuery prepared = prepare(query);
   TopLevel top;
-  top_level(forest, pq, test, top);
+  top_level(forest, prepared, test, top);
   std::array<int, kMaxSplitEdges> idx;
   const int n_split = top.n > 0 ? split_indices(top, idx) : 0;
   if (n_split > 0 && !remove_split(top, idx, n_split)) return 0;
-  return walk_probability(forest, pq, test, top, edge);
+  return walk_probability(forest, prepared, test, top, edge);
 }
 
 }  // namespace qsil::edgetree

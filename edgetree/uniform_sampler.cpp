@@ -9,14 +9,14 @@
 
 namespace qsil::edgetree {
 
-double UniformEdgeSampler::weight(const ForestEdge& e) {
+double UniformEdgeSampler::weight(const Edge& e) {
   const bool always = e.f1 < 0 || e.cls == EdgeClass::Boundary || e.cls == EdgeClass::NonManifold ||
                       e.cls == EdgeClass::Inconsistent || e.cls == EdgeClass::Intersection;
   return e.length * (always ? kPi : e.angle);
 }
 
 UniformEdgeSampler::UniformEdgeSampler(const EdgeSet& edges) {
-  auto add = [&](const ForestEdge& e) {
+  auto add = [&](const Edge& e) {
     const double w = weight(e);
     if (!(w > 0)) return;  // a zero-length edge contributes nothing
     if (e.shape >= int(shapes_.size())) shapes_.resize(size_t(e.shape) + 1);
@@ -25,8 +25,8 @@ UniformEdgeSampler::UniformEdgeSampler(const EdgeSet& edges) {
     t.total += w;
     t.cdf.push_back(t.total);
   };
-  for (const ForestEdge& e : edges.edges()) add(e);
-  for (const ForestEdge& e : edges.always_edges()) add(e);
+  for (const Edge& e : edges.edges()) add(e);
+  for (const Edge& e : edges.always_edges()) add(e);
 }
 
 SilhouetteSample UniformEdgeSampler::sample(const SilhouetteQuery& query, const std::function<double()>& next) const {
@@ -47,7 +47,7 @@ SilhouetteSample UniformEdgeSampler::sample(const SilhouetteQuery& query, const 
   u = std::min(u, t->total);
   size_t i = size_t(std::upper_bound(t->cdf.begin(), t->cdf.end(), u) - t->cdf.begin());
   i = std::min(i, t->edges.size() - 1);
-  const ForestEdge& e = *t->edges[i];
+  const Edge& e = *t->edges[i];
   return sample_on_edge(e, weight(e) / sum, query, next());  // no edge for a non-discontinuity: a zero sample
 }
 
@@ -59,7 +59,7 @@ std::vector<EdgeProbability> UniformEdgeSampler::edge_probabilities(const Silhou
   if (!(sum > 0)) return out;
   for (size_t k = 0; k < shapes_.size(); ++k) {
     if (!query.is_eligible(int(k))) continue;
-    for (const ForestEdge* e : shapes_[k].edges) out.push_back({e, weight(*e) / sum});
+    for (const Edge* e : shapes_[k].edges) out.push_back({e, weight(*e) / sum});
   }
   return out;
 }

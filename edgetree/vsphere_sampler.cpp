@@ -123,7 +123,7 @@ int VSphereEdgeSampler::top_candidates(const SilhouetteQuery& q, std::vector<Can
     weigh(n.bp, n.lw, q, false, c.importance, c.defensive);
     out.push_back(c);
   }
-  for (const ForestEdge& e : edges_.always_edges()) {
+  for (const Edge& e : edges_.always_edges()) {
     if (e.crease || e.crossing || !q.is_eligible(e.shape)) continue;  // in the tree's plain BVH
     Cand c;
     c.edge = &e;

@@ -67,13 +67,13 @@ std::uint64_t quantise(double x, double lo, double hi, int bits) {
 
 struct BuildItem {
   std::uint64_t code = 0;
-  const ForestEdge* edge = nullptr;
+  const Edge* edge = nullptr;
   Vec3 h0 = Vec3::Zero(), h1 = Vec3::Zero();
 };
 
 struct Builder {
   std::vector<VSphereNode>& nodes;
-  std::vector<const ForestEdge*>& edges;
+  std::vector<const Edge*>& edges;
   std::vector<BuildItem>& items;
   int shape;
   bool hough;
@@ -136,14 +136,14 @@ VSphereTree VSphereTree::build(const EdgeSet& set, const Vec3& o) {
   VSphereTree t;
   t.origin_ = o;
   int num_shapes = 0;
-  for (const ForestEdge& e : set.edges()) num_shapes = std::max(num_shapes, e.shape + 1);
-  for (const ForestEdge& e : set.always_edges()) num_shapes = std::max(num_shapes, e.shape + 1);
-  std::vector<std::vector<const ForestEdge*>> plain(static_cast<size_t>(num_shapes)),
+  for (const Edge& e : set.edges()) num_shapes = std::max(num_shapes, e.shape + 1);
+  for (const Edge& e : set.always_edges()) num_shapes = std::max(num_shapes, e.shape + 1);
+  std::vector<std::vector<const Edge*>> plain(static_cast<size_t>(num_shapes)),
       hough(static_cast<size_t>(num_shapes));
-  for (const ForestEdge& e : set.edges()) (edge_is_silhouette(e, o) ? plain : hough)[size_t(e.shape)].push_back(&e);
+  for (const Edge& e : set.edges()) (edge_is_silhouette(e, o) ? plain : hough)[size_t(e.shape)].push_back(&e);
   // Creases and intersection-curve segments are candidates for every point (no v-sphere test
   // applies): the plain BVH.
-  for (const ForestEdge& e : set.always_edges())
+  for (const Edge& e : set.always_edges())
     if (e.crease || e.crossing) plain[size_t(e.shape)].push_back(&e);
   std::vector<BuildItem> items;
   for (int pass = 0; pass < 2; ++pass) {  // plain trees first: edges_[0, plain_edges_) are theirs
@@ -200,7 +200,7 @@ bool VSphereTree::may_have_silhouette(int i, const Vec3& p, VSphereTest test) co
 
 size_t VSphereTree::memory_bytes() const {
   return nodes_.size() * sizeof(VSphereNode) + roots_.size() * sizeof(VSphereRoot) +
-         edges_.size() * sizeof(const ForestEdge*);
+         edges_.size() * sizeof(const Edge*);
 }
 
 }  // namespace qsil::edgetree

@@ -120,26 +120,26 @@ void describe_boundary_setup(const BoundarySetup& boundary, Method method, int p
 
 void set_up_boundary_term(const Scene& scene, const RayTracer& tracer, Method method, const SceneVelocities* velocities,
                           const std::vector<bool>& moving, double sppi, const EnvironmentLight& environment,
-                          BoundarySetup& boundary, BoundaryContext& bctx, PrimaryEdges& primary, SetupReport& setup,
+                          BoundarySetup& boundary, BoundaryContext& boundary_ctx, PrimaryEdges& primary, SetupReport& setup,
                           bool intersection_curves) {
   boundary = build_boundary_setup(scene, method, intersection_curves);
-  bctx.sampler = boundary.sampler.get();
-  bctx.contours = boundary.contours.get();
-  bctx.velocities = velocities;
-  bctx.moving = moving;
-  bctx.all.assign(scene.shapes.size(), true);
+  boundary_ctx.sampler = boundary.sampler.get();
+  boundary_ctx.contours = boundary.contours.get();
+  boundary_ctx.velocities = velocities;
+  boundary_ctx.moving = moving;
+  boundary_ctx.all.assign(scene.shapes.size(), true);
   // A crossing group moves where either of its shapes does.
   for (const edgetree::CrossingGroup& g : boundary.edges->crossing_groups()) {
     const size_t id = size_t(g.id);
-    if (bctx.moving.size() <= id) bctx.moving.resize(id + 1, false);
-    if (bctx.all.size() <= id) bctx.all.resize(id + 1, true);
+    if (boundary_ctx.moving.size() <= id) boundary_ctx.moving.resize(id + 1, false);
+    if (boundary_ctx.all.size() <= id) boundary_ctx.all.resize(id + 1, true);
     auto moves = [&](int s) { return s >= 0 && s < int(moving.size()) && moving[size_t(s)]; };
-    bctx.moving[id] = moves(g.shape0) || moves(g.shape1);
+    boundary_ctx.moving[id] = moves(g.shape0) || moves(g.shape1);
   }
-  bctx.sppi = sppi > 0 ? sppi : default_sppi(method);
-  bctx.split_speed = default_split_speed(method);
-  set_light_importance(scene, environment, bctx);
-  primary = find_primary_edges(scene, *boundary.edges, bctx.moving, tracer);
+  boundary_ctx.sppi = sppi > 0 ? sppi : default_sppi(method);
+  boundary_ctx.split_speed = default_split_speed(method);
+  set_light_importance(scene, environment, boundary_ctx);
+  primary = find_primary_edges(scene, *boundary.edges, boundary_ctx.moving, tracer);
   describe_boundary_setup(boundary, method, int(primary.edges.size()), setup);
 }
 

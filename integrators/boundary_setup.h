@@ -62,18 +62,18 @@ void check_sample_rates(const Camera& camera, double sppi, double sppp);
 void describe_boundary_setup(const BoundarySetup& boundary, Method method, int primary_edges, SetupReport& setup);
 
 /// The boundary term of a run, set up once (what GradientEstimator and ReverseEstimator both do):
-/// build_boundary_setup of `method` into `boundary`; `bctx` with its sampler, `velocities` (forward
+/// build_boundary_setup of `method` into `boundary`; `boundary_ctx` with its sampler, `velocities` (forward
 /// mode's; null in reverse mode: velocity factor 1), `moving` (the shapes whose edges are eligible
 /// at a static shading point), every shape eligible at a moving one, sppi traversals per
 /// vertex (0: default_sppi of the method) and set_light_importance; `primary` =
 /// find_primary_edges of the `moving` shapes (their visibility from the camera tested with
-/// `tracer`); and describe_boundary_setup into `setup`. `moving` and `bctx.all` are extended with
+/// `tracer`); and describe_boundary_setup into `setup`. `moving` and `boundary_ctx.all` are extended with
 /// the crossing groups of the edge set (edgetree::CrossingGroup: eligible where either of its
 /// shapes is), and `primary` takes the extended vector. `intersection_curves`: as for
 /// build_boundary_setup. `scene`, `tracer` and `velocities` must outlive the results.
 void set_up_boundary_term(const Scene& scene, const RayTracer& tracer, Method method, const SceneVelocities* velocities,
                           const std::vector<bool>& moving, double sppi, const EnvironmentLight& environment,
-                          BoundarySetup& boundary, BoundaryContext& bctx, PrimaryEdges& primary, SetupReport& setup,
+                          BoundarySetup& boundary, BoundaryContext& boundary_ctx, PrimaryEdges& primary, SetupReport& setup,
                           bool intersection_curves = true);
 
 }  // namespace qsil

@@ -82,7 +82,7 @@ class GradientEstimator final : public Estimator::Impl, private RenderSetup {
     // ---- The boundary method's structures, only when something moves.
     if (samples_edges(config.method) && vel.any_moving()) {
       set_up_boundary_term(s, tracer, config.method, &vel, vel.moving, config.sppi, lights.environment,
-                           boundary, bctx, primary, setup, config.intersection_curves);
+                           boundary, boundary_ctx, primary, setup, config.intersection_curves);
     }
   }
 
@@ -94,7 +94,7 @@ class GradientEstimator final : public Estimator::Impl, private RenderSetup {
     const bool with_boundary = bool(boundary.sampler);
     // A fractional boundary rate draws a pixel's samples unalike (boundary_traversals): that
     // fraction of them makes one more traversal, stratum 1 of the film.
-    const double fraction = with_boundary ? bctx.sppi - std::floor(bctx.sppi) : 0.0;
+    const double fraction = with_boundary ? boundary_ctx.sppi - std::floor(boundary_ctx.sppi) : 0.0;
     PathStats total;
     run_pixels(
         cam, layout, options, first, count, "grad",
@@ -103,11 +103,11 @@ class GradientEstimator final : public Estimator::Impl, private RenderSetup {
           ColorT<Dual<N>> L;
           const uint64_t pixel = uint64_t(y) * cam.width + x;
           const int traversals =
-              with_boundary ? boundary_traversals(bctx.sppi, options.seed, pixel, uint64_t(s)) : 0;
+              with_boundary ? boundary_traversals(boundary_ctx.sppi, options.seed, pixel, uint64_t(s)) : 0;
           if (traversals > 0) {
             // The boundary term draws from a stream of its own, so it leaves the path's decisions unchanged.
             Sampler bsampler(options.seed, pixel, uint64_t(s), 1);
-            const BoundaryHook<N> hook{&ctx, &bctx, &bsampler, traversals};
+            const BoundaryHook<N> hook{&ctx, &boundary_ctx, &bsampler, traversals};
             L = trace_path(ctx, view, {lift<Dual<N>>(origin), ray.dir, ray.hit}, sampler, st, hook);
           } else {
             L = trace_path(ctx, view, {lift<Dual<N>>(origin), ray.dir, ray.hit}, sampler, st);
@@ -119,7 +119,7 @@ class GradientEstimator final : public Estimator::Impl, private RenderSetup {
                 (out[layout.derivative(k, 0)] + out[layout.derivative(k, 1)] + out[layout.derivative(k, 2)]) / 3.0;
           }
           // Stratum 1: the samples that made the rate's fractional traversal (Film::standard_error).
-          return fraction > 0 && traversals > int(bctx.sppi) ? 1 : 0;
+          return fraction > 0 && traversals > int(boundary_ctx.sppi) ? 1 : 0;
         },
         r, total, fraction);
     // ---- Primary silhouettes: sppp edge samples per pixel sample, splatted where they land.

@@ -102,11 +102,11 @@ void run_chunk(const PathContext& ctx, const SceneVelocities& vel, const Primary
   const FilmLayout layout(K);
   Eigen::Matrix<double, 1, N> J;
   const Eigen::Matrix<double, 3, N> dp = Eigen::Matrix<double, 3, N>::Zero();  // the camera does not move
-  auto accept = [&](const edgetree::ForestEdge& e, double t, const Vec3& g) {
+  auto accept = [&](const edgetree::Edge& e, double t, const Vec3& g) {
     J = edge_point_jacobian<N>(vel, e, t, g, dp);
     return !J.isZero(0.0);
   };
-  auto emit = [&](int px, int py, const edgetree::ForestEdge&, double, const Color& weight, const Vec3&) {
+  auto emit = [&](int px, int py, const edgetree::Edge&, double, const Color& weight, const Vec3&) {
     for (int k = 0; k < K; ++k) {
       for (int c = 0; c < 3; ++c) out.push_back({px, py, layout.derivative(k, c), weight[c] * J[k]});
       out.push_back({px, py, layout.derivative_mean(k), weight.mean() * J[k]});
@@ -199,7 +199,7 @@ PrimaryEdges find_primary_edges(const Scene& scene, const edgetree::EdgeSet& edg
   PrimaryEdges out;
   // Silhouettes and boundary edges from o, and every crease of a flat-shaded shape (its two
   // faces both seen: the shading jumps across it).
-  auto consider = [&](const edgetree::ForestEdge& e) {
+  auto consider = [&](const edgetree::Edge& e) {
     // Only moving shapes' edges (and crossing groups with a moving shape); an index `moving`
     // does not cover is kept (SilhouetteQuery::eligible's rule: never a false reject).
     if (e.shape < 0 || (e.shape < int(moving.size()) && !moving[size_t(e.shape)])) return;
@@ -294,8 +294,8 @@ void for_each_primary_sample(const PathContext& ctx, const PrimaryEdges& edges, 
           chunk_stats[size_t(j - j0)] = PathStats{};
           sample_chunk(
               ctx, edges, count, plan.per_sample, seed, c, chunk_stats[size_t(j - j0)],
-              [](const edgetree::ForestEdge&, double, const Vec3&) { return true; },
-              [&](int px, int py, const edgetree::ForestEdge& e, double t, const Color& weight, const Vec3& g) {
+              [](const edgetree::Edge&, double, const Vec3&) { return true; },
+              [&](int px, int py, const edgetree::Edge& e, double t, const Color& weight, const Vec3& g) {
                 out.push_back({px, py, &e, t, weight, g});
               });
         },

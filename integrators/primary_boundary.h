@@ -26,7 +26,7 @@ namespace qsil {
 
 /// One primary discontinuity edge: its visible parameter range and its projected segment.
 struct PrimaryEdge {
-  const edgetree::ForestEdge* edge = nullptr;
+  const edgetree::Edge* edge = nullptr;
   double ta = 0, tb = 1;                    ///< the part in front of the near plane and inside the frustum
   Vec2 a = Vec2::Zero(), b = Vec2::Zero();  ///< film positions (pixels) of ta and tb
   double za = 1, zb = 1;                    ///< camera-space depths of ta and tb
@@ -119,7 +119,7 @@ void add_primary_boundary(Film& film, const PathContext& ctx, const SceneVelocit
 /// the pixel's derivative gains weight (g . v) for an edge-point velocity v.
 struct PrimarySample {
   int px = 0, py = 0;
-  const edgetree::ForestEdge* edge = nullptr;
+  const edgetree::Edge* edge = nullptr;
   double t = 0;
   Color weight = Color::Zero();
   Vec3 g = Vec3::Zero();

@@ -15,8 +15,8 @@ namespace qsil {
 
 /// The ray tracer, the lights and the path context over them (built at construction), and, when
 /// the estimator samples the boundary term, its edge structure and sampler (`boundary`), its
-/// per-vertex context (`bctx`) and the camera's primary edges (`primary`), filled by
-/// set_up_boundary_term (boundary_setup.h); empty otherwise. `ctx` and `bctx` point into the
+/// per-vertex context (`boundary_ctx`) and the camera's primary edges (`primary`), filled by
+/// set_up_boundary_term (boundary_setup.h); empty otherwise. `ctx` and `boundary_ctx` point into the
 /// bundle, so it is neither copied nor moved.
 struct RenderSetup {
   explicit RenderSetup(const Scene& scene) : tracer(scene), lights(scene), ctx(lights.context(scene, tracer)) {}
@@ -27,7 +27,7 @@ struct RenderSetup {
   LightSetup lights;
   PathContext ctx;
   BoundarySetup boundary;
-  BoundaryContext bctx;
+  BoundaryContext boundary_ctx;
   PrimaryEdges primary;
 };
 

@@ -119,7 +119,7 @@ struct Accumulator {
 /// to five vertices of the two crossing triangles, through its Jacobian (CrossingEnd): vertex i
 /// gets J_i^T g.
 template <class Add>
-void add_edge_adjoint(const edgetree::ForestEdge& e, const Vec3& g0, const Vec3& g1,
+void add_edge_adjoint(const edgetree::Edge& e, const Vec3& g0, const Vec3& g1,
                       const std::vector<int>& chosen_index, Add&& add) {
   if (e.crossing) {
     for (int k = 0; k < 2; ++k) {
@@ -145,7 +145,7 @@ void add_edge_adjoint(const edgetree::ForestEdge& e, const Vec3& g0, const Vec3&
 /// share goes to the sample's contribution list (first pass only), p's share to L's slots.
 struct ReverseBoundaryHook {
   const PathContext* ctx;
-  const BoundaryContext* bctx;
+  const BoundaryContext* boundary_ctx;
   Sampler* sampler;  ///< a stream of its own, so the hook leaves the path's own decisions unchanged
   int traversals;    ///< at every vertex (boundary_traversals of the sample)
   const Tape* tape;
@@ -158,8 +158,8 @@ struct ReverseBoundaryHook {
                   const ColorT<RDual>& beta, int seg, Sampler&, PathStats& stats, ColorT<RDual>& L) const {
     Eigen::Matrix<double, 3, kSlots> dp;
     for (int i = 0; i < 3; ++i) dp.row(i) = si.p[i].derivatives().transpose();
-    edgetree::SilhouetteQuery q = boundary_query(*bctx, si, sp, wo_local);
-    q.eligible = tape->moving ? &bctx->all : &bctx->moving;
+    edgetree::SilhouetteQuery q = boundary_query(*boundary_ctx, si, sp, wo_local);
+    q.eligible = tape->moving ? &boundary_ctx->all : &boundary_ctx->moving;
     q.velocities = nullptr;  // a parameter per vertex: no normal-velocity factor
     const BoundaryVertex<RDual> vertex{.si = si,
                                        .sp = sp,
@@ -169,9 +169,9 @@ struct ReverseBoundaryHook {
                                        .segments = seg,
                                        .traversals = traversals};
     for_each_boundary_sample(
-        *ctx, *bctx, vertex, *sampler, stats,
-        [](const edgetree::ForestEdge&, double, const Vec3&) { return true; },
-        [&](const edgetree::ForestEdge& e, double t, const Color& weight, const Vec3& g) {
+        *ctx, *boundary_ctx, vertex, *sampler, stats,
+        [](const edgetree::Edge&, double, const Vec3&) { return true; },
+        [&](const edgetree::Edge& e, double t, const Color& weight, const Vec3& g) {
           // p's share: J = g . (v_edge - dp), the -g . dp part through L's slots.
           const Eigen::Matrix<double, 1, kSlots> Jp = -(g.transpose() * dp);
           if (!Jp.isZero(0.0))
@@ -243,7 +243,7 @@ class ReverseEstimator::Impl : public RenderSetup {
       throw Error("method " + std::string(method_name(config.method)) + " cannot estimate derivatives");
     if (samples_edges(config.method)) {
       set_up_boundary_term(s, tracer, config.method, nullptr, chosen, config.sppi, lights.environment, boundary,
-                           bctx, primary, setup, config.intersection_curves);
+                           boundary_ctx, primary, setup, config.intersection_curves);
     }
   }
 
@@ -287,11 +287,11 @@ class ReverseEstimator::Impl : public RenderSetup {
     Sampler sampler(ps.seed, pixel, uint64_t(ps.s));
     const CameraRay ray = trace_camera_ray(ctx, ps.x, ps.y, sampler.next2(), st);
     const ReverseView view{&scene, &chosen, &tape};
-    const int traversals = boundary.sampler ? boundary_traversals(bctx.sppi, ps.seed, pixel, uint64_t(ps.s)) : 0;
+    const int traversals = boundary.sampler ? boundary_traversals(boundary_ctx.sppi, ps.seed, pixel, uint64_t(ps.s)) : 0;
     ColorT<RDual> L;
     if (traversals > 0) {
       Sampler bsampler(ps.seed, pixel, uint64_t(ps.s), 1);
-      const ReverseBoundaryHook hook{&ctx, &bctx, &bsampler, traversals, &tape, &chosen_index, a, window == 0,
+      const ReverseBoundaryHook hook{&ctx, &boundary_ctx, &bsampler, traversals, &tape, &chosen_index, a, window == 0,
                                      &contributions};
       L = trace_path(ctx, view, {lift<RDual>(origin), ray.dir, ray.hit}, sampler, st, hook);
     } else {

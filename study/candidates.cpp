@@ -26,7 +26,7 @@ namespace {
 
 using edgetree::EdgeForest;
 using edgetree::EdgeProbability;
-using edgetree::ForestEdge;
+using edgetree::Edge;
 using edgetree::SilhouetteQuery;
 
 /// Exhaustive traversal of the quadric forest with the test of `method`: accepted children down
@@ -38,13 +38,13 @@ std::vector<EdgeProbability> forest_candidates(const EdgeForest& f, const Silhou
   std::vector<int> stack;
   for (int r : f.roots())
     if (q.is_eligible(f.node(r).shape) && edgetree::may_have_silhouette(f, r, q.p, node_test(method))) stack.push_back(r);
-  for (const ForestEdge& e : f.always_edges())
+  for (const Edge& e : f.always_edges())
     if (q.is_eligible(e.shape)) out.push_back({&e, edgetree::silhouette_edge_probability(f, q, &e, node_test(method))});
   while (!stack.empty()) {
     const int n = stack.back();
     stack.pop_back();
     if (f.node(n).is_leaf()) {
-      for (const ForestEdge& e : f.leaf_edges(n)) {
+      for (const Edge& e : f.leaf_edges(n)) {
         ++leaf_edges;
         if (!edgetree::edge_is_silhouette(e, q.p)) continue;
         const double pr = edgetree::silhouette_edge_probability(f, q, &e, node_test(method));
@@ -59,7 +59,7 @@ std::vector<EdgeProbability> forest_candidates(const EdgeForest& f, const Silhou
   return out;
 }
 
-bool upper_hemisphere(const ForestEdge& e, const Vec3& p, const Vec3& n) {
+bool upper_hemisphere(const Edge& e, const Vec3& p, const Vec3& n) {
   return std::max((e.p0 - p).dot(n), (e.p1 - p).dot(n)) > 0;
 }
 
@@ -142,7 +142,7 @@ CandidatesReport find_candidates(const Scene& scene, const CandidatesOptions& o)
   auto forest = std::make_shared<EdgeForest>(EdgeForest::build(edgetree::forest_inputs(scene)));
   rep.keep_alive = std::make_shared<std::pair<decltype(forest), decltype(eligible)>>(forest, eligible);
   for (const auto* list : {&forest->edges(), &forest->always_edges()})
-    for (const ForestEdge& e : *list)
+    for (const Edge& e : *list)
       if (q.is_eligible(e.shape) && edgetree::edge_is_silhouette(e, rep.p)) {
         ++rep.true_silhouettes;
         rep.true_upper += upper_hemisphere(e, rep.p, rep.n);

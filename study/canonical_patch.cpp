@@ -135,7 +135,7 @@ PatchTests PatchTests::from_forest_node(const EdgeForest& forest, int node, cons
   t.flags_ = n.flags;
   t.bp_ = n.bp;
   for (int i = n.edge_begin; i < n.edge_end; ++i) {
-    const ForestEdge& e = forest.edges()[size_t(i)];
+    const Edge& e = forest.edges()[size_t(i)];
     t.wedges_.push_back({e.q0, e.q1});
     if (edge_is_silhouette(e, o)) {
       ++t.origin_sil_;

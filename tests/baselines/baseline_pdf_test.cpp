@@ -108,7 +108,7 @@ TEST(BaselinePdf, SumsToAtMostOneAndEverySilhouetteHasProbability) {
     int missing = 0, ineligible = 0, over = 0;
     for (const QueryCase& c : qs) {
       const auto probs = m.probabilities(c.q);
-      std::map<const ForestEdge*, double> pm;
+      std::map<const Edge*, double> pm;
       double sum = 0;
       for (const auto& e : probs) {
         pm[e.edge] += e.probability;
@@ -116,11 +116,11 @@ TEST(BaselinePdf, SumsToAtMostOneAndEverySilhouetteHasProbability) {
         ineligible += !c.eligible[size_t(e.edge->shape)];
       }
       over += sum > 1 + 1e-12;
-      auto check = [&](const ForestEdge& e) {
+      auto check = [&](const Edge& e) {
         if (c.eligible[size_t(e.shape)] && edge_is_silhouette(e, c.q.p) && !(pm[&e] > 0)) ++missing;
       };
-      for (const ForestEdge& e : w->forest.edges()) check(e);
-      for (const ForestEdge& e : w->forest.always_edges()) check(e);
+      for (const Edge& e : w->forest.edges()) check(e);
+      for (const Edge& e : w->forest.always_edges()) check(e);
     }
     EXPECT_EQ(missing, 0) << m.name << ": silhouette edges with probability 0";
     EXPECT_EQ(ineligible, 0) << m.name << ": edges of ineligible shapes with probability > 0";
@@ -139,7 +139,7 @@ TEST(BaselinePdf, HistogramMatchesProbabilities) {
     for (size_t qi = 0; qi < qs.size(); ++qi) {
       const QueryCase& c = qs[qi];
       const auto probs = m.probabilities(c.q);
-      std::map<const ForestEdge*, int> bin;
+      std::map<const Edge*, int> bin;
       std::vector<double> expected(1, 0.0);  // bin 0: no edge (or a non-silhouette)
       double sil_mass = 0;
       for (const auto& e : probs) {

@@ -53,21 +53,21 @@ ContourProbe probe_of(const TriangleMesh& m, const Vec3& p, const Vec3& axis, do
 
 /// Brute force: every edge of the forest (tree and always-candidate) that is a silhouette from p
 /// and whose arc from p comes within the cone; concave ones only with `concave`.
-std::set<const ForestEdge*> brute_force(const EdgeForest& forest, const Vec3& p, const ContourProbe& probe,
+std::set<const Edge*> brute_force(const EdgeForest& forest, const Vec3& p, const ContourProbe& probe,
                                         bool concave = false) {
-  std::set<const ForestEdge*> out;
+  std::set<const Edge*> out;
   for (const auto* arr : {&forest.edges(), &forest.always_edges()})
-    for (const ForestEdge& e : *arr)
+    for (const Edge& e : *arr)
       if ((concave || e.cls != EdgeClass::Concave) && edge_is_silhouette(e, p) &&
           arc_max_cos(e.p0, e.p1, p, probe.axis) >= probe.cos_half_angle)
         out.insert(&e);
   return out;
 }
 
-std::set<const ForestEdge*> contour(const ContourIndex& index, const Vec3& p, const ContourProbe& probe) {
-  std::vector<const ForestEdge*> v;
+std::set<const Edge*> contour(const ContourIndex& index, const Vec3& p, const ContourProbe& probe) {
+  std::vector<const Edge*> v;
   index.contour_edges(probe, p, nullptr, v);
-  const std::set<const ForestEdge*> s(v.begin(), v.end());
+  const std::set<const Edge*> s(v.begin(), v.end());
   EXPECT_EQ(s.size(), v.size()) << "an edge listed twice";
   return s;
 }
@@ -97,8 +97,8 @@ TEST(ContourSet, ConvexMeshGivesTheSilhouetteEdgesInTheCone) {
     const double beta = (outline - angle) * (1.2 + 1.8 * u(rng));
     const ContourProbe probe = probe_of(meshes[0], p, axis, beta);
     ASSERT_EQ(probe.count, 1) << "case " << i << ": the axis must meet the sphere";
-    const std::set<const ForestEdge*> got = contour(index, p, probe), want = brute_force(forest, p, probe);
-    for (const ForestEdge* e : got) EXPECT_TRUE(want.count(e)) << "case " << i << ": not a silhouette in the cone";
+    const std::set<const Edge*> got = contour(index, p, probe), want = brute_force(forest, p, probe);
+    for (const Edge* e : got) EXPECT_TRUE(want.count(e)) << "case " << i << ": not a silhouette in the cone";
     equal += got == want;
     nonempty += !want.empty();
   }
@@ -143,13 +143,13 @@ TEST(ContourSet, HiddenOutlineBehindTheHitSurfaceIsLeftOut) {
   const ContourProbe probe = probe_of(meshes[0], p, axis, 0.12);
   ASSERT_EQ(probe.count, 1);
   ASSERT_GT(probe.hits[0].point.z(), -2.0) << "the axis must meet the front sphere";
-  const std::set<const ForestEdge*> got = contour(index, p, probe), want = brute_force(forest, p, probe);
+  const std::set<const Edge*> got = contour(index, p, probe), want = brute_force(forest, p, probe);
   int hidden = 0, front = 0;
-  for (const ForestEdge* e : want) (e->v0 >= offset ? hidden : front)++;
+  for (const Edge* e : want) (e->v0 >= offset ? hidden : front)++;
   ASSERT_GT(hidden, 0) << "the back sphere's outline must be inside the cone for the test to have power";
   ASSERT_GT(front, 0);
   int got_front = 0;
-  for (const ForestEdge* e : got) {
+  for (const Edge* e : got) {
     EXPECT_LT(e->v0, offset) << "an edge of the hidden back sphere";
     EXPECT_TRUE(want.count(e));
     ++got_front;
@@ -175,8 +175,8 @@ TEST(ContourSet, SpotSetsHoldSilhouettesInTheConeButNoConcaveEdge) {
     const Vec3 target = meshes[0].positions[size_t(u(rng) * meshes[0].num_vertices()) % meshes[0].positions.size()];
     const ContourProbe probe = probe_of(meshes[0], p, target - p, 0.1);
     if (probe.count == 0) continue;
-    const std::set<const ForestEdge*> got = contour(index, p, probe), want = brute_force(forest, p, probe);
-    for (const ForestEdge* e : got) {
+    const std::set<const Edge*> got = contour(index, p, probe), want = brute_force(forest, p, probe);
+    for (const Edge* e : got) {
       EXPECT_NE(e->cls, EdgeClass::Concave) << "case " << i;
       EXPECT_TRUE(want.count(e)) << "case " << i << ": not a silhouette in the cone";
     }

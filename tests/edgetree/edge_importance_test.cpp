@@ -54,7 +54,7 @@ struct Case {
   SilhouetteQuery q;
   std::vector<LightPolygon> lights;
   std::vector<double> emission;
-  ForestEdge e;
+  Edge e;
   double s = 0;
   bool straddle = false;
 
@@ -168,7 +168,7 @@ TEST(EdgeImportanceTest, LeafEdgeWeightsFollowTheirIntegrand) {
 
 /// Makes e a crease between two faces through it (f0, f1), a smooth shape's (`smooth`) or a
 /// flat-shaded shape's: both faces facing p, or with `silhouette` one facing away.
-void make_crease(ForestEdge& e, const Vec3& p, bool silhouette, bool smooth) {
+void make_crease(Edge& e, const Vec3& p, bool silhouette, bool smooth) {
   const Vec3 mid = 0.5 * (e.p0 + e.p1), dir = (e.p1 - e.p0).normalized();
   Vec3 toward = p - mid;
   toward = (toward - toward.dot(dir) * dir).normalized();
@@ -197,7 +197,7 @@ TEST(EdgeImportanceTest, SmoothCreasesThatAreNoSilhouetteWeighLessUnderTheCosine
     const bool glossy = i % 2 == 1;
     Case c(rng, glossy);
     for (const bool silhouette : {false, true}) {
-      ForestEdge flat = c.e, smooth = c.e;
+      Edge flat = c.e, smooth = c.e;
       make_crease(flat, c.q.p, silhouette, false);
       make_crease(smooth, c.q.p, silhouette, true);
       ASSERT_EQ(edge_is_silhouette(smooth, c.q.p), silhouette) << "case " << i;
@@ -239,7 +239,7 @@ TEST(EdgeImportanceTest, SmoothCreasesAreMarkedAndTheirNodesSumTheConcaveOnes) {
     ForestShapeInput in{&spot, 0, /*face_normals=*/build == 2, build == 1 ? CreaseSet::All : CreaseSet::Concave};
     const EdgeSet set = EdgeSet::build(std::span<const ForestShapeInput>(&in, 1));
     int creases = 0, convex = 0, always_nodes = 0;
-    for (const ForestEdge& e : set.always_edges()) {
+    for (const Edge& e : set.always_edges()) {
       creases += e.crease;
       convex += e.crease && e.cls == EdgeClass::Convex;
       EXPECT_EQ(e.smooth_crease, e.crease && build != 2);
@@ -253,7 +253,7 @@ TEST(EdgeImportanceTest, SmoothCreasesAreMarkedAndTheirNodesSumTheConcaveOnes) {
       ++always_nodes;
       double sum = 0;
       for (int k = n.edge_begin; k < n.edge_end; ++k) {
-        const ForestEdge& e = set.always_edges()[size_t(k)];
+        const Edge& e = set.always_edges()[size_t(k)];
         if (e.smooth_crease && e.cls == EdgeClass::Concave) sum += always_edge_weight(e);
       }
       EXPECT_NEAR(n.lw_smooth, sum, 1e-9 * n.lw) << "build " << build;

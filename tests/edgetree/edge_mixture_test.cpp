@@ -35,7 +35,7 @@ using test::sum;
 /// lobe at height 2; a quad light at height 3 facing down that covers the middle of the edge.
 struct LitEdge {
   SilhouetteQuery q;
-  ForestEdge e;
+  Edge e;
   std::vector<LightPolygon> lights;
   std::vector<double> emission{0.0, 0.0};
   LitEdge(double env, double light_radiance) {

@@ -257,7 +257,7 @@ TEST(IntersectionCurves, EdgeSetKeepsSegmentsAsACrossingGroup) {
   EXPECT_EQ(g.shape1, 1);
   EXPECT_EQ(g.segments, int(set.crossings().size()));
   int crossing_edges = 0;
-  for (const ForestEdge& e : set.always_edges()) {
+  for (const Edge& e : set.always_edges()) {
     if (!e.crossing) continue;
     ++crossing_edges;
     EXPECT_EQ(e.cls, EdgeClass::Intersection);

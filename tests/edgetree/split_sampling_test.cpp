@@ -92,8 +92,8 @@ TEST(SplitSampling, SplitSetIsTheBrightLooseEdges) {
     const SilhouetteQuery& q = qs[qi];
     double sum = 0;
     const auto split = split_edges(w->forest, q, NodeTest::DualBoxAndQuadrics, &sum);
-    std::vector<std::pair<double, const ForestEdge*>> want;
-    for (const ForestEdge& e : w->forest.always_edges()) {
+    std::vector<std::pair<double, const Edge*>> want;
+    for (const Edge& e : w->forest.always_edges()) {
       const double pr = silhouette_edge_probability(w->forest, q, &e, NodeTest::DualBoxAndQuadrics);
       if (pr >= kSplitShare) want.push_back({pr, &e});
     }
@@ -125,11 +125,11 @@ TEST(SplitSampling, TraversalHistogramMatchesRenormalisedProbabilities) {
     const SilhouetteQuery& q = qs[qi];
     double split_sum = 0;
     const auto split = split_edges(w->forest, q, NodeTest::DualBoxAndQuadrics, &split_sum);
-    auto is_split = [&](const ForestEdge* e) { return std::find(split.begin(), split.end(), e) != split.end(); };
-    std::map<const ForestEdge*, int> bin;
+    auto is_split = [&](const Edge* e) { return std::find(split.begin(), split.end(), e) != split.end(); };
+    std::map<const Edge*, int> bin;
     std::vector<double> expected(1, 0.0);  // bin 0: no traversal sample
     double mass = 0;
-    auto add = [&](const ForestEdge& e) {
+    auto add = [&](const Edge& e) {
       if (is_split(&e) || !edge_is_silhouette(e, q.p)) return;
       const double pr = traversal_edge_probability(w->forest, q, &e, NodeTest::DualBoxAndQuadrics);
       if (!(pr > 0)) return;
@@ -137,8 +137,8 @@ TEST(SplitSampling, TraversalHistogramMatchesRenormalisedProbabilities) {
       expected.push_back(n * pr);
       mass += pr;
     };
-    for (const ForestEdge& e : w->forest.edges()) add(e);
-    for (const ForestEdge& e : w->forest.always_edges()) add(e);
+    for (const Edge& e : w->forest.edges()) add(e);
+    for (const Edge& e : w->forest.always_edges()) add(e);
     expected[0] = n * std::max(0.0, 1.0 - mass);
     std::vector<double> observed(expected.size(), 0.0);
     Sampler rng(91, qi, 0);
@@ -196,7 +196,7 @@ TEST(SplitSampling, ChoiceAmongTheRestIsMadeAfresh) {
     ++tested;
     SilhouetteQuery without = q;
     without.eligible = &spot_only;
-    for (const ForestEdge& e : w->forest.edges()) {
+    for (const Edge& e : w->forest.edges()) {
       if (!edge_is_silhouette(e, q.p)) continue;
       const double want = silhouette_edge_probability(w->forest, without, &e, NodeTest::DualBoxAndQuadrics);
       const double got = traversal_edge_probability(w->forest, q, &e, NodeTest::DualBoxAndQuadrics);
@@ -230,7 +230,7 @@ TEST(QuadricTraversal, EveryDiscontinuityEdgeHasProbabilityAndTheySumToAtMostOne
       int missing = 0, over = 0, edges = 0, crease_edges = 0;
       for (const SilhouetteQuery& q : qs) {
         double sum = 0;
-        auto check = [&](const ForestEdge& e) {
+        auto check = [&](const Edge& e) {
           const double pr = silhouette_edge_probability(w->forest, q, &e, m);
           sum += pr;
           if (!is_discontinuity(e, q.p)) return;
@@ -238,8 +238,8 @@ TEST(QuadricTraversal, EveryDiscontinuityEdgeHasProbabilityAndTheySumToAtMostOne
           crease_edges += e.crease;
           missing += !(pr > 0);
         };
-        for (const ForestEdge& e : w->forest.edges()) check(e);
-        for (const ForestEdge& e : w->forest.always_edges()) check(e);
+        for (const Edge& e : w->forest.edges()) check(e);
+        for (const Edge& e : w->forest.always_edges()) check(e);
         over += sum > 1 + 1e-9;
       }
       const std::string what = std::string(m == NodeTest::DualBox ? "dual box" : "dual box + quadrics") + (with_creases ? " with creases" : "");

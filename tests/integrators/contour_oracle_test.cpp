@@ -115,14 +115,14 @@ OracleResult run_oracle(const Scene& scene, const Vec3& p_velocity = Vec3::Zero(
   const LightSetup lights(scene);
   const PathContext ctx = lights.context(scene, tracer);
   BoundarySetup boundary;
-  BoundaryContext bctx;
+  BoundaryContext boundary_ctx;
   PrimaryEdges primary;
   SetupReport setup;
-  set_up_boundary_term(scene, tracer, Method::Quadric, &vel, vel.moving, 1, lights.environment, boundary, bctx, primary,
+  set_up_boundary_term(scene, tracer, Method::Quadric, &vel, vel.moving, 1, lights.environment, boundary, boundary_ctx, primary,
                        setup);
-  EXPECT_TRUE(boundary.contours && bctx.contours == boundary.contours.get())
+  EXPECT_TRUE(boundary.contours && boundary_ctx.contours == boundary.contours.get())
       << "a scene with a glossy BSDF or a quad light has contour sets";
-  if (!bctx.contours) return r;
+  if (!boundary_ctx.contours) return r;
 
   // ---- The shading point: the camera ray's hit on the mirror at p.
   const Vec3 origin = scene.camera.origin(), dir = (kP - origin).normalized();
@@ -132,31 +132,31 @@ OracleResult run_oracle(const Scene& scene, const Vec3& p_velocity = Vec3::Zero(
   const SurfaceInteraction<double> si = make_interaction(pv, hit, origin, dir, tracer.local_origin());
   const ShadingPoint<double> sp = make_shading_point(ctx, si, -dir);
   const Vec3 wo_local = sp.frame_value.to_local(-dir);
-  edgetree::SilhouetteQuery q = boundary_query(bctx, si, sp, wo_local);
+  edgetree::SilhouetteQuery q = boundary_query(boundary_ctx, si, sp, wo_local);
   const bool p_moves = p_velocity != Vec3::Zero();
-  q.eligible = p_moves ? &bctx.all : &bctx.moving;  // as BoundaryHook: at a moving p every edge moves
+  q.eligible = p_moves ? &boundary_ctx.all : &boundary_ctx.moving;  // as BoundaryHook: at a moving p every edge moves
   q.velocities = &vel;
   q.dp.setZero();
   q.dp.col(0) = p_velocity;
-  q.velocity_scale = bctx.velocity_scale;
+  q.velocity_scale = boundary_ctx.velocity_scale;
   const Eigen::Matrix<double, 3, 1> dp = p_velocity;
-  r.split = boundary_split(bctx, q);
+  r.split = boundary_split(boundary_ctx, q);
   const Vec3 p = value(si.p);
 
   // ---- The contour set at p (the probe as the renderer makes it) and the split edges.
   int rays = 0;
   const edgetree::ContourProbe probe = contour_probe(ctx, *boundary.contours, si, Vec3(-dir), q, rays);
   EXPECT_GT(probe.count, 0) << "the core's axis or ring must meet the occluder";
-  std::vector<const edgetree::ForestEdge*> contour;
+  std::vector<const edgetree::Edge*> contour;
   boundary.contours->contour_edges(probe, p, q.eligible, contour);
   EXPECT_FALSE(contour.empty());
-  for (const edgetree::ForestEdge* e : edgetree::split_edges(*boundary.forest, q, edgetree::NodeTest::DualBoxAndQuadrics))
+  for (const edgetree::Edge* e : edgetree::split_edges(*boundary.forest, q, edgetree::NodeTest::DualBoxAndQuadrics))
     r.contour_has_split_edge |= std::find(contour.begin(), contour.end(), e) != contour.end();
 
   // ---- Reference: quadrature over every discontinuity edge of the moving occluder.
   Sampler rng(1, 0, 0);
   PathStats stats;
-  auto integrand = [&](const edgetree::ForestEdge& e, double t) {
+  auto integrand = [&](const edgetree::Edge& e, double t) {
     const Vec3 w = (e.p0 + t * (e.p1 - e.p0) - p).normalized();
     const Color f = bsdf_eval<double>(*sp.bsdf, sp.frame_value.to_local(w), wo_local);
     if ((f == 0).all()) return 0.0;
@@ -172,7 +172,7 @@ OracleResult run_oracle(const Scene& scene, const Vec3& p_velocity = Vec3::Zero(
     if (!jump) return 0.0;
     return f[0] * (*jump)[0] * J[0];
   };
-  auto quadrature = [&](const edgetree::ForestEdge& e, int n) {
+  auto quadrature = [&](const edgetree::Edge& e, int n) {
     double sum = 0;
     for (int i = 0; i < n; ++i) sum += integrand(e, (i + 0.5) / n);
     return sum / n;
@@ -180,7 +180,7 @@ OracleResult run_oracle(const Scene& scene, const Vec3& p_velocity = Vec3::Zero(
   double coarse = 0, on_contour = 0;
   int edges = 0;
   for (const auto* arr : {&boundary.forest->edges(), &boundary.forest->always_edges()})
-    for (const edgetree::ForestEdge& e : *arr) {
+    for (const edgetree::Edge& e : *arr) {
       if (!q.is_eligible(e.shape) || !edgetree::is_discontinuity(e, p)) continue;
       const double fine = quadrature(e, 4000);
       r.reference += fine;
@@ -215,11 +215,11 @@ OracleResult run_oracle(const Scene& scene, const Vec3& p_velocity = Vec3::Zero(
                                           .traversals = int(b.sppi)};
       for_each_boundary_sample(
           ctx, b, vertex, sampler, st,
-          [&](const edgetree::ForestEdge& e, double t, const Vec3& gv) {
+          [&](const edgetree::Edge& e, double t, const Vec3& gv) {
             J = edge_point_jacobian<1>(vel, e, t, gv, dp);
             return !J.isZero(0.0);
           },
-          [&](const edgetree::ForestEdge&, double, const Color& weight, const Vec3&) { v += weight[0] * J[0]; });
+          [&](const edgetree::Edge&, double, const Color& weight, const Vec3&) { v += weight[0] * J[0]; });
       sum += v;
       sum2 += v * v;
     }
@@ -229,11 +229,11 @@ OracleResult run_oracle(const Scene& scene, const Vec3& p_velocity = Vec3::Zero(
     m.se = std::sqrt(m.var / (n - 1));
     return m;
   };
-  r.with = estimate(bctx, 11);
-  BoundaryContext two = bctx;
+  r.with = estimate(boundary_ctx, 11);
+  BoundaryContext two = boundary_ctx;
   two.sppi = 2;
   r.with_two = estimate(two, 13);
-  BoundaryContext plain = bctx;
+  BoundaryContext plain = boundary_ctx;
   plain.contours = nullptr;
   r.without = estimate(plain, 12);
   std::printf(
@@ -243,7 +243,7 @@ OracleResult run_oracle(const Scene& scene, const Vec3& p_velocity = Vec3::Zero(
       r.split);
   std::vector<Mean> estimates{r.with, r.with_two, r.without};
   if (p_moves) {
-    BoundaryContext unsplit = bctx;
+    BoundaryContext unsplit = boundary_ctx;
     unsplit.split_speed = 0;
     r.unsplit = estimate(unsplit, 14);
     estimates.push_back(r.unsplit);

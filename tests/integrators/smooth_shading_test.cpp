@@ -397,7 +397,7 @@ TEST(SmoothShading, EdgesInTheShadingPointsPlaneSeeTheSkyBelowItAtEveryPoint) {
   Sampler sampler(3, 0, 0);
   for (const edgetree::MeshEdge& me : set.edges) {
     if (me.f1 < 0 || me.cls == edgetree::EdgeClass::Flat) continue;  // the wall's diagonal is flat
-    edgetree::ForestEdge e;
+    edgetree::Edge e;
     static_cast<edgetree::MeshEdge&>(e) = me;
     e.p0 = mesh.positions[size_t(me.v0)];
     e.p1 = mesh.positions[size_t(me.v1)];

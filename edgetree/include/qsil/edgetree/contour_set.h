@@ -136,7 +136,7 @@ class ContourIndex {
   /// following from all their seeds, each edge once, in the order found (deterministic: walks in
   /// hit and direction order, then a depth-first following) into `out` (cleared first).
   void contour_edges(const ContourProbe& probe, const Vec3& p, const std::vector<bool>* eligible,
-                     std::vector<const ForestEdge*>& out) const;
+                     std::vector<const Edge*>& out) const;
 
   /// Whether the cone {w : w . axis >= cos_half_angle} from p (axis unit) meets the bounding
   /// sphere of an eligible indexed shape (`eligible` as in contour_edges): where it meets none, no
@@ -155,7 +155,7 @@ class ContourIndex {
     std::vector<MeshEdge> edges;
     /// Per edge, its entry in the edge set (tree edge or always-candidate); null: not in the set
     /// (flat, or culled).
-    std::vector<const ForestEdge*> entries;
+    std::vector<const Edge*> entries;
     std::vector<int> vertex_begin;  ///< CSR: edges at vertex v are vertex_edges[vertex_begin[v] .. vertex_begin[v+1])
     std::vector<int> vertex_edges;
     int first_edge = 0;          ///< number of the mesh's first edge among all meshes' edges (visited sets)

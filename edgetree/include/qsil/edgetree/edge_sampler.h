@@ -22,7 +22,7 @@ namespace qsil::edgetree {
 /// An edge and its probability of being chosen (the discrete part of a sampler's pdf), for
 /// exhaustive enumerations (`qsil candidates`, the pdf tests).
 struct EdgeProbability {
-  const ForestEdge* edge = nullptr;
+  const Edge* edge = nullptr;
   double probability = 0;
 };
 

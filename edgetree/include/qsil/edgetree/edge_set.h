@@ -35,12 +35,13 @@ enum NodeFlags : std::uint16_t {
   kNodeAlways = 32,       ///< a node of an always-candidate tree: no rejection test, no dual bound
 };
 
-/// An edge stored in the forest: the mesh edge (vertex and face indices into its shape's mesh,
+/// The edge record every edge set and sampler shares (the edge forest, the v-sphere tree, the
+/// uniform tables): the mesh edge (vertex and face indices into its shape's mesh,
 /// world planes q0/q1, length, exterior angle, class, shape index) plus its endpoint positions
 /// (world frame, scene units); or a segment of an intersection curve (cls
 /// EdgeClass::Intersection, `crossing` set; `shape` is then its crossing group's id, no shape of
 /// the scene: EdgeSet::crossing_groups).
-struct ForestEdge : MeshEdge {
+struct Edge : MeshEdge {
   Vec3 p0 = Vec3::Zero();  ///< position of v0
   Vec3 p1 = Vec3::Zero();  ///< position of v1
   /// A shading crease: the radiance may jump across it where both of its faces face the viewer
@@ -60,7 +61,7 @@ struct ForestEdge : MeshEdge {
 /// world units per unit theta): its vertex's (v0, v1) for a mesh edge, crossing_end_velocity for
 /// a segment of an intersection curve. The velocity of the edge point at t is (1 - t) times that
 /// of end 0 plus t times that of end 1.
-inline SceneVelocities::Block edge_end_velocity(const ForestEdge& e, int end, const SceneVelocities& velocities) {
+inline SceneVelocities::Block edge_end_velocity(const Edge& e, int end, const SceneVelocities& velocities) {
   if (e.crossing) return crossing_end_velocity(e.crossing->ends[size_t(end)], velocities);
   return velocities.position[size_t(e.shape)][size_t(end ? e.v1 : e.v0)];
 }
@@ -68,12 +69,12 @@ inline SceneVelocities::Block edge_end_velocity(const ForestEdge& e, int end, co
 /// True iff the radiance seen from p can jump across edge e: a silhouette or boundary edge
 /// (edge_is_silhouette), or a crease (its shading jumps there whether or not it is a
 /// silhouette). Edge samplers return only such edges.
-inline bool is_discontinuity(const ForestEdge& e, const Vec3& p) { return e.crease || edge_is_silhouette(e, p); }
+inline bool is_discontinuity(const Edge& e, const Vec3& p) { return e.crease || edge_is_silhouette(e, p); }
 
 /// Weight of an always-candidate edge in its tree's L_w (units * rad): a crease bounds a jump
 /// that grows with its bend angle (length * angle, as tree edges); a boundary, non-manifold or
 /// inconsistent edge bounds a jump of the full radiance, like a silhouette of angle pi.
-inline double always_edge_weight(const ForestEdge& e) { return e.length * (e.crease ? e.angle : kPi); }
+inline double always_edge_weight(const Edge& e) { return e.length * (e.crease ? e.angle : kPi); }
 
 /// A node of the edge set's hierarchy (and of the forest fitted over it). Inner nodes: children are nodes [first, first
 /// + count) (1..4 of them). Leaves (kNodeLeaf): edges [first, first + count) (1..4 of them) of EdgeSet::edges(), or of
@@ -83,7 +84,7 @@ struct ForestNode {
   Box3 bp;                  ///< primal box B_p of the patch's edge endpoints (world, scene units)
   double lw = 0.0;          ///< L_w = sum of edge length * exterior dihedral angle (units * rad);
                             ///< always_edge_weight() for always-candidate trees
-  double lw_smooth = 0.0;   ///< the part of lw from concave smooth creases (ForestEdge::smooth_crease;
+  double lw_smooth = 0.0;   ///< the part of lw from concave smooth creases (Edge::smooth_crease;
                             ///< a twosided smooth shape's convex creases, often its silhouettes, not)
   int first = 0;            ///< first child (inner) or first edge (leaf)
   int count = 0;            ///< number of children (inner) or edges (leaf)
@@ -102,7 +103,7 @@ struct ForestNode {
   bool always() const { return flags & kNodeAlways; }
 };
 
-/// Which non-flat edges of a shape are shading creases (ForestEdge::crease), i.e. where the
+/// Which non-flat edges of a shape are shading creases (Edge::crease), i.e. where the
 /// radiance leaving the surface jumps although no silhouette is there:
 /// - All: every convex and concave edge. Flat shading (face_normals): the normal jumps; and a
 ///   smooth-shaded twosided shape: a sliver ray from one face meets the back of its neighbour,
@@ -171,12 +172,12 @@ struct ForestShapeStats {
 };
 
 /// The segments of the intersection curves between two shapes (or within one), which the edge
-/// set keeps together: always-candidates whose ForestEdge::shape (and whose always-candidate
+/// set keeps together: always-candidates whose Edge::shape (and whose always-candidate
 /// tree's ForestNode::shape) is `id`, one past the largest input shape index plus the group's
 /// position in EdgeSet::crossing_groups(). They are eligible where either shape is
 /// (SilhouetteQuery::eligible is extended with their ids by the boundary term's set-up).
 struct CrossingGroup {
-  int id = 0;                  ///< the group's index in eligibility vectors and ForestEdge::shape
+  int id = 0;                  ///< the group's index in eligibility vectors and Edge::shape
   int shape0 = 0, shape1 = 0;  ///< the two shapes, shape0 <= shape1 (equal: a self-intersection)
   int segments = 0;            ///< number of its segments
 };
@@ -205,15 +206,15 @@ class EdgeSet {
   const std::vector<int>& always_roots() const { return always_roots_; }
   /// Indices into always_edges() of the edges in no always-candidate tree (loose top-level
   /// candidates, e.g. the four outline edges of a rectangle).
-  const std::vector<int>& loose_always() const { return loose_always_; }
+  const std::vector<int>& loose_always_edges() const { return loose_always_edges_; }
   /// Tree edges in leaf order (a leaf's edges are contiguous), grouped by shape.
-  const std::vector<ForestEdge>& edges() const { return edges_; }
+  const std::vector<Edge>& edges() const { return edges_; }
   /// Always-candidate edges (boundary, non-manifold, inconsistently oriented, creases, and the
   /// segments of intersection curves, group by group after every shape's): a possible
   /// discontinuity for every shading point, never in a silhouette tree; those of a shape (or
   /// crossing group) with more than EdgeSetOptions::always_tree_min_edges are in its
-  /// always-candidate tree (leaf order), the others are loose_always().
-  const std::vector<ForestEdge>& always_edges() const { return always_; }
+  /// always-candidate tree (leaf order), the others are loose_always_edges().
+  const std::vector<Edge>& always_edges() const { return always_; }
   /// Children of an inner node as a node-index range [first, first+count); empty for a leaf.
   std::span<const ForestNode> children(int i) const {
     const ForestNode& n = node(i);
@@ -222,13 +223,13 @@ class EdgeSet {
   }
   /// Edges of a leaf (empty for an inner node), from edges() or, for an always-candidate tree's
   /// leaf, from always_edges().
-  std::span<const ForestEdge> leaf_edges(int i) const {
+  std::span<const Edge> leaf_edges(int i) const {
     const ForestNode& n = node(i);
     if (!n.is_leaf()) return {};
     return {(n.always() ? always_.data() : edges_.data()) + n.first, size_t(n.count)};
   }
   /// Edges below node i (its edge range in edges() or always_edges()).
-  std::span<const ForestEdge> node_edges(int i) const {
+  std::span<const Edge> node_edges(int i) const {
     const ForestNode& n = node(i);
     return {(n.always() ? always_.data() : edges_.data()) + n.edge_begin, size_t(n.edge_end - n.edge_begin)};
   }
@@ -257,9 +258,9 @@ class EdgeSet {
   std::vector<ForestNode> nodes_;
   std::vector<int> roots_;
   std::vector<int> always_roots_;
-  std::vector<int> loose_always_;
-  std::vector<ForestEdge> edges_;
-  std::vector<ForestEdge> always_;
+  std::vector<int> loose_always_edges_;
+  std::vector<Edge> edges_;
+  std::vector<Edge> always_;
   /// Finds the intersection curves of `shapes` and appends their segments to `f` as
   /// always-candidates, one crossing group per pair of shapes (a tree per group when it has more
   /// than opt.always_tree_min_edges segments).

@@ -42,7 +42,7 @@ inline constexpr double kFlatAngle = 1e-4;
 
 /// One undirected mesh edge (or, with cls Intersection, a segment of an intersection curve: v0 =
 /// v1 = -1, f0 and f1 the crossing triangles of two shapes, q0 and q1 their planes, `shape` the
-/// index of its crossing group; see ForestEdge::crossing).
+/// index of its crossing group; see Edge::crossing).
 struct MeshEdge {
   int v0 = -1, v1 = -1;    ///< vertex indices into TriangleMesh::positions, v0 < v1
   int f0 = -1, f1 = -1;    ///< adjacent faces (indices into TriangleMesh::triangles);

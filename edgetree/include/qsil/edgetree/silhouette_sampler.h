@@ -71,7 +71,7 @@ struct SilhouetteQuery {
   /// once per shading point): distinct discontinuity edges of eligible shapes that
   /// sample_silhouette_set estimates by a strategy of their own. Empty (the default): none.
   /// The edges must outlive the query's use.
-  std::span<const ForestEdge* const> contour;
+  std::span<const Edge* const> contour;
 
   /// True when edges of shape (or crossing group) `shape` may contribute (see `eligible`).
   bool is_eligible(int shape) const {
@@ -105,7 +105,7 @@ void local_lights(const SilhouetteQuery& q, std::vector<LocalLight>& out);
 
 /// A sampled edge point and its probability.
 struct SilhouetteSample {
-  const ForestEdge* edge = nullptr;  ///< nullptr: no edge (every candidate was rejected)
+  const Edge* edge = nullptr;  ///< nullptr: no edge (every candidate was rejected)
   double t = 0;                      ///< point x0 + t (x1 - x0) on the edge
   double pdf = 0;                    ///< discrete probability of the edge times the density of t
   int rejection_tests = 0;           ///< number of node tests performed
@@ -149,7 +149,7 @@ void sample_silhouette_set(const EdgeForest& forest, const SilhouetteQuery& quer
 
 /// The edges sample_silhouette_set splits for the query and the sum of their top-level
 /// probabilities (those of sample_silhouette). For tests and `qsil candidates`.
-std::vector<const ForestEdge*> split_edges(const EdgeForest& forest, const SilhouetteQuery& query, NodeTest test,
+std::vector<const Edge*> split_edges(const EdgeForest& forest, const SilhouetteQuery& query, NodeTest test,
                                            double* split_probability = nullptr);
 
 /// Samples one discontinuity edge and a point on it for the query (no splitting), with the rejection test of
@@ -164,7 +164,7 @@ SilhouetteSample sample_silhouette(const EdgeForest& forest, const SilhouetteQue
 /// pdf(t). Returns no edge when e is not a discontinuity for the query point (is_discontinuity):
 /// samplers without an exact leaf test (vsphere, uniform) land there, a zero-contribution sample.
 /// `rejection_tests` (the tests the choice of e took) is stored in the result.
-SilhouetteSample sample_on_edge(const ForestEdge& e, double pmf, const SilhouetteQuery& query, double u,
+SilhouetteSample sample_on_edge(const Edge& e, double pmf, const SilhouetteQuery& query, double u,
                                 int rejection_tests = 0);
 
 /// Boxes seen under a bounding cone of sin(half-angle) = half diagonal / distance below this are
@@ -173,7 +173,7 @@ SilhouetteSample sample_on_edge(const ForestEdge& e, double pmf, const Silhouett
 /// docs/experiments/2026-11-25-edge-choice.md §5 "Importance".
 inline constexpr double kConeImportanceSin = 0.5;
 
-/// Factor on both weights (importance and defensive) of a smooth crease (ForestEdge::smooth_crease)
+/// Factor on both weights (importance and defensive) of a smooth crease (Edge::smooth_crease)
 /// that is no silhouette for p, under the cosine lobe, at a leaf or flat choice and as a loose
 /// always-candidate; and on a node's L_w, the part of its concave smooth creases
 /// (ForestNode::lw_smooth, silhouettes or not: a node cannot tell). Such a crease's radiance jumps
@@ -210,32 +210,32 @@ NodeWeight node_weight(const ForestNode& node, const SilhouetteQuery& query);
 /// integral for edges shorter than 0.1 × their distance wholly above the horizon and wholly in
 /// or out of each light (tests/edgetree/edge_importance_test.cpp). Both weights times
 /// kSmoothCreaseWeight where it applies.
-NodeWeight leaf_edge_weight(const ForestEdge& e, const SilhouetteQuery& q);
+NodeWeight leaf_edge_weight(const Edge& e, const SilhouetteQuery& q);
 
 /// Importance of a loose always-candidate edge, which competes with the forest roots: on the
 /// roots' scale (a node's I is about π times the radiance-weighted integral over its silhouettes),
 /// π × the radiance-weighted LTC integral; defensive weight π × length / distance²; both times
 /// kSmoothCreaseWeight where it applies.
-NodeWeight loose_edge_weight(const ForestEdge& e, const SilhouetteQuery& q);
+NodeWeight loose_edge_weight(const Edge& e, const SilhouetteQuery& q);
 
 /// The normal-velocity factor of an edge for the query (1 without velocities): the mean over its
 /// endpoints of sum_k |n . (v_k - dp_k)| velocity_scale[k], n the unit normal of the plane through
 /// p and the edge. J of [QSS Eq. 3] is proportional to n . (v(t) - dp), which is linear in t, so
 /// this bounds its mean over the edge: 0 only where every point of the edge moves within that
 /// plane (e.g. an edge of p's own triangle under a rigid motion), where the integrand is 0 too.
-double velocity_factor(const ForestEdge& e, const SilhouetteQuery& q);
+double velocity_factor(const Edge& e, const SilhouetteQuery& q);
 
 /// Probability with which sample_silhouette (with `test`) picks `edge` (an element of
 /// forest.edges() or forest.always_edges()) for the query, by walking the same choices (for
 /// tests: the sampling probabilities of all edges sum to at most 1, and match the histogram).
-double silhouette_edge_probability(const EdgeForest& forest, const SilhouetteQuery& query, const ForestEdge* edge,
+double silhouette_edge_probability(const EdgeForest& forest, const SilhouetteQuery& query, const Edge* edge,
                                    NodeTest test = NodeTest::DualBoxAndQuadrics);
 
 /// Probability with which the traversal of sample_silhouette_set (after splitting, without a
 /// contour set) picks `edge`: 0 for a split edge, otherwise the walk of
 /// silhouette_edge_probability from the top-level choice among the non-split candidates. For
 /// tests (the histogram of split_sampling_test).
-double traversal_edge_probability(const EdgeForest& forest, const SilhouetteQuery& query, const ForestEdge* edge,
+double traversal_edge_probability(const EdgeForest& forest, const SilhouetteQuery& query, const Edge* edge,
                                   NodeTest test = NodeTest::DualBoxAndQuadrics);
 
 }  // namespace qsil::edgetree

@@ -34,11 +34,11 @@ class UniformEdgeSampler final : public EdgeSampler {
   std::vector<EdgeProbability> edge_probabilities(const SilhouetteQuery& query) const;
 
   /// The sampling weight w_e of an edge (see the file comment).
-  static double weight(const ForestEdge& e);
+  static double weight(const Edge& e);
 
  private:
   struct ShapeTable {
-    std::vector<const ForestEdge*> edges;
+    std::vector<const Edge*> edges;
     std::vector<double> cdf;  ///< inclusive prefix sums of the weights
     double total = 0;
   };

@@ -58,7 +58,7 @@ class VSphereEdgeSampler final : public EdgeSampler {
   /// A candidate of a choice: a node (>= 0) or an always-candidate edge, with its weights.
   struct Cand {
     int node = -1;
-    const ForestEdge* edge = nullptr;
+    const Edge* edge = nullptr;
     double importance = 0, defensive = 0;
   };
   int top_candidates(const SilhouetteQuery& q, std::vector<Cand>& out, int& tests) const;

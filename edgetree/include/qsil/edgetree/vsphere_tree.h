@@ -96,7 +96,7 @@ class VSphereTree {
   const VSphereNode& node(int i) const { return nodes_[size_t(i)]; }
   const std::vector<VSphereRoot>& roots() const { return roots_; }
   /// Edges in leaf order (pointers into the edge set's edges).
-  const std::vector<const ForestEdge*>& edges() const { return edges_; }
+  const std::vector<const Edge*>& edges() const { return edges_; }
   /// Number of edges in plain (o-silhouette) trees and in 6D trees.
   int plain_edges() const { return plain_edges_; }
   int hough_edges() const { return int(edges_.size()) - plain_edges_; }
@@ -113,7 +113,7 @@ class VSphereTree {
   Vec3 origin_ = Vec3::Zero();
   std::vector<VSphereNode> nodes_;
   std::vector<VSphereRoot> roots_;
-  std::vector<const ForestEdge*> edges_;
+  std::vector<const Edge*> edges_;
   int plain_edges_ = 0;
 };
 

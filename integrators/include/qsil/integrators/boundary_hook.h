@@ -12,7 +12,7 @@ namespace qsil {
 template <int N>
 struct BoundaryHook {
   const PathContext* ctx;
-  const BoundaryContext* bctx;
+  const BoundaryContext* boundary_ctx;
   Sampler* sampler;  ///< a stream of its own, so the hook leaves the path's own decisions unchanged
   int traversals;    ///< at every vertex (boundary_traversals of the sample)
 
@@ -21,12 +21,12 @@ struct BoundaryHook {
     // ---- dp/dtheta: does the shading point move?
     Eigen::Matrix<double, 3, N> dp;
     for (int i = 0; i < 3; ++i) dp.row(i) = si.p[i].derivatives().transpose();
-    edgetree::SilhouetteQuery q = boundary_query(*bctx, si, sp, wo_local);
-    q.eligible = !dp.isZero(0.0) ? &bctx->all : &bctx->moving;
-    q.velocities = bctx->velocities;
+    edgetree::SilhouetteQuery q = boundary_query(*boundary_ctx, si, sp, wo_local);
+    q.eligible = !dp.isZero(0.0) ? &boundary_ctx->all : &boundary_ctx->moving;
+    q.velocities = boundary_ctx->velocities;
     q.dp.setZero();
     q.dp.template leftCols<N>() = dp;
-    q.velocity_scale = bctx->velocity_scale;
+    q.velocity_scale = boundary_ctx->velocity_scale;
     Eigen::Matrix<double, 1, N> J;  // of the sample being evaluated
     const BoundaryVertex<Dual<N>> vertex{.si = si,
                                          .sp = sp,
@@ -36,12 +36,12 @@ struct BoundaryHook {
                                          .segments = seg,
                                          .traversals = traversals};
     for_each_boundary_sample(
-        *ctx, *bctx, vertex, *sampler, stats,
-        [&](const edgetree::ForestEdge& e, double t, const Vec3& g) {
-          J = edge_point_jacobian<N>(*bctx->velocities, e, t, g, dp);
+        *ctx, *boundary_ctx, vertex, *sampler, stats,
+        [&](const edgetree::Edge& e, double t, const Vec3& g) {
+          J = edge_point_jacobian<N>(*boundary_ctx->velocities, e, t, g, dp);
           return !J.isZero(0.0);
         },
-        [&](const edgetree::ForestEdge&, double, const Color& weight, const Vec3&) {
+        [&](const edgetree::Edge&, double, const Color& weight, const Vec3&) {
           for (int c = 0; c < 3; ++c) L[c] += Dual<N>(0.0, (weight[c] * J).transpose());
         });
   }

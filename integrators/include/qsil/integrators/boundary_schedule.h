@@ -41,8 +41,8 @@ inline constexpr int kMaxBoundarySplit = 16;
 /// (splitting, as in adjoint-driven Russian roulette and splitting, Vorba & Křivánek 2016, with the
 /// shading point's speed as the driver): with s = max_k |dp/dtheta_k| velocity_scale[k], the speed
 /// of p in units of the fastest mesh vertex of each parameter (q.dp, q.velocity_scale; 0 without
-/// q.velocities, e.g. reverse mode), ceil(s / bctx.split_speed) clamped to [1,
-/// kMaxBoundarySplit]; 1 when bctx.split_speed is 0.
+/// q.velocities, e.g. reverse mode), ceil(s / boundary_ctx.split_speed) clamped to [1,
+/// kMaxBoundarySplit]; 1 when boundary_ctx.split_speed is 0.
 /// Why: with directions fixed, a point a ray meets on a moving surface at an angle of incidence
 /// with cosine c slides along the ray at about 1/c the surface's speed, so J = n . (v - dp) of
 /// every edge seen from p grows with s, and so does the variance of one traversal's estimate
@@ -53,13 +53,13 @@ inline constexpr int kMaxBoundarySplit = 16;
 /// as s^2 (the rate's own argument, docs/design-notes.md "How many boundary samples per pixel
 /// sample", per vertex). Such points are rare (grazing hits), so the cost stays small: measured
 /// in docs/architecture.md §5 "Splitting at fast shading points".
-inline int boundary_split(const BoundaryContext& bctx, const edgetree::SilhouetteQuery& q) {
-  if (!(bctx.split_speed > 0) || !q.velocities) return 1;
+inline int boundary_split(const BoundaryContext& boundary_ctx, const edgetree::SilhouetteQuery& q) {
+  if (!(boundary_ctx.split_speed > 0) || !q.velocities) return 1;
   double speed = 0;
   for (int k = 0; k < q.velocities->num_params; ++k)
     speed = std::max(speed, q.dp.col(k).norm() * q.velocity_scale[size_t(k)]);
   // The clamp before the conversion keeps a non-finite speed from becoming an undefined int.
-  return int(std::clamp(std::ceil(speed / bctx.split_speed), 1.0, double(kMaxBoundarySplit)));
+  return int(std::clamp(std::ceil(speed / boundary_ctx.split_speed), 1.0, double(kMaxBoundarySplit)));
 }
 
 }  // namespace qsil

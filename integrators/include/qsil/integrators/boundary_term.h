@@ -47,16 +47,16 @@ struct BoundaryVertex {
 
 /// The secondary boundary term's samples at one path vertex (shared by forward mode, BoundaryHook,
 /// and reverse mode, integrators/reverse.cpp) `vertex` (BoundaryVertex): vertex.traversals
-/// traversals of bctx.sampler (boundary_traversals) for query q = vertex.query (set up by the
-/// caller: eligibility, velocities; its contour set is made here when bctx.contours is set:
-/// contour_probe, ContourIndex::contour_edges), each split into m = boundary_split(bctx, q), drawing from
+/// traversals of boundary_ctx.sampler (boundary_traversals) for query q = vertex.query (set up by the
+/// caller: eligibility, velocities; its contour set is made here when boundary_ctx.contours is set:
+/// contour_probe, ContourIndex::contour_edges), each split into m = boundary_split(boundary_ctx, q), drawing from
 /// `sampler`; for each edge point with f_s != 0, `accept(edge, t, g)` decides before any ray
 /// whether it can contribute (edge_jump_with), and each contributing one is handed to
-/// `visit(edge, t, weight, g)` with weight = T f_s jump / (pdf r m), r = bctx.sppi
+/// `visit(edge, t, weight, g)` with weight = T f_s jump / (pdf r m), r = boundary_ctx.sppi
 /// and T the detached throughput (the vertex's derivative gains weight (g . v_t)). Counts
 /// traversals (the split ones each), zero traversals and thread time.
 template <class T, class Accept, class Visit>
-void for_each_boundary_sample(const PathContext& ctx, const BoundaryContext& bctx, const BoundaryVertex<T>& vertex,
+void for_each_boundary_sample(const PathContext& ctx, const BoundaryContext& boundary_ctx, const BoundaryVertex<T>& vertex,
                               Sampler& sampler, PathStats& stats, Accept&& accept, Visit&& visit) {
   const SurfaceInteraction<T>& si = vertex.si;
   const ShadingPoint<T>& sp = vertex.sp;
@@ -65,34 +65,34 @@ void for_each_boundary_sample(const PathContext& ctx, const BoundaryContext& bct
   int traversals = vertex.traversals;
   if (traversals <= 0) return;
   edgetree::SilhouetteQuery q = vertex.query;
-  const int split = boundary_split(bctx, q);
+  const int split = boundary_split(boundary_ctx, q);
   traversals *= split;
-  const double rate = bctx.sppi * double(split);
+  const double rate = boundary_ctx.sppi * double(split);
   const auto t0 = std::chrono::steady_clock::now();
   const Vec3 wo_world = q.frame.to_world(wo_local);
   // ---- The contour set of a glossy vertex: made once, used by every traversal here. The
   // traversals leave no other boundary query open on this thread meanwhile (their radiance paths
   // have no vertex hook), so per-thread storage serves.
-  thread_local std::vector<const edgetree::ForestEdge*> contour;
+  thread_local std::vector<const edgetree::Edge*> contour;
   contour.clear();
-  if (bctx.contours) {
+  if (boundary_ctx.contours) {
     int rays = 0;
-    const edgetree::ContourProbe probe = contour_probe(ctx, *bctx.contours, si, wo_world, q, rays);
+    const edgetree::ContourProbe probe = contour_probe(ctx, *boundary_ctx.contours, si, wo_world, q, rays);
     stats.rays += uint64_t(rays);
-    if (probe.count > 0) bctx.contours->contour_edges(probe, q.p, q.eligible, contour);
+    if (probe.count > 0) boundary_ctx.contours->contour_edges(probe, q.p, q.eligible, contour);
   }
   q.contour = contour;
   edgetree::SilhouetteSampleSet set;
   for (int sample = 0; sample < traversals; ++sample) {
     ++stats.boundary_traversals;
-    bctx.sampler->sample_set(
+    boundary_ctx.sampler->sample_set(
         q, [&sampler] { return sampler.next(); }, set);
     // Counted per traversal: zero when none of its edge points contributed.
     bool contributed = false;
     for (int k = 0; k < set.count; ++k) {
       const edgetree::SilhouetteSample& s = set.samples[size_t(k)];
       if (!(s.pdf > 0)) continue;
-      const edgetree::ForestEdge& e = *s.edge;
+      const edgetree::Edge& e = *s.edge;
       const Vec3 w = (e.p0 + s.t * (e.p1 - e.p0) - q.p).normalized();
       const Color f = bsdf_eval<double>(*sp.bsdf, q.frame.to_local(w), wo_local);
       if ((f == 0).all()) continue;
@@ -127,17 +127,17 @@ void for_each_boundary_sample(const PathContext& ctx, const BoundaryContext& bct
 }
 
 /// The shading point's part of a boundary query: position, frame, the BSDF's LTC toward wo and the
-/// importance inputs of bctx (eligibility, velocities: the caller's).
+/// importance inputs of boundary_ctx (eligibility, velocities: the caller's).
 template <class T>
-edgetree::SilhouetteQuery boundary_query(const BoundaryContext& bctx, const SurfaceInteraction<T>& si,
+edgetree::SilhouetteQuery boundary_query(const BoundaryContext& boundary_ctx, const SurfaceInteraction<T>& si,
                                          const ShadingPoint<T>& sp, const Vec3& wo_local) {
   edgetree::SilhouetteQuery q;
   q.p = value(si.p);
   q.frame = sp.frame_value;
   q.ltc = edgetree::bsdf_ltc(*sp.bsdf, wo_local);
-  q.lights = &bctx.lights;
-  q.env_weight = bctx.env_weight;
-  q.emission = &bctx.emission;
+  q.lights = &boundary_ctx.lights;
+  q.env_weight = boundary_ctx.env_weight;
+  q.emission = &boundary_ctx.emission;
   return q;
 }
 

@@ -150,7 +150,7 @@ inline double crossing_reach(const std::array<Vec3, 2>& n) {
 
 /// The crossing seen from p (in.edge.crossing set), or nothing when p is the edge point.
 inline std::optional<CrossingSight> crossing_sight(const EdgeJumpInputs& in) {
-  const edgetree::ForestEdge& e = in.edge;
+  const edgetree::Edge& e = in.edge;
   const edgetree::CrossingSegment& c = *e.crossing;
   const Vec3& p = in.p;
   const std::optional<EdgeSight> sight = edge_sight(e, in.t, p);

@@ -28,7 +28,7 @@
 namespace qsil {
 
 /// The vertex of face `face` (one of edge `e`'s two faces) that is not on the edge (world).
-inline const Vec3& opposite_vertex(const TriangleMesh& mesh, const edgetree::ForestEdge& e, int face) {
+inline const Vec3& opposite_vertex(const TriangleMesh& mesh, const edgetree::Edge& e, int face) {
   return mesh.positions[size_t(edgetree::opposite_vertex_index(mesh, e, face))];
 }
 
@@ -38,7 +38,7 @@ inline const Vec3& opposite_vertex(const TriangleMesh& mesh, const edgetree::For
 /// coordinates' magnitude: far above double rounding, far below any modelled feature), else -1.
 /// Such an edge lies in p's plane as an edge of p's own triangle does (a flat region split into
 /// several triangles: a box's wall, a floor quad), and is treated as OwnFace says.
-inline int face_in_plane(const TriangleMesh& mesh, const edgetree::ForestEdge& e, int triangle, const Vec3& ng,
+inline int face_in_plane(const TriangleMesh& mesh, const edgetree::Edge& e, int triangle, const Vec3& ng,
                          const Vec3& p) {
   if (e.f0 == triangle || e.f1 == triangle) return triangle;
   auto in_plane = [&](const Vec3& x) {
@@ -53,7 +53,7 @@ inline int face_in_plane(const TriangleMesh& mesh, const edgetree::ForestEdge& e
 /// The rays of the boundary term ignore the sampled edge's own two faces (an Embree filter on
 /// their primitive ids: no absolute epsilon). `through_back_faces` as for every ray of the path
 /// tracer (leaves_below).
-inline IgnoreSet edge_faces(const edgetree::ForestEdge& e, bool through_back_faces) {
+inline IgnoreSet edge_faces(const edgetree::Edge& e, bool through_back_faces) {
   IgnoreSet ignore;
   if (e.crossing) {  // a segment of an intersection curve: its two crossing triangles
     ignore.prims[0] = {e.crossing->shape[0], e.crossing->face[0]};
@@ -78,7 +78,7 @@ struct EdgeRays {
 /// The rays of edge point `in` (not a crossing; `mesh` its shape's mesh), or nothing for a zero
 /// contribution: an edge in p's plane whose other face T' is missing, below p's plane or in it.
 inline std::optional<EdgeRays> edge_rays(const PathContext& ctx, const EdgeJumpInputs& in, const TriangleMesh& mesh) {
-  const edgetree::ForestEdge& e = in.edge;
+  const edgetree::Edge& e = in.edge;
   const Vec3& p = in.p;
   const OwnFace& own = in.own;
   EdgeRays rays;
@@ -107,7 +107,7 @@ inline std::optional<EdgeRays> edge_rays(const PathContext& ctx, const EdgeJumpI
 
 /// The side of the plane (p, edge) on which face `face` of the edge lies: the sign of
 /// (w0 x w1).(x_opp - p) for the face's third vertex x_opp (n01 = w0 x w1, EdgeSight; world).
-inline double plane_side(const Vec3& n01, const TriangleMesh& mesh, const edgetree::ForestEdge& e, int face,
+inline double plane_side(const Vec3& n01, const TriangleMesh& mesh, const edgetree::Edge& e, int face,
                          const Vec3& p) {
   return n01.dot(opposite_vertex(mesh, e, face) - p);
 }
@@ -118,7 +118,7 @@ inline double plane_side(const Vec3& n01, const TriangleMesh& mesh, const edgetr
 /// vertex order (the face may be seen edge-on from p, where a ray-plane intersection degenerates).
 inline Color edge_face_radiance(const PathContext& ctx, const EdgeJumpInputs& in, const Vec3& w, int face, Sampler& rng,
                                 PathStats& stats) {
-  const edgetree::ForestEdge& e = in.edge;
+  const edgetree::Edge& e = in.edge;
   const double t = in.t;
   const PrimalView pv{ctx.scene};
   Hit h;
@@ -138,7 +138,7 @@ inline Color edge_face_radiance(const PathContext& ctx, const EdgeJumpInputs& in
 /// (w0 x w1) points to. Nothing (a zero contribution) when the first face lies in that plane.
 inline std::optional<Color> crease_jump(const PathContext& ctx, const EdgeJumpInputs& in, const EdgeSight& sight,
                                         Sampler& sampler, PathStats& stats) {
-  const edgetree::ForestEdge& e = in.edge;
+  const edgetree::Edge& e = in.edge;
   const double s0 = plane_side(sight.n01, ctx.scene->shapes[e.shape].mesh, e, e.f0, in.p);
   if (s0 == 0) return std::nullopt;
   // Common random numbers: both faces continue their paths with the same random numbers, so
@@ -154,7 +154,7 @@ inline std::optional<Color> crease_jump(const PathContext& ctx, const EdgeJumpIn
 /// Nothing (a zero contribution) when the occluding face lies in the plane (p, edge).
 inline std::optional<Color> silhouette_jump(const PathContext& ctx, const EdgeJumpInputs& in, const EdgeSight& sight,
                                             const EdgeRays& rays, Sampler& sampler, PathStats& stats) {
-  const edgetree::ForestEdge& e = in.edge;
+  const edgetree::Edge& e = in.edge;
   const Vec3& p = in.p;
   const int own_occluder = rays.own_occluder;
   const double side =
@@ -209,7 +209,7 @@ inline std::optional<Color> silhouette_jump(const PathContext& ctx, const EdgeJu
 template <class Accept>
 std::optional<Color> edge_jump_with(const PathContext& ctx, const EdgeJumpInputs& in, Sampler& sampler,
                                     PathStats& stats, Accept&& accept) {
-  const edgetree::ForestEdge& e = in.edge;
+  const edgetree::Edge& e = in.edge;
   if (e.crossing) return crossing_jump(ctx, in, sampler, stats, accept);
   const Vec3& p = in.p;
   const std::optional<EdgeSight> sight = edge_sight(e, in.t, p);
@@ -237,7 +237,7 @@ std::optional<Color> edge_jump_with(const PathContext& ctx, const EdgeJumpInputs
 /// of the edge point (1 - t) v0 + t v1 (its ends' velocities, edgetree::edge_end_velocity, from
 /// `vel`) minus dp (3 x N, p's velocity).
 template <int N>
-Eigen::Matrix<double, 1, N> edge_point_jacobian(const SceneVelocities& vel, const edgetree::ForestEdge& e, double t,
+Eigen::Matrix<double, 1, N> edge_point_jacobian(const SceneVelocities& vel, const edgetree::Edge& e, double t,
                                                 const Vec3& g, const Eigen::Matrix<double, 3, N>& dp) {
   if (e.crossing) {
     const SceneVelocities::Block v0 = edgetree::edge_end_velocity(e, 0, vel),

@@ -41,7 +41,7 @@ struct OwnFace {
 /// start and pass back faces, the face rule for an edge in p's plane, and the path depth. World
 /// coordinates, scene units. Read-only; the random numbers and the counters are passed beside it.
 struct EdgeJumpInputs {
-  const edgetree::ForestEdge& edge;  ///< the sampled discontinuity edge (or segment of an intersection curve)
+  const edgetree::Edge& edge;  ///< the sampled discontinuity edge (or segment of an intersection curve)
   double t = 0;                      ///< the edge point's parameter: edge.p0 + t (edge.p1 - edge.p0), t in [0, 1]
   Vec3 p = Vec3::Zero();             ///< the point the edge is seen from: a path vertex, or the camera centre
   /// The visibility ray's origin: p, or p offset off its surface (spawn_origin); for an edge in
@@ -68,7 +68,7 @@ struct EdgeSight {
 };
 
 /// The sight of edge e's point at t from p, or nothing when p is that point (distance 0).
-inline std::optional<EdgeSight> edge_sight(const edgetree::ForestEdge& e, double t, const Vec3& p) {
+inline std::optional<EdgeSight> edge_sight(const edgetree::Edge& e, double t, const Vec3& p) {
   EdgeSight s;
   s.w0 = e.p0 - p;
   s.w1 = e.p1 - p;
