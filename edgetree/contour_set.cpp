@@ -124,6 +124,13 @@ class VisitedSet {
   std::uint32_t stamp_ = 0;
 };
 
+/// The buffers of a contour set's construction (EdgeChoiceScratch).
+struct ContourBuffers {
+  std::vector<std::pair<int, int>> seeds;  ///< (shape, edge)
+  VisitedSet visited;
+  std::vector<std::pair<int, int>> stack;
+};
+
 /// Walk directions: angles pi k / kContourWalks, k = 0 .. 2 kContourWalks - 1.
 static_assert(kContourWalks == 4, "the tables below hold 8 directions");
 constexpr double kWalkCos[8] = {1.0,  0.70710678118654757,  0.0, -0.70710678118654757,
@@ -133,8 +140,10 @@ constexpr double kWalkSin[8] = {0.0, 0.70710678118654757,  1.0,  0.7071067811865
 }  // namespace
 
 void ContourIndex::contour_edges(const ContourProbe& probe, const Vec3& p, const std::vector<bool>* eligible,
-                                 std::vector<const Edge*>& out) const {
+                                 std::vector<const Edge*>& out, EdgeChoiceScratch* scratch) const {
   out.clear();
+  EdgeChoiceScratch fallback;
+  ContourBuffers& buffers = scratch_buffer<ContourBuffers>(scratch, fallback);
   const Vec4 ph(p.x(), p.y(), p.z(), 1.0);
   auto indexed = [&](int shape) {
     return shape >= 0 && shape < int(meshes_.size()) && meshes_[size_t(shape)].mesh &&
@@ -146,7 +155,7 @@ void ContourIndex::contour_edges(const ContourProbe& probe, const Vec3& p, const
 
   // ---- 1. From each hit, walks across the faces the planes through its ray cut, to the first
   // silhouette.
-  thread_local std::vector<std::pair<int, int>> seeds;  // (shape, edge)
+  std::vector<std::pair<int, int>>& seeds = buffers.seeds;
   seeds.clear();
   for (int h = 0; h < probe.count; ++h) {
     const ContourHit& hit = probe.hits[size_t(h)];
@@ -189,9 +198,9 @@ void ContourIndex::contour_edges(const ContourProbe& probe, const Vec3& p, const
   }
 
   // ---- 2. Contour following: silhouette edges sharing a vertex, within the core.
-  thread_local VisitedSet visited;
+  VisitedSet& visited = buffers.visited;
   visited.clear();
-  thread_local std::vector<std::pair<int, int>> stack;
+  std::vector<std::pair<int, int>>& stack = buffers.stack;
   stack.assign(seeds.begin(), seeds.end());
   int visits = 0;
   while (!stack.empty() && int(out.size()) < kMaxContourEdges && visits < kMaxContourVisits) {

@@ -50,19 +50,19 @@ constexpr int kExactTestEdges = 64;
 /// below which the forest is handled edge by edge.
 constexpr int kFlatEdges = kExactTestEdges;
 
-/// A query with its per-query constants: the lights that face p, in the local frame.
+struct ForestBuffers;
+
+/// A query with its per-query constants: the lights that face p, in the local frame; and the
+/// buffers of its traversal (from q.scratch, or from the caller's own scratch).
 struct PreparedQuery {
   const SilhouetteQuery& q;
   std::span<const LocalLight> lights;
   bool cosine_lobe;  ///< q.ltc is the clamped cosine (M_inv = I): far boxes use cone_fbar, far edges far_total
+  ForestBuffers& buffers;
 };
 
-/// Per-thread storage of the prepared lights (a traversal is single-threaded).
-PreparedQuery prepare(const SilhouetteQuery& q) {
-  thread_local std::vector<LocalLight> storage;
-  local_lights(q, storage);
-  return {q, storage, is_cosine_lobe(q.ltc)};
-}
+/// The query's constants, in buffers of q.scratch, or of `fallback` where q has none.
+PreparedQuery prepare(const SilhouetteQuery& q, EdgeChoiceScratch& fallback);
 
 NodeWeight node_weight(const ForestNode& node, const PreparedQuery& prepared);
 NodeWeight leaf_edge_weight(const Edge& e, const PreparedQuery& prepared);
@@ -213,11 +213,20 @@ void local_lights(const SilhouetteQuery& q, std::vector<LocalLight>& out) {
   }
 }
 
-NodeWeight leaf_edge_weight(const Edge& e, const SilhouetteQuery& q) { return leaf_edge_weight(e, prepare(q)); }
+NodeWeight leaf_edge_weight(const Edge& e, const SilhouetteQuery& q) {
+  EdgeChoiceScratch fallback;
+  return leaf_edge_weight(e, prepare(q, fallback));
+}
 
-NodeWeight loose_edge_weight(const Edge& e, const SilhouetteQuery& q) { return loose_edge_weight(e, prepare(q)); }
+NodeWeight loose_edge_weight(const Edge& e, const SilhouetteQuery& q) {
+  EdgeChoiceScratch fallback;
+  return loose_edge_weight(e, prepare(q, fallback));
+}
 
-NodeWeight node_weight(const ForestNode& node, const SilhouetteQuery& q) { return node_weight(node, prepare(q)); }
+NodeWeight node_weight(const ForestNode& node, const SilhouetteQuery& q) {
+  EdgeChoiceScratch fallback;
+  return node_weight(node, prepare(q, fallback));
+}
 
 namespace {
 
@@ -384,13 +393,29 @@ NodeWeight node_weight(const ForestNode& node, const PreparedQuery& prepared) {
 
 namespace {
 
-/// The top level of a traversal: candidates and their probabilities (thread-local storage).
+/// The top level of a traversal: candidates and their probabilities.
 struct TopLevel {
   std::vector<Candidate> cand;
   std::vector<double> prob;
   int n = 0;
   int tests = 0;
 };
+
+/// The buffers of the forest traversal (EdgeChoiceScratch), one set per use.
+struct ForestBuffers {
+  std::vector<LocalLight> lights;                 ///< prepare
+  std::vector<Candidate> rest, flat, contour_cand;  ///< remove_split, descend, sample_contour
+  std::vector<int> rest_index;                    ///< remove_split
+  std::vector<double> rest_prob, flat_prob, contour_prob;
+  TopLevel top_sample, top_set;                   ///< sample_silhouette, sample_silhouette_set
+  std::vector<const Edge*> contour;               ///< sample_silhouette_set
+};
+
+PreparedQuery prepare(const SilhouetteQuery& q, EdgeChoiceScratch& fallback) {
+  ForestBuffers& b = scratch_buffer<ForestBuffers>(q.scratch, fallback);
+  local_lights(q, b.lights);
+  return {q, b.lights, is_cosine_lobe(q.ltc), b};
+}
 
 void top_level(const EdgeForest& forest, const PreparedQuery& prepared, NodeTest test, TopLevel& top) {
   top.tests = 0;
@@ -424,11 +449,11 @@ int split_indices(const TopLevel& top, std::array<int, kMaxSplitEdges>& idx) {
 /// part at its old size while the split edges had taken most of the importance part: on the
 /// teapot's self-shadows the rest's choice was then up to ~40 % defensive (docs/architecture.md §5
 /// "Splitting"). Returns false when no candidate is left.
-bool remove_split(TopLevel& top, const std::array<int, kMaxSplitEdges>& idx, int n_split) {
+bool remove_split(TopLevel& top, const std::array<int, kMaxSplitEdges>& idx, int n_split, ForestBuffers& b) {
   auto is_split = [&](int i) { return std::find(idx.begin(), idx.begin() + n_split, i) != idx.begin() + n_split; };
-  thread_local std::vector<Candidate> rest;
-  thread_local std::vector<int> where;
-  thread_local std::vector<double> prob;
+  std::vector<Candidate>& rest = b.rest;
+  std::vector<int>& where = b.rest_index;
+  std::vector<double>& prob = b.rest_prob;
   rest.clear();
   where.clear();
   for (int i = 0; i < top.n; ++i) {
@@ -455,8 +480,8 @@ SilhouetteSample descend(const EdgeForest& forest, const PreparedQuery& prepared
   while (!cur.edge) {
     const ForestNode& node = forest.node(cur.node);
     if (is_flat(node, test, prepared.q.p)) {
-      thread_local std::vector<Candidate> flat;
-      thread_local std::vector<double> prob;
+      std::vector<Candidate>& flat = prepared.buffers.flat;
+      std::vector<double>& prob = prepared.buffers.flat_prob;
       const int k = flat_candidates(forest, cur.node, prepared, flat, prob);
       const int i = k > 0 ? choose(prob.data(), k, next()) : -1;
       if (i < 0) {  // a false accept: no discontinuity below
@@ -488,8 +513,9 @@ SilhouetteSample descend(const EdgeForest& forest, const PreparedQuery& prepared
 
 SilhouetteSample sample_silhouette(const EdgeForest& forest, const SilhouetteQuery& query,
                                    const std::function<double()>& next, NodeTest test) {
-  const PreparedQuery prepared = prepare(query);
-  thread_local TopLevel top;
+  EdgeChoiceScratch fallback;
+  const PreparedQuery prepared = prepare(query, fallback);
+  TopLevel& top = prepared.buffers.top_sample;
   top_level(forest, prepared, test, top);
   SilhouetteSample s;
   s.rejection_tests = top.tests;
@@ -507,8 +533,8 @@ SilhouetteSample sample_contour(std::span<const Edge* const> contour, const Prep
                                 double u_t) {
   const int k = int(contour.size());
   if (k == 0) return {};
-  thread_local std::vector<Candidate> cand;
-  thread_local std::vector<double> prob;
+  std::vector<Candidate>& cand = prepared.buffers.contour_cand;
+  std::vector<double>& prob = prepared.buffers.contour_prob;
   cand.clear();
   for (const Edge* e : contour) cand.push_back({-1, e, {}});
   prob.resize(size_t(k));
@@ -528,13 +554,14 @@ SilhouetteSample sample_contour(std::span<const Edge* const> contour, const Prep
 void sample_silhouette_set(const EdgeForest& forest, const SilhouetteQuery& query, const std::function<double()>& next,
                            NodeTest test, SilhouetteSampleSet& out) {
   out.count = 0;
-  const PreparedQuery prepared = prepare(query);
-  thread_local TopLevel top;
+  EdgeChoiceScratch fallback;
+  const PreparedQuery prepared = prepare(query, fallback);
+  TopLevel& top = prepared.buffers.top_set;
   top_level(forest, prepared, test, top);
   std::array<int, kMaxSplitEdges> idx;
   const int n_split = top.n > 0 ? split_indices(top, idx) : 0;
   // ---- The contour set, less the split edges (which keep their point of probability 1).
-  thread_local std::vector<const Edge*> contour;
+  std::vector<const Edge*>& contour = prepared.buffers.contour;
   contour.clear();
   for (const Edge* e : query.contour) {
     QSIL_DCHECK_MSG(is_discontinuity(*e, query.p), "a contour edge that is no discontinuity");
@@ -561,7 +588,7 @@ void sample_silhouette_set(const EdgeForest& forest, const SilhouetteQuery& quer
     if (s.edge) out.push(s);
   }
   // The traversal chooses among the rest.
-  if (n_split > 0 && !remove_split(top, idx, n_split)) return;
+  if (n_split > 0 && !remove_split(top, idx, n_split, prepared.buffers)) return;
   const int i = choose(top.prob.data(), top.n, next());
   if (i < 0) return;
   push(descend(forest, prepared, next, test, top.cand[size_t(i)], top.prob[size_t(i)], top.tests));
@@ -570,7 +597,8 @@ void sample_silhouette_set(const EdgeForest& forest, const SilhouetteQuery& quer
 std::vector<const Edge*> split_edges(const EdgeForest& forest, const SilhouetteQuery& query, NodeTest test,
                                            double* split_probability) {
   TopLevel top;
-  top_level(forest, prepare(query), test, top);
+  EdgeChoiceScratch fallback;
+  top_level(forest, prepare(query, fallback), test, top);
   std::array<int, kMaxSplitEdges> idx;
   const int n_split = top.n > 0 ? split_indices(top, idx) : 0;
   std::vector<const Edge*> out;
@@ -585,7 +613,8 @@ std::vector<const Edge*> split_edges(const EdgeForest& forest, const SilhouetteQ
 
 SilhouetteSample sample_on_edge(const Edge& e, double pmf, const SilhouetteQuery& query, double u,
                                 int rejection_tests) {
-  return sample_on_edge(e, pmf, prepare(query), u, rejection_tests);
+  EdgeChoiceScratch fallback;
+  return sample_on_edge(e, pmf, prepare(query, fallback), u, rejection_tests);
 }
 
 namespace {
@@ -658,7 +687,8 @@ double walk_probability(const EdgeForest& forest, const PreparedQuery& prepared,
 
 double silhouette_edge_probability(const EdgeForest& forest, const SilhouetteQuery& query, const Edge* edge,
                                    NodeTest test) {
-  const PreparedQuery prepared = prepare(query);
+  EdgeChoiceScratch fallback;
+  const PreparedQuery prepared = prepare(query, fallback);
   TopLevel top;
   top_level(forest, prepared, test, top);
   return walk_probability(forest, prepared, test, top, edge);
@@ -666,12 +696,13 @@ double silhouette_edge_probability(const EdgeForest& forest, const SilhouetteQue
 
 double traversal_edge_probability(const EdgeForest& forest, const SilhouetteQuery& query, const Edge* edge,
                                   NodeTest test) {
-  const PreparedQuery prepared = prepare(query);
+  EdgeChoiceScratch fallback;
+  const PreparedQuery prepared = prepare(query, fallback);
   TopLevel top;
   top_level(forest, prepared, test, top);
   std::array<int, kMaxSplitEdges> idx;
   const int n_split = top.n > 0 ? split_indices(top, idx) : 0;
-  if (n_split > 0 && !remove_split(top, idx, n_split)) return 0;
+  if (n_split > 0 && !remove_split(top, idx, n_split, prepared.buffers)) return 0;
   return walk_probability(forest, prepared, test, top, edge);
 }
 

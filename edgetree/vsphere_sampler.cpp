@@ -154,10 +154,18 @@ int VSphereEdgeSampler::child_candidates(int n, const SilhouetteQuery& q, Cand* 
   return k;
 }
 
+/// The buffers of a traversal's top level (EdgeChoiceScratch).
+struct VSphereEdgeSampler::Buffers {
+  std::vector<Cand> top;
+  std::vector<double> prob;
+};
+
 SilhouetteSample VSphereEdgeSampler::sample(const SilhouetteQuery& query, const std::function<double()>& next) const {
   SilhouetteSample s;
-  thread_local std::vector<Cand> top;
-  thread_local std::vector<double> prob;
+  EdgeChoiceScratch fallback;
+  Buffers& buffers = scratch_buffer<Buffers>(query.scratch, fallback);
+  std::vector<Cand>& top = buffers.top;
+  std::vector<double>& prob = buffers.prob;
   const int n_top = top_candidates(query, top, s.rejection_tests);
   if (n_top == 0) return s;
   prob.resize(size_t(n_top));

@@ -12,6 +12,7 @@
 #include "qsil/integrators/geometry_view.h"
 #include "qsil/integrators/path_tracer.h"
 
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
@@ -95,6 +96,7 @@ class GradientEstimator final : public Estimator::Impl, private RenderSetup {
     // A fractional boundary rate draws a pixel's samples unalike (boundary_traversals): that
     // fraction of them makes one more traversal, stratum 1 of the film.
     const double fraction = with_boundary ? boundary_ctx.sppi - std::floor(boundary_ctx.sppi) : 0.0;
+    tbb::enumerable_thread_specific<edgetree::EdgeChoiceScratch> scratch;  // one per worker thread
     PathStats total;
     run_pixels(
         cam, layout, options, first, count, "grad",
@@ -107,7 +109,7 @@ class GradientEstimator final : public Estimator::Impl, private RenderSetup {
           if (traversals > 0) {
             // The boundary term draws from a stream of its own, so it leaves the path's decisions unchanged.
             Sampler bsampler(options.seed, pixel, uint64_t(s), 1);
-            const BoundaryHook<N> hook{&ctx, &boundary_ctx, &bsampler, traversals};
+            const BoundaryHook<N> hook{&ctx, &boundary_ctx, &bsampler, traversals, &scratch.local()};
             L = trace_path(ctx, view, {lift<Dual<N>>(origin), ray.dir, ray.hit}, sampler, st, hook);
           } else {
             L = trace_path(ctx, view, {lift<Dual<N>>(origin), ray.dir, ray.hit}, sampler, st);

@@ -153,12 +153,13 @@ struct ReverseBoundaryHook {
   Color adjoint;                         ///< the pixel's adjoint / spp
   bool edges;                            ///< add the edge vertices' share (first pass of the path)
   std::vector<Contribution>* out;
+  edgetree::EdgeChoiceScratch* scratch;  ///< this thread's edge-choice scratch
 
   void operator()(const SurfaceInteraction<RDual>& si, const ShadingPoint<RDual>& sp, const Vec3& wo_local,
                   const ColorT<RDual>& beta, int seg, Sampler&, PathStats& stats, ColorT<RDual>& L) const {
     Eigen::Matrix<double, 3, kSlots> dp;
     for (int i = 0; i < 3; ++i) dp.row(i) = si.p[i].derivatives().transpose();
-    edgetree::SilhouetteQuery q = boundary_query(*boundary_ctx, si, sp, wo_local);
+    edgetree::SilhouetteQuery q = boundary_query(*boundary_ctx, si, sp, wo_local, scratch);
     q.eligible = tape->moving ? &boundary_ctx->all : &boundary_ctx->moving;
     q.velocities = nullptr;  // a parameter per vertex: no normal-velocity factor
     const BoundaryVertex<RDual> vertex{.si = si,
@@ -201,6 +202,14 @@ struct TileSums {
   PathStats stats;
   double loss = 0;
   uint64_t nonfinite = 0, replays = 0;
+};
+
+/// What one tile's samples reuse from one to the next: the hit tape, the vertex adjoints of a
+/// sample, and the edge choice's scratch (one tile runs on one thread at a time).
+struct TileScratch {
+  Tape tape;
+  std::vector<Contribution> contributions;
+  edgetree::EdgeChoiceScratch edge_choice;
 };
 
 /// One sample of one pixel: sample index s of pixel (x, y), and the run's seed.
@@ -276,10 +285,11 @@ class ReverseEstimator::Impl : public RenderSetup {
 
   /// One pass of sample `ps`'s path: the path from the sample's first random number, with slots
   /// for tape hits [window, window + kHitsPerPass) (every pass draws the same numbers: the same
-  /// path), its secondary boundary term adding to `contributions` (adjoint `a` of the pixel, per
-  /// sample) and its hits' adjoints added by backpropagate_hits.
-  ColorT<RDual> trace_pass(const PixelSample& ps, int window, const Color& a, Tape& tape,
-                           std::vector<Contribution>& contributions, PathStats& st) const {
+  /// path), its secondary boundary term adding to `scratch.contributions` (adjoint `a` of the
+  /// pixel, per sample) and its hits' adjoints added by backpropagate_hits.
+  ColorT<RDual> trace_pass(const PixelSample& ps, int window, const Color& a, TileScratch& scratch,
+                           PathStats& st) const {
+    Tape& tape = scratch.tape;
     const Camera& cam = scene.camera;
     const Vec3 origin = cam.origin();
     const uint64_t pixel = uint64_t(ps.y) * uint64_t(cam.width) + uint64_t(ps.x);
@@ -291,13 +301,15 @@ class ReverseEstimator::Impl : public RenderSetup {
     ColorT<RDual> L;
     if (traversals > 0) {
       Sampler bsampler(ps.seed, pixel, uint64_t(ps.s), 1);
-      const ReverseBoundaryHook hook{&ctx, &boundary_ctx, &bsampler, traversals, &tape, &chosen_index, a, window == 0,
-                                     &contributions};
+      const ReverseBoundaryHook hook{&ctx,          &boundary_ctx, &bsampler,
+                                     traversals,    &tape,         &chosen_index,
+                                     a,             window == 0,   &scratch.contributions,
+                                     &scratch.edge_choice};
       L = trace_path(ctx, view, {lift<RDual>(origin), ray.dir, ray.hit}, sampler, st, hook);
     } else {
       L = trace_path(ctx, view, {lift<RDual>(origin), ray.dir, ray.hit}, sampler, st);
     }
-    backpropagate_hits(tape, L, a, contributions);
+    backpropagate_hits(tape, L, a, scratch.contributions);
     return L;
   }
 
@@ -307,8 +319,8 @@ class ReverseEstimator::Impl : public RenderSetup {
   /// values into `image` (W x H x 3).
   void reverse_tile(const Tile& tile, const std::vector<double>& adjoint, int first, int count, uint64_t seed,
                     TileSums& sums, std::vector<double>& image) const {
-    Tape tape;
-    std::vector<Contribution> contributions;
+    TileScratch scratch;
+    std::vector<Contribution>& contributions = scratch.contributions;
     for (int y = tile.y0; y < tile.y1; ++y)
       for (int x = tile.x0; x < tile.x1; ++x) {
         const uint64_t pixel = uint64_t(y) * uint64_t(scene.camera.width) + uint64_t(x);
@@ -317,9 +329,9 @@ class ReverseEstimator::Impl : public RenderSetup {
         for (int s = first; s < first + count; ++s) {
           contributions.clear();
           const PixelSample ps{x, y, s, seed};
-          const Color value_L = value(trace_pass(ps, 0, a, tape, contributions, sums.stats));
-          for (int w = kHitsPerPass; w < int(tape.hits.size()); w += kHitsPerPass) {
-            trace_pass(ps, w, a, tape, contributions, sums.stats);
+          const Color value_L = value(trace_pass(ps, 0, a, scratch, sums.stats));
+          for (int w = kHitsPerPass; w < int(scratch.tape.hits.size()); w += kHitsPerPass) {
+            trace_pass(ps, w, a, scratch, sums.stats);
             ++sums.replays;
           }
           if (!value_L.allFinite() || !finite(contributions)) {

@@ -132,7 +132,7 @@ OracleResult run_oracle(const Scene& scene, const Vec3& p_velocity = Vec3::Zero(
   const SurfaceInteraction<double> si = make_interaction(pv, hit, origin, dir, tracer.local_origin());
   const ShadingPoint<double> sp = make_shading_point(ctx, si, -dir);
   const Vec3 wo_local = sp.frame_value.to_local(-dir);
-  edgetree::SilhouetteQuery q = boundary_query(boundary_ctx, si, sp, wo_local);
+  edgetree::SilhouetteQuery q = boundary_query(boundary_ctx, si, sp, wo_local, nullptr);
   const bool p_moves = p_velocity != Vec3::Zero();
   q.eligible = p_moves ? &boundary_ctx.all : &boundary_ctx.moving;  // as BoundaryHook: at a moving p every edge moves
   q.velocities = &vel;

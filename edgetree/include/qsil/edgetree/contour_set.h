@@ -44,6 +44,7 @@
 /// over every other edge (the traversal, whose samples of edges in the set are dropped); see
 /// sample_silhouette_set.
 
+#include "qsil/edgetree/edge_choice_scratch.h"
 #include "qsil/edgetree/edge_set.h"
 #include "qsil/edgetree/mesh_edges.h"
 #include "qsil/math.h"
@@ -135,8 +136,9 @@ class ContourIndex {
   /// means every shape) of the walks from each hit (in planes through its ray) and the contour
   /// following from all their seeds, each edge once, in the order found (deterministic: walks in
   /// hit and direction order, then a depth-first following) into `out` (cleared first).
+  /// `scratch`: this thread's buffers (edge_choice_scratch.h); null: the call makes its own.
   void contour_edges(const ContourProbe& probe, const Vec3& p, const std::vector<bool>* eligible,
-                     std::vector<const Edge*>& out) const;
+                     std::vector<const Edge*>& out, EdgeChoiceScratch* scratch = nullptr) const;
 
   /// Whether the cone {w : w . axis >= cos_half_angle} from p (axis unit) meets the bounding
   /// sphere of an eligible indexed shape (`eligible` as in contour_edges): where it meets none, no

@@ -21,6 +21,7 @@
 ///   exactly one strategy. Measured: docs/experiments/2026-11-25-edge-choice.md, -header-notes.md.
 
 #include "qsil/edgetree/contour_set.h"
+#include "qsil/edgetree/edge_choice_scratch.h"
 #include "qsil/edgetree/edge_forest.h"
 #include "qsil/edgetree/ltc.h"
 #include "qsil/edgetree/node_rejection.h"
@@ -72,6 +73,9 @@ struct SilhouetteQuery {
   /// sample_silhouette_set estimates by a strategy of their own. Empty (the default): none.
   /// The edges must outlive the query's use.
   std::span<const Edge* const> contour;
+  /// Scratch memory of this thread for the edge choice (edge_choice_scratch.h); null: each call
+  /// makes its own.
+  EdgeChoiceScratch* scratch = nullptr;
 
   /// True when edges of shape (or crossing group) `shape` may contribute (see `eligible`).
   bool is_eligible(int shape) const {

@@ -56,6 +56,7 @@ class VSphereEdgeSampler final : public EdgeSampler {
 
  private:
   /// A candidate of a choice: a node (>= 0) or an always-candidate edge, with its weights.
+  struct Buffers;  ///< the traversal's scratch buffers (vsphere_sampler.cpp)
   struct Cand {
     int node = -1;
     const Edge* edge = nullptr;

@@ -15,13 +15,14 @@ struct BoundaryHook {
   const BoundaryContext* boundary_ctx;
   Sampler* sampler;  ///< a stream of its own, so the hook leaves the path's own decisions unchanged
   int traversals;    ///< at every vertex (boundary_traversals of the sample)
+  edgetree::EdgeChoiceScratch* scratch;  ///< this thread's edge-choice scratch
 
   void operator()(const SurfaceInteraction<Dual<N>>& si, const ShadingPoint<Dual<N>>& sp, const Vec3& wo_local,
                   const ColorT<Dual<N>>& beta, int seg, Sampler&, PathStats& stats, ColorT<Dual<N>>& L) const {
     // ---- dp/dtheta: does the shading point move?
     Eigen::Matrix<double, 3, N> dp;
     for (int i = 0; i < 3; ++i) dp.row(i) = si.p[i].derivatives().transpose();
-    edgetree::SilhouetteQuery q = boundary_query(*boundary_ctx, si, sp, wo_local);
+    edgetree::SilhouetteQuery q = boundary_query(*boundary_ctx, si, sp, wo_local, scratch);
     q.eligible = !dp.isZero(0.0) ? &boundary_ctx->all : &boundary_ctx->moving;
     q.velocities = boundary_ctx->velocities;
     q.dp.setZero();

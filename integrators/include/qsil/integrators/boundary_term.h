@@ -45,6 +45,11 @@ struct BoundaryVertex {
   int traversals = 0;                ///< boundary traversals at the vertex (boundary_traversals; <= 0: none)
 };
 
+/// The contour set of a vertex's query, in its edge-choice scratch (for_each_boundary_sample).
+struct ContourEdgesBuffer {
+  std::vector<const edgetree::Edge*> edges;
+};
+
 /// The secondary boundary term's samples at one path vertex (shared by forward mode, BoundaryHook,
 /// and reverse mode, integrators/reverse.cpp) `vertex` (BoundaryVertex): vertex.traversals
 /// traversals of boundary_ctx.sampler (boundary_traversals) for query q = vertex.query (set up by the
@@ -70,16 +75,18 @@ void for_each_boundary_sample(const PathContext& ctx, const BoundaryContext& bou
   const double rate = boundary_ctx.sppi * double(split);
   const auto t0 = std::chrono::steady_clock::now();
   const Vec3 wo_world = q.frame.to_world(wo_local);
-  // ---- The contour set of a glossy vertex: made once, used by every traversal here. The
-  // traversals leave no other boundary query open on this thread meanwhile (their radiance paths
-  // have no vertex hook), so per-thread storage serves.
-  thread_local std::vector<const edgetree::Edge*> contour;
+  // ---- The contour set of a glossy vertex: made once, used by every traversal here, in the
+  // query's scratch (the traversals leave no other boundary query open on this thread meanwhile:
+  // their radiance paths have no vertex hook).
+  edgetree::EdgeChoiceScratch fallback;
+  std::vector<const edgetree::Edge*>& contour =
+      edgetree::scratch_buffer<ContourEdgesBuffer>(q.scratch, fallback).edges;
   contour.clear();
   if (boundary_ctx.contours) {
     int rays = 0;
     const edgetree::ContourProbe probe = contour_probe(ctx, *boundary_ctx.contours, si, wo_world, q, rays);
     stats.rays += uint64_t(rays);
-    if (probe.count > 0) boundary_ctx.contours->contour_edges(probe, q.p, q.eligible, contour);
+    if (probe.count > 0) boundary_ctx.contours->contour_edges(probe, q.p, q.eligible, contour, q.scratch);
   }
   q.contour = contour;
   edgetree::SilhouetteSampleSet set;
@@ -127,11 +134,14 @@ void for_each_boundary_sample(const PathContext& ctx, const BoundaryContext& bou
 }
 
 /// The shading point's part of a boundary query: position, frame, the BSDF's LTC toward wo and the
-/// importance inputs of boundary_ctx (eligibility, velocities: the caller's).
+/// importance inputs of boundary_ctx (eligibility, velocities: the caller's), and this thread's
+/// edge-choice scratch (`scratch`, null: none).
 template <class T>
 edgetree::SilhouetteQuery boundary_query(const BoundaryContext& boundary_ctx, const SurfaceInteraction<T>& si,
-                                         const ShadingPoint<T>& sp, const Vec3& wo_local) {
+                                         const ShadingPoint<T>& sp, const Vec3& wo_local,
+                                         edgetree::EdgeChoiceScratch* scratch) {
   edgetree::SilhouetteQuery q;
+  q.scratch = scratch;
   q.p = value(si.p);
   q.frame = sp.frame_value;
   q.ltc = edgetree::bsdf_ltc(*sp.bsdf, wo_local);
