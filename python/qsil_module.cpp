@@ -76,14 +76,8 @@ void set_vertices(Scene& scene, const std::string& id, const Array& v) {
   if (!shape.face_normals) mesh.normals = vertex_normals(mesh);
 }
 
-}  // namespace
-}  // namespace qsil
-
-PYBIND11_MODULE(qsil, m) {
-  using namespace qsil;
-  m.doc() = "qsil: a differentiable path tracer with quadric-based silhouette sampling (Python bindings)";
-  py::register_exception<Error>(m, "Error", PyExc_ValueError);
-
+/// Binds qsil.Scene: loading, the camera's size and sample count, shapes' vertices and triangles.
+void bind_scene(py::module_& m) {
   py::class_<Scene>(m, "Scene", "A scene loaded from Mitsuba 3 XML (geometry in world space)")
       .def(py::init([](const std::string& path, const std::map<std::string, std::string>& defines) {
              return load_scene(path, defines);
@@ -123,7 +117,10 @@ PYBIND11_MODULE(qsil, m) {
           py::arg("shape"), "Triangles (T, 3) of a shape: vertex indices, counter-clockwise = outward")
       .def("set_vertices", &set_vertices, py::arg("shape"), py::arg("positions"),
            "Sets a shape's vertex positions (V, 3) and recomputes its area-weighted vertex normals");
+}
 
+/// Binds qsil.render and qsil.grad (forward mode).
+void bind_forward(py::module_& m) {
   m.def(
       "render",
       [](const Scene& scene, int spp, uint64_t seed, int threads) {
@@ -168,6 +165,10 @@ PYBIND11_MODULE(qsil, m) {
       "boundary-term samples per shading point on average over a pixel's samples (0: the method's default, 0.5 for "
       "quadric); sppp: primary edge samples per pixel sample (`qsil grad --help`)");
 
+}
+
+/// Binds qsil.reverse (reverse mode).
+void bind_reverse(py::module_& m) {
   m.def(
       "reverse",
       [](const Scene& scene, const std::vector<std::string>& shapes, const Array& adjoint, int spp, uint64_t seed,
@@ -208,4 +209,16 @@ PYBIND11_MODULE(qsil, m) {
       py::arg("sppp") = kDefaultSppp,
       "Reverse mode: for the loss L = sum(adjoint * I), a dict with 'image' (H, W, 3), 'loss' (of that image), "
       "'gradient' {shape id: dL/dx (V, 3)}, 'seconds', 'nonfinite'; sppi and sppp as for grad");
+}
+
+}  // namespace
+}  // namespace qsil
+
+PYBIND11_MODULE(qsil, m) {
+  using namespace qsil;
+  m.doc() = "qsil: a differentiable path tracer with quadric-based silhouette sampling (Python bindings)";
+  py::register_exception<Error>(m, "Error", PyExc_ValueError);
+  qsil::bind_scene(m);
+  qsil::bind_forward(m);
+  qsil::bind_reverse(m);
 }

@@ -45,6 +45,42 @@ std::vector<double> read_rgb(const std::string& option, const std::string& path,
   return out;
 }
 
+/// The adjoint of the L2 loss mean (I - T)^2 against the target image of `target_path` (2 (I - T) /
+/// n per pixel-channel), I a primal render with seed `render.seed` + 1; `l2` receives that render's
+/// loss.
+std::vector<double> l2_adjoint(const Scene& scene, const std::string& target_path, const RenderOptions& render,
+                               double& l2) {
+  const Camera& cam = scene.camera;
+  const std::vector<double> target = read_rgb("--target", target_path, cam);
+  RenderOptions primal_options = render;
+  primal_options.seed = render.seed + 1;
+  const RenderResult primal = Estimator(scene, EstimatorConfig::primal()).run(primal_options);
+  const double n = double(target.size());
+  std::vector<double> w(target.size());
+  l2 = 0;
+  for (int y = 0; y < cam.height; ++y)
+    for (int x = 0; x < cam.width; ++x)
+      for (int c = 0; c < 3; ++c) {
+        const size_t i = 3 * (size_t(y) * cam.width + x) + size_t(c);
+        const double diff = primal.film.mean(FilmLayout().primal(c), x, y) - target[i];
+        l2 += diff * diff / n;
+        w[i] = 2 * diff / n;
+      }
+  return w;
+}
+
+/// A row-major RGB image (width x height x 3 doubles) as an EXR image with channels R, G, B.
+Image rgb_image(const std::vector<double>& rgb, int width, int height) {
+  Image img;
+  img.width = width;
+  img.height = height;
+  img.channel_names = {"R", "G", "B"};
+  img.planes.assign(3, std::vector<float>(size_t(width) * height));
+  for (size_t i = 0; i < img.planes[0].size(); ++i)
+    for (int c = 0; c < 3; ++c) img.planes[size_t(c)][i] = float(rgb[3 * i + size_t(c)]);
+  return img;
+}
+
 const CommandRegistrar registrar{
     {"reverse", "Gradient of a loss with respect to every vertex of chosen shapes (reverse mode)",
      [](CLI::App& app) -> std::function<int()> {
@@ -76,42 +112,16 @@ const CommandRegistrar registrar{
          const ReverseEstimator reverse(scene,
                                         ReverseConfig{resolve_shapes(scene, flags->shapes), method, flags->boundary.sppi,
                                                       flags->boundary.sppp, flags->boundary.intersection_curves});
-         std::vector<double> w;
          double l2 = NAN;
-         if (!flags->adjoint.empty()) {
-           w = read_rgb("--adjoint", flags->adjoint, cam);
-         } else {
-           const std::vector<double> target = read_rgb("--target", flags->target, cam);
-           RenderOptions primal_options = flags->render;
-           primal_options.seed = flags->render.seed + 1;
-           const RenderResult primal = Estimator(scene, EstimatorConfig::primal()).run(primal_options);
-           const double n = double(target.size());
-           w.resize(target.size());
-           l2 = 0;
-           for (int y = 0; y < cam.height; ++y)
-             for (int x = 0; x < cam.width; ++x)
-               for (int c = 0; c < 3; ++c) {
-                 const size_t i = 3 * (size_t(y) * cam.width + x) + size_t(c);
-                 const double diff = primal.film.mean(FilmLayout().primal(c), x, y) - target[i];
-                 l2 += diff * diff / n;
-                 w[i] = 2 * diff / n;
-               }
-         }
+         const std::vector<double> w =
+             flags->adjoint.empty() ? l2_adjoint(scene, flags->target, flags->render, l2)
+                                    : read_rgb("--adjoint", flags->adjoint, cam);
          const ReverseResult r = reverse.run(w, flags->render);
          std::vector<double> rows;
          for (const auto& g : r.gradient)
            for (const Vec3& v : g) rows.insert(rows.end(), {v.x(), v.y(), v.z()});
          write_npy(flags->output, rows.size() / 3, 3, rows);
-         if (!flags->image.empty()) {
-           Image img;
-           img.width = cam.width;
-           img.height = cam.height;
-           img.channel_names = {"R", "G", "B"};
-           img.planes.assign(3, std::vector<float>(size_t(cam.width) * cam.height));
-           for (size_t i = 0; i < img.planes[0].size(); ++i)
-             for (int c = 0; c < 3; ++c) img.planes[size_t(c)][i] = float(r.image[3 * i + size_t(c)]);
-           write_exr(flags->image, img);
-         }
+         if (!flags->image.empty()) write_exr(flags->image, rgb_image(r.image, cam.width, cam.height));
          if (r.nonfinite > 0)
            std::fprintf(stderr, "warning: %llu samples had a non-finite value or gradient and were dropped\n",
                         (unsigned long long)r.nonfinite);
