@@ -11,7 +11,9 @@
 #include <cmath>
 #include <set>
 
-namespace qsil::edgetree {
+namespace qsil::study {
+
+using namespace qsil::edgetree;
 
 PatchKind parse_patch_kind(const std::string& name) {
   if (name == "sphere") return PatchKind::Sphere;
@@ -173,4 +175,4 @@ SliceVerdict PatchTests::evaluate(const Vec3& p) const {
   return v;
 }
 
-}  // namespace qsil::edgetree
+}  // namespace qsil::study

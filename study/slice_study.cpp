@@ -13,7 +13,9 @@
 
 #include <sstream>
 
-namespace qsil::edgetree {
+namespace qsil::study {
+
+using namespace qsil::edgetree;
 
 namespace {
 
@@ -176,4 +178,4 @@ void write_slice_study(const SliceStudy& s, const std::filesystem::path& dir) {
   write_file(dir / "summary.csv", csv.str());
 }
 
-}  // namespace qsil::edgetree
+}  // namespace qsil::study

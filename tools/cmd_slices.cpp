@@ -21,17 +21,17 @@ namespace qsil::cli {
 namespace {
 
 struct Flags {
-  edgetree::SliceStudyOptions study;
+  study::SliceStudyOptions study;
   ChartOutputFlags chart;
 };
 
 int run(const Flags& f) {
-  const edgetree::SliceStudy s = edgetree::run_slice_study(f.study);
+  const study::SliceStudy s = study::run_slice_study(f.study);
   const std::filesystem::path dir =
       f.chart.out_dir.empty() ? std::filesystem::path("out") / ("slices-" + s.label) : std::filesystem::path(f.chart.out_dir);
-  edgetree::write_slice_study(s, dir);
+  study::write_slice_study(s, dir);
   for (int k = 0; k < 2; ++k) {
-    const edgetree::PlaneStats& st = s.planes[size_t(k)];
+    const study::PlaneStats& st = s.planes[size_t(k)];
     for (size_t t = 0; t < kRejectionMethods.size(); ++t)
       std::printf("slices %s plane %d (h = %g): %-13s false-accept rate %.4f (%lld of %lld), false rejects %lld\n",
                   s.label.c_str(), k + 1, st.height, std::string(method_name(kRejectionMethods[t])).c_str(),
@@ -61,7 +61,7 @@ const CommandRegistrar registrar{
     {"slices", "False accepts of four rejection tests on two planes through one node ([QSS] Fig. 7)",
      [](CLI::App& app) -> std::function<int()> {
        auto f = std::make_shared<Flags>();
-       edgetree::SliceStudyOptions& s = f->study;
+       study::SliceStudyOptions& s = f->study;
        app.add_option("mesh", s.mesh, "Mesh (.obj) whose forest node --node is shown");
        app.add_option("--node", s.node, "Inner node id of the mesh's quadric edge forest")
            ->check(qsil::cli::non_negative_number());

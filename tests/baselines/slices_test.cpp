@@ -18,7 +18,7 @@
 #include <filesystem>
 #include <fstream>
 
-namespace qsil::edgetree {
+namespace qsil::study {
 namespace {
 
 struct Rates {
@@ -106,4 +106,4 @@ TEST(Candidates, CommandWritesImagesAndSummaries) {
 }
 
 }  // namespace
-}  // namespace qsil::edgetree
+}  // namespace qsil::study

@@ -25,7 +25,11 @@
 #include <string>
 #include <vector>
 
-namespace qsil::edgetree {
+namespace qsil::study {
+
+using edgetree::EdgeForest;
+using edgetree::NodeBound;
+using edgetree::Wedge;
 
 /// The two canonical patches.
 enum class PatchKind { Sphere, Torus };
@@ -81,4 +85,4 @@ class PatchTests {
   int node_ = -1;
 };
 
-}  // namespace qsil::edgetree
+}  // namespace qsil::study

@@ -20,7 +20,7 @@
 #include <string>
 #include <vector>
 
-namespace qsil::edgetree {
+namespace qsil::study {
 
 /// The node and the planes. Either `patch` ("sphere" or "torus", a canonical patch) or `mesh`
 /// (an OBJ file) with `node` (an inner node of its edge forest). Empty vectors and zeros take the
@@ -67,4 +67,4 @@ SliceStudy run_slice_study(const SliceStudyOptions& options);
 /// Writes the pictures, summary.json and summary.csv of a study to `dir` (created).
 void write_slice_study(const SliceStudy& study, const std::filesystem::path& dir);
 
-}  // namespace qsil::edgetree
+}  // namespace qsil::study
