@@ -685,25 +685,34 @@ double walk_probability(const EdgeForest& forest, const PreparedQuery& prepared,
 
 }  // namespace
 
-double silhouette_edge_probability(const EdgeForest& forest, const SilhouetteQuery& query, const Edge* edge,
-                                   NodeTest test) {
+namespace {
+
+/// The probability of `edge` under the traversal of `query`, with the split edges taken out of the
+/// top-level choice (`without_split`, as sample_silhouette_set does) or not.
+double edge_probability(const EdgeForest& forest, const SilhouetteQuery& query, const Edge* edge, NodeTest test,
+                        bool without_split) {
   EdgeChoiceScratch fallback;
   const PreparedQuery prepared = prepare(query, fallback);
   TopLevel top;
   top_level(forest, prepared, test, top);
+  if (without_split) {
+    std::array<int, kMaxSplitEdges> idx;
+    const int n_split = top.n > 0 ? split_indices(top, idx) : 0;
+    if (n_split > 0 && !remove_split(top, idx, n_split, prepared.buffers)) return 0;
+  }
   return walk_probability(forest, prepared, test, top, edge);
+}
+
+}  // namespace
+
+double silhouette_edge_probability(const EdgeForest& forest, const SilhouetteQuery& query, const Edge* edge,
+                                   NodeTest test) {
+  return edge_probability(forest, query, edge, test, false);
 }
 
 double traversal_edge_probability(const EdgeForest& forest, const SilhouetteQuery& query, const Edge* edge,
                                   NodeTest test) {
-  EdgeChoiceScratch fallback;
-  const PreparedQuery prepared = prepare(query, fallback);
-  TopLevel top;
-  top_level(forest, prepared, test, top);
-  std::array<int, kMaxSplitEdges> idx;
-  const int n_split = top.n > 0 ? split_indices(top, idx) : 0;
-  if (n_split > 0 && !remove_split(top, idx, n_split, prepared.buffers)) return 0;
-  return walk_probability(forest, prepared, test, top, edge);
+  return edge_probability(forest, query, edge, test, true);
 }
 
 }  // namespace qsil::edgetree

@@ -109,7 +109,7 @@ class GradientEstimator final : public Estimator::Impl, private RenderSetup {
           if (traversals > 0) {
             // The boundary term draws from a stream of its own, so it leaves the path's decisions unchanged.
             Sampler bsampler(options.seed, pixel, uint64_t(s), 1);
-            const BoundaryHook<N> hook{&ctx, &boundary_ctx, &bsampler, traversals, &scratch.local()};
+            const BoundaryHook<N> hook{{&ctx, &boundary_ctx, &bsampler, traversals, &scratch.local()}};
             L = trace_path(ctx, view, {lift<Dual<N>>(origin), ray.dir, ray.hit}, sampler, st, hook);
           } else {
             L = trace_path(ctx, view, {lift<Dual<N>>(origin), ray.dir, ray.hit}, sampler, st);

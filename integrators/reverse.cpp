@@ -143,17 +143,12 @@ void add_edge_adjoint(const edgetree::Edge& e, const Vec3& g0, const Vec3& g1,
 
 /// The secondary boundary term of a reverse-mode pass (the reverse of BoundaryHook): the edge's
 /// share goes to the sample's contribution list (first pass only), p's share to L's slots.
-struct ReverseBoundaryHook {
-  const PathContext* ctx;
-  const BoundaryContext* boundary_ctx;
-  Sampler* sampler;  ///< a stream of its own, so the hook leaves the path's own decisions unchanged
-  int traversals;    ///< at every vertex (boundary_traversals of the sample)
+struct ReverseBoundaryHook : BoundaryHookBase {
   const Tape* tape;
   const std::vector<int>* chosen_index;  ///< per shape: its index in the chosen list, or -1
   Color adjoint;                         ///< the pixel's adjoint / spp
   bool edges;                            ///< add the edge vertices' share (first pass of the path)
   std::vector<Contribution>* out;
-  edgetree::EdgeChoiceScratch* scratch;  ///< this thread's edge-choice scratch
 
   void operator()(const SurfaceInteraction<RDual>& si, const ShadingPoint<RDual>& sp, const Vec3& wo_local,
                   const ColorT<RDual>& beta, int seg, Sampler&, PathStats& stats, ColorT<RDual>& L) const {
@@ -162,15 +157,8 @@ struct ReverseBoundaryHook {
     edgetree::SilhouetteQuery q = boundary_query(*boundary_ctx, si, sp, wo_local, scratch);
     q.eligible = tape->moving ? &boundary_ctx->all : &boundary_ctx->moving;
     q.velocities = nullptr;  // a parameter per vertex: no normal-velocity factor
-    const BoundaryVertex<RDual> vertex{.si = si,
-                                       .sp = sp,
-                                       .query = q,
-                                       .wo_local = wo_local,
-                                       .throughput = value(beta),
-                                       .segments = seg,
-                                       .traversals = traversals};
     for_each_boundary_sample(
-        *ctx, *boundary_ctx, vertex, *sampler, stats,
+        *ctx, *boundary_ctx, vertex(si, sp, q, wo_local, beta, seg), *sampler, stats,
         [](const edgetree::Edge&, double, const Vec3&) { return true; },
         [&](const edgetree::Edge& e, double t, const Color& weight, const Vec3& g) {
           // p's share: J = g . (v_edge - dp), the -g . dp part through L's slots.
@@ -301,10 +289,12 @@ class ReverseEstimator::Impl : public RenderSetup {
     ColorT<RDual> L;
     if (traversals > 0) {
       Sampler bsampler(ps.seed, pixel, uint64_t(ps.s), 1);
-      const ReverseBoundaryHook hook{&ctx,          &boundary_ctx, &bsampler,
-                                     traversals,    &tape,         &chosen_index,
-                                     a,             window == 0,   &scratch.contributions,
-                                     &scratch.edge_choice};
+      const ReverseBoundaryHook hook{{&ctx, &boundary_ctx, &bsampler, traversals, &scratch.edge_choice},
+                                     &tape,
+                                     &chosen_index,
+                                     a,
+                                     window == 0,
+                                     &scratch.contributions};
       L = trace_path(ctx, view, {lift<RDual>(origin), ray.dir, ray.hit}, sampler, st, hook);
     } else {
       L = trace_path(ctx, view, {lift<RDual>(origin), ray.dir, ray.hit}, sampler, st);

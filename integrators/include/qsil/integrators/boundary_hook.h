@@ -10,13 +10,7 @@ namespace qsil {
 
 /// The vertex hook of trace_path that adds the secondary boundary term (DualView<N> paths only).
 template <int N>
-struct BoundaryHook {
-  const PathContext* ctx;
-  const BoundaryContext* boundary_ctx;
-  Sampler* sampler;  ///< a stream of its own, so the hook leaves the path's own decisions unchanged
-  int traversals;    ///< at every vertex (boundary_traversals of the sample)
-  edgetree::EdgeChoiceScratch* scratch;  ///< this thread's edge-choice scratch
-
+struct BoundaryHook : BoundaryHookBase {
   void operator()(const SurfaceInteraction<Dual<N>>& si, const ShadingPoint<Dual<N>>& sp, const Vec3& wo_local,
                   const ColorT<Dual<N>>& beta, int seg, Sampler&, PathStats& stats, ColorT<Dual<N>>& L) const {
     // ---- dp/dtheta: does the shading point move?
@@ -29,15 +23,8 @@ struct BoundaryHook {
     q.dp.template leftCols<N>() = dp;
     q.velocity_scale = boundary_ctx->velocity_scale;
     Eigen::Matrix<double, 1, N> J;  // of the sample being evaluated
-    const BoundaryVertex<Dual<N>> vertex{.si = si,
-                                         .sp = sp,
-                                         .query = q,
-                                         .wo_local = wo_local,
-                                         .throughput = value(beta),
-                                         .segments = seg,
-                                         .traversals = traversals};
     for_each_boundary_sample(
-        *ctx, *boundary_ctx, vertex, *sampler, stats,
+        *ctx, *boundary_ctx, vertex(si, sp, q, wo_local, beta, seg), *sampler, stats,
         [&](const edgetree::Edge& e, double t, const Vec3& g) {
           J = edge_point_jacobian<N>(*boundary_ctx->velocities, e, t, g, dp);
           return !J.isZero(0.0);

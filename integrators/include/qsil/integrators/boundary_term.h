@@ -151,4 +151,29 @@ edgetree::SilhouetteQuery boundary_query(const BoundaryContext& boundary_ctx, co
   return q;
 }
 
+/// What the vertex hooks of both modes hold (forward mode's BoundaryHook, boundary_hook.h; reverse
+/// mode's in integrators/reverse.cpp), which differ only in what they do with each sample.
+struct BoundaryHookBase {
+  const PathContext* ctx;
+  const BoundaryContext* boundary_ctx;
+  Sampler* sampler;  ///< a stream of its own, so the hook leaves the path's own decisions unchanged
+  int traversals;    ///< at every vertex (boundary_traversals of the sample)
+  edgetree::EdgeChoiceScratch* scratch;  ///< this thread's edge-choice scratch
+
+  /// The path vertex (si, sp, viewer direction wo_local, throughput beta after `seg` segments)
+  /// for query q, with this hook's traversals.
+  template <class T>
+  BoundaryVertex<T> vertex(const SurfaceInteraction<T>& si, const ShadingPoint<T>& sp,
+                           const edgetree::SilhouetteQuery& q, const Vec3& wo_local, const ColorT<T>& beta,
+                           int seg) const {
+    return {.si = si,
+            .sp = sp,
+            .query = q,
+            .wo_local = wo_local,
+            .throughput = value(beta),
+            .segments = seg,
+            .traversals = traversals};
+  }
+};
+
 }  // namespace qsil
