@@ -12,9 +12,10 @@
 #include <tiny_obj_loader.h>
 
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <fstream>
-#include <map>
+#include <unordered_map>
 #include <sstream>
 
 namespace qsil {
@@ -22,6 +23,23 @@ namespace qsil {
 std::vector<Vec3> vertex_normals(const TriangleMesh& mesh) { return vertex_normals_t<double>(mesh, mesh.positions); }
 
 namespace {
+
+/// Hash of a position for welding. Positions equal under == weld, so -0.0 and 0.0 must hash alike
+/// (x + 0.0 is +0.0 for both); coordinates are finite here (checked before welding).
+struct PositionHash {
+  size_t operator()(const std::array<double, 3>& p) const {
+    size_t h = 0;
+    for (double x : p) h = h * 0x9E3779B97F4A7C15ull + std::hash<double>{}(x + 0.0);
+    return h;
+  }
+};
+
+/// Hash of a (position index, normal index) pair.
+struct IndexPairHash {
+  size_t operator()(const std::pair<int, int>& k) const {
+    return std::hash<std::uint64_t>{}((std::uint64_t(std::uint32_t(k.first)) << 32) | std::uint32_t(k.second));
+  }
+};
 /// tinyobjloader reads a literal `nan` or `inf` coordinate, or a word, as 0 and a missing one as 0;
 /// scan the `v` lines first so that a bad coordinate is an error naming its line and value, never
 /// a silently wrong mesh. Coordinates beyond kMaxCoordinate are refused too (scene.h says why).
@@ -80,8 +98,11 @@ TriangleMesh load_obj(const std::filesystem::path& path, bool weld, std::vector<
   // Welding: identical positions map to one vertex, so that faces on either side of a UV or
   // normal seam share their edge (the edge forest needs mesh adjacency). Without welding, each
   // distinct (position, normal) index pair becomes a vertex.
-  std::map<std::array<double, 3>, int> by_position;
-  std::map<std::pair<int, int>, int> by_pair;
+  // Hash maps (vertices are numbered in the order first met, as before with ordered maps).
+  std::unordered_map<std::array<double, 3>, int, PositionHash> by_position;
+  std::unordered_map<std::pair<int, int>, int, IndexPairHash> by_pair;
+  by_position.reserve(nv);
+  by_pair.reserve(nv);
   auto vertex_of = [&](const tinyobj::index_t& idx) -> int {
     if (idx.vertex_index < 0 || size_t(idx.vertex_index) >= nv)
       throw Error(name + ": face refers to vertex " + std::to_string(idx.vertex_index + 1) + " of " +

@@ -11,6 +11,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <unistd.h>
 #include <cmath>
 #include <optional>
 
@@ -123,6 +126,39 @@ TEST(SceneLoaderTest, ObjNormalsFaceNormalsAndFlip) {
   EXPECT_NEAR(flipped.mesh.normals[origin_index(flipped.mesh)].dot(Vec3(1, 1, 1)), std::sqrt(3.0), 1e-12);
   const Vec3 c0 = tet.mesh.face_cross(0), c1 = flipped.mesh.face_cross(0);
   EXPECT_NEAR((c0 + c1).norm(), 0, 1e-12);
+}
+
+// Welding joins vertices at equal positions (== on each coordinate, so -0.0 and 0.0 are one
+// position), numbers vertices in the order first met, and leaves distinct positions apart;
+// without welding, each distinct (position, normal) index pair is a vertex.
+TEST(SceneLoaderTest, ObjWeldingJoinsEqualPositionsInFirstMetOrder) {
+  const std::filesystem::path p = std::filesystem::temp_directory_path() / (std::to_string(::getpid()) + "_weld.obj");
+  {
+    std::ofstream out(p);
+    // Two triangles sharing the edge (0,0,0)-(1,0,0), written twice (once as -0.0), plus a point
+    // 1e-12 away from (0,1,0) that must stay a vertex of its own.
+    out << "v 0 0 0\nv 1 0 0\nv 0 1 0\nv -0.0 -0.0 0\nv 1 0 -0.0\nv 0 -1 0\nv 0 1.000000000001 0\n"
+           "f 1 2 3\nf 4 6 5\nf 7 1 2\n";
+  }
+  const TriangleMesh welded = load_obj(p);
+  ASSERT_EQ(welded.num_triangles(), 3);
+  EXPECT_EQ(welded.num_vertices(), 5);
+  // Vertex indices two triangles share.
+  auto shared = [&](int a, int b) {
+    int n = 0;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) n += welded.triangles[size_t(a)][i] == welded.triangles[size_t(b)][j];
+    return n;
+  };
+  EXPECT_EQ(shared(0, 1), 2);  // the edge, once written with -0.0
+  EXPECT_EQ(shared(0, 2), 2);  // the same edge; (0, 1 + 1e-12, 0) is not (0, 1, 0)
+  EXPECT_EQ(shared(1, 2), 2);
+  // Numbered in the order first met: the first triangle's vertices are 0, 1, 2.
+  EXPECT_EQ(welded.triangles[0].minCoeff(), 0);
+  EXPECT_EQ(welded.triangles[0].maxCoeff(), 2);
+  const TriangleMesh apart = load_obj(p, false);
+  EXPECT_EQ(apart.num_vertices(), 7);
+  std::filesystem::remove(p);
 }
 
 TEST(SceneLoaderTest, RectangleGeometry) {
