@@ -135,8 +135,7 @@ void bind_forward(py::module_& m) {
       py::arg("scene"), py::arg("spp") = 0, py::arg("seed") = 0, py::arg("threads") = 0,
       "The primal image (H, W, 3); spp 0: the scene's sample count");
 
-  m.def(
-      "grad",
+  const auto grad =
       [](const Scene& scene, const std::vector<std::string>& params, int spp, uint64_t seed, int threads,
          const std::string& boundary, double sppi, double sppp) {
         const Method method = parse_method(boundary, "boundary", kBoundaryMethods);
@@ -157,20 +156,25 @@ void bind_forward(py::module_& m) {
             for (int x = 0; x < scene.camera.width; ++x)
               for (int c = 0; c < 3; ++c) a(k, y, x, c) = r->film.mean(layout.derivative(k, c), x, y);
         return py::make_tuple(film_image(r->film, [&](int c) { return layout.primal(c); }), d);
-      },
+      };
+  m.def("grad", grad,
       py::arg("scene"), py::arg("params"), py::arg("spp") = 0, py::arg("seed") = 0, py::arg("threads") = 0,
       py::arg("boundary") = "quadric", py::arg("sppi") = 0, py::arg("sppp") = kDefaultSppp,
       "Forward mode: (image (H, W, 3), derivatives (K, H, W, 3)) for 1-8 parameter specs "
       "('ID:translate:X,Y,Z', 'ID:rotate:X,Y,Z', 'ID:scale', 'ID:vertex:I:X,Y,Z'). sppi: secondary "
       "boundary-term samples per shading point on average over a pixel's samples (0: the method's default, 0.5 for "
       "quadric); sppp: primary edge samples per pixel sample (`qsil grad --help`)");
+  // The keyword names before 2026-11-25 (boundary_spp, primary_samples): the same function.
+  m.def("grad", grad, py::arg("scene"), py::arg("params"), py::arg("spp") = 0, py::arg("seed") = 0,
+        py::arg("threads") = 0, py::arg("boundary") = "quadric", py::arg("boundary_spp") = 0,
+        py::arg("primary_samples") = kDefaultSppp,
+        "The same, with the old keyword names boundary_spp (= sppi) and primary_samples (= sppp)");
 
 }
 
 /// Binds qsil.reverse (reverse mode).
 void bind_reverse(py::module_& m) {
-  m.def(
-      "reverse",
+  const auto reverse =
       [](const Scene& scene, const std::vector<std::string>& shapes, const Array& adjoint, int spp, uint64_t seed,
          int threads, const std::string& boundary, double sppi, double sppp) {
         const Method method = parse_method(boundary, "boundary", kBoundaryMethods);
@@ -203,12 +207,18 @@ void bind_reverse(py::module_& m) {
         out["seconds"] = r->seconds;
         out["nonfinite"] = r->nonfinite;
         return out;
-      },
+      };
+  m.def("reverse", reverse,
       py::arg("scene"), py::arg("shapes"), py::arg("adjoint"), py::arg("spp") = 0, py::arg("seed") = 0,
       py::arg("threads") = 0, py::arg("boundary") = "quadric", py::arg("sppi") = 0,
       py::arg("sppp") = kDefaultSppp,
       "Reverse mode: for the loss L = sum(adjoint * I), a dict with 'image' (H, W, 3), 'loss' (of that image), "
       "'gradient' {shape id: dL/dx (V, 3)}, 'seconds', 'nonfinite'; sppi and sppp as for grad");
+  // The keyword names before 2026-11-25 (boundary_spp, primary_samples): the same function.
+  m.def("reverse", reverse, py::arg("scene"), py::arg("shapes"), py::arg("adjoint"), py::arg("spp") = 0,
+        py::arg("seed") = 0, py::arg("threads") = 0, py::arg("boundary") = "quadric", py::arg("boundary_spp") = 0,
+        py::arg("primary_samples") = kDefaultSppp,
+        "The same, with the old keyword names boundary_spp (= sppi) and primary_samples (= sppp)");
 }
 
 }  // namespace

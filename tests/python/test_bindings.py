@@ -85,6 +85,20 @@ def test_reverse_with_the_boundary_term_is_finite_and_deterministic():
     assert np.count_nonzero(np.abs(a["gradient"]["spot"]).sum(axis=1)) > 100
 
 
+def test_old_keyword_names_set_the_same_rates():
+    # sppi / sppp, as Mitsuba 3 names them; boundary_spp / primary_samples, the names before them,
+    # still set the same values: equal images, and unequal to the defaults'.
+    s = load()
+    _, new = qsil.grad(s, ["spot:translate:0,1,0"], spp=2, seed=4, sppi=2, sppp=0.5)
+    _, old = qsil.grad(s, ["spot:translate:0,1,0"], spp=2, seed=4, boundary_spp=2, primary_samples=0.5)
+    _, default = qsil.grad(s, ["spot:translate:0,1,0"], spp=2, seed=4)
+    assert np.array_equal(new, old) and not np.array_equal(new, default)
+    w = np.ones((16, 16, 3))
+    a = qsil.reverse(s, ["spot"], w, spp=2, seed=3, sppi=2)
+    b = qsil.reverse(s, ["spot"], w, spp=2, seed=3, boundary_spp=2)
+    assert np.array_equal(a["gradient"]["spot"], b["gradient"]["spot"])
+
+
 def test_bad_input_raises_qsil_error_with_one_line():
     s = load(res=8, spp=1)
     cases = [
