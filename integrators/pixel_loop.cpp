@@ -53,7 +53,8 @@ class ProgressBar {
   std::atomic<bool> printed_{false};
 };
 
-/// Runs `run` on `threads` threads (0 = all cores).
+}  // namespace
+
 void in_arena(int threads, const std::function<void()>& run) {
   if (threads > 0) {
     tbb::task_arena arena(threads);
@@ -62,8 +63,6 @@ void in_arena(int threads, const std::function<void()>& run) {
     run();
   }
 }
-
-}  // namespace
 
 int tile_count(int width, int height) {
   return ((width + kTileSize - 1) / kTileSize) * ((height + kTileSize - 1) / kTileSize);

@@ -23,6 +23,10 @@
 
 namespace qsil {
 
+/// Runs `run` (which may run parallel TBB work) on `threads` threads (0 = all cores: the caller's
+/// arena).
+void in_arena(int threads, const std::function<void()>& run);
+
 /// The side of a tile of pixels (for_each_tile).
 inline constexpr int kTileSize = 16;
 

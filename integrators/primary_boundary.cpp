@@ -3,12 +3,12 @@
 
 #include "primary_boundary.h"
 
+#include "pixel_loop.h"
 #include "qsil/edgetree/mesh_edges.h"
 #include "qsil/error.h"
 #include "qsil/integrators/boundary_term.h"
 
 #include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <cmath>
@@ -151,11 +151,7 @@ struct ChunkPlan {
       const long long begin = std::max(g0, c * kChunkSize), end = std::min(g1, (c + 1) * kChunkSize);
       body(j, end - begin, c);
     };
-    auto all = [&] { tbb::parallel_for(j0, j1 < 0 ? chunks : j1, one); };
-    if (threads > 0)
-      tbb::task_arena(threads).execute(all);
-    else
-      all();
+    in_arena(threads, [&] { tbb::parallel_for(j0, j1 < 0 ? chunks : j1, one); });
   }
 };
 
