@@ -194,22 +194,59 @@ double velocity_factor(const Edge& e, const SilhouetteQuery& q) {
   return velocity_factor(e, q, EdgeGeometry(e, q.p));
 }
 
+bool light_billboard(const LightSphere& light, const Vec3& p, LightPolygon& out) {
+  const Vec3 to_centre = light.centre - p;
+  const double d2 = to_centre.squaredNorm(), r2 = light.radius * light.radius;
+  if (!(light.weight > 0) || !(d2 > r2)) return false;
+  const double d = std::sqrt(d2);
+  const Vec3 a = to_centre / d;
+  // D tan(beta) = D r / sqrt(D^2 - r^2).
+  const double half = d * light.radius / std::sqrt(d2 - r2);
+  if (!std::isfinite(half)) return false;
+  const Vec3 s = a.unitOrthogonal() * half, t = a.cross(a.unitOrthogonal()) * half;
+  out.corners = {light.centre - s - t, light.centre + s - t, light.centre + s + t, light.centre - s + t};
+  out.normal = -a;
+  out.weight = light.weight;
+  out.shape = light.shape;
+  return true;
+}
+
+double enclosing_light_weight(const std::vector<LightSphere>* spheres, const Vec3& p) {
+  double w = 0;
+  if (spheres)
+    for (const LightSphere& l : *spheres)
+      if (l.weight > 0 && (l.centre - p).squaredNorm() <= l.radius * l.radius) w += l.weight;
+  return w;
+}
+
+namespace {
+
+/// Appends `light` seen from q.p to `out` when it emits toward q.p (light_toward).
+void push_local_light(const LightPolygon& light, const SilhouetteQuery& q, std::vector<LocalLight>& out) {
+  LocalLight l;
+  if (!light_toward(light, q, l.corners)) return;
+  const Vec3 inside = l.corners[0] + l.corners[1] + l.corners[2] + l.corners[3];
+  for (int i = 0; i < 4; ++i) {
+    Vec3 n = l.corners[size_t(i)].cross(l.corners[size_t((i + 1) % 4)]);
+    if (n.dot(inside) < 0) n = -n;
+    const double len = n.norm();
+    l.sides[size_t(i)] = len > 0 ? Vec3(n / len) : Vec3::Zero();
+    l.sides_world[size_t(i)] = q.frame.to_world(l.sides[size_t(i)]);
+  }
+  l.weight = light.weight;
+  out.push_back(l);
+}
+
+}  // namespace
+
 void local_lights(const SilhouetteQuery& q, std::vector<LocalLight>& out) {
   out.clear();
-  if (!q.lights) return;
-  for (const LightPolygon& light : *q.lights) {
-    LocalLight l;
-    if (!light_toward(light, q, l.corners)) continue;
-    const Vec3 inside = l.corners[0] + l.corners[1] + l.corners[2] + l.corners[3];
-    for (int i = 0; i < 4; ++i) {
-      Vec3 n = l.corners[size_t(i)].cross(l.corners[size_t((i + 1) % 4)]);
-      if (n.dot(inside) < 0) n = -n;
-      const double len = n.norm();
-      l.sides[size_t(i)] = len > 0 ? Vec3(n / len) : Vec3::Zero();
-      l.sides_world[size_t(i)] = q.frame.to_world(l.sides[size_t(i)]);
-    }
-    l.weight = light.weight;
-    out.push_back(l);
+  if (q.lights)
+    for (const LightPolygon& light : *q.lights) push_local_light(light, q, out);
+  if (q.light_spheres) {
+    LightPolygon quad;
+    for (const LightSphere& sphere : *q.light_spheres)
+      if (light_billboard(sphere, q.p, quad)) push_local_light(quad, q, out);
   }
 }
 

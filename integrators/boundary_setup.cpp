@@ -20,6 +20,21 @@ namespace {
 /// Whether shape s is a quad area light of the light-aware importance (an emitting rectangle).
 bool is_quad_light(const Shape& s) { return s.is_emitter && s.type == "rectangle" && s.mesh.positions.size() == 4; }
 
+/// The sphere that stands for a mesh emitter in the light-aware importance (edgetree::LightSphere):
+/// centred on its vertices' bounding box, through its farthest vertex (a bound, not the smallest).
+edgetree::LightSphere light_sphere(const Shape& s, int index) {
+  edgetree::LightSphere light;
+  Eigen::AlignedBox3d box;
+  for (const Vec3& v : s.mesh.positions) box.extend(v);
+  light.centre = box.center();
+  double r2 = 0;
+  for (const Vec3& v : s.mesh.positions) r2 = std::max(r2, (v - light.centre).squaredNorm());
+  light.radius = std::sqrt(r2);
+  light.weight = luminance(s.radiance);
+  light.shape = index;
+  return light;
+}
+
 }  // namespace
 
 BoundarySetup build_boundary_setup(const Scene& scene, Method method, bool intersection_curves) {
@@ -35,15 +50,15 @@ BoundarySetup build_boundary_setup(const Scene& scene, Method method, bool inter
     options.intersection_curves = intersection_curves;
     auto forest = std::make_unique<edgetree::EdgeForest>(edgetree::EdgeForest::build(inputs, options));
     out.forest = forest.get();
-    // Contour sets for narrow lobes and small quad lights: the quadric method only (quadric-box
+    // Contour sets for narrow lobes and small area lights: the quadric method only (quadric-box
     // is the paper's ablation, kept as the paper traverses), in scenes with a glossy BSDF on some
     // shape or a quad light (set_light_importance's).
     const bool glossy = std::any_of(scene.shapes.begin(), scene.shapes.end(), [&](const Shape& s) {
       return s.bsdf >= 0 && scene.bsdfs[size_t(s.bsdf)].type == BSDFDesc::Type::RoughConductor;
     });
-    const bool quad_light =
-        std::any_of(scene.shapes.begin(), scene.shapes.end(), [](const Shape& s) { return is_quad_light(s); });
-    if (method == Method::Quadric && (glossy || quad_light))
+    const bool area_light =
+        std::any_of(scene.shapes.begin(), scene.shapes.end(), [](const Shape& s) { return s.is_emitter; });
+    if (method == Method::Quadric && (glossy || area_light))
       out.contours = std::make_unique<edgetree::ContourIndex>(edgetree::ContourIndex::build(inputs, *forest));
     out.sampler = std::make_unique<edgetree::QuadricEdgeSampler>(*forest, node_test(method));
     out.edges = std::move(forest);
@@ -64,7 +79,10 @@ BoundarySetup build_boundary_setup(const Scene& scene, Method method, bool inter
 
 void set_light_importance(const Scene& scene, const EnvironmentLight& environment, BoundaryContext& context) {
   context.lights.clear();
+  context.light_spheres.clear();
   for (const Shape& s : scene.shapes) {
+    if (s.is_emitter && !is_quad_light(s) && !s.mesh.positions.empty())
+      context.light_spheres.push_back(light_sphere(s, int(&s - scene.shapes.data())));
     if (!is_quad_light(s)) continue;
     edgetree::LightPolygon light;
     for (int i = 0; i < 4; ++i) light.corners[size_t(i)] = s.mesh.positions[size_t(i)];
@@ -84,7 +102,8 @@ void set_light_importance(const Scene& scene, const EnvironmentLight& environmen
       context.velocity_scale[size_t(k)] = vmax > 0 ? 1.0 / vmax : 0.0;
     }
   context.env_weight = environment.present() ? luminance(environment.average_radiance()) : 0.0;
-  if (context.lights.empty() && context.env_weight == 0) context.env_weight = 1.0;  // plain [QSS 3.5] importance
+  // Without any light: plain [QSS 3.5] importance.
+  if (context.lights.empty() && context.light_spheres.empty() && context.env_weight == 0) context.env_weight = 1.0;
 }
 
 void check_sppi(double sppi) {

@@ -40,8 +40,10 @@ struct BoundarySetup {
 BoundarySetup build_boundary_setup(const Scene& scene, Method method, bool intersection_curves = true);
 
 /// The importance inputs of the boundary term [QSS 3.6]: every rectangle emitter as a light
-/// polygon weighted by the luminance of its radiance, and the environment's weight (luminance
-/// of its mean radiance; 1 when the scene has neither, i.e. plain [QSS 3.5] importance); every
+/// polygon weighted by the luminance of its radiance, every other emitter (a mesh) as a light
+/// sphere that bounds its vertices (edgetree::LightSphere), and the environment's weight
+/// (luminance of its mean radiance; 1 when the scene has no light of either kind and no
+/// environment, i.e. plain [QSS 3.5] importance); every
 /// shape's emitted luminance (the outline of any emitter weighs it); and, from
 /// context.velocities (set it first; none: no scale), each parameter's velocity scale.
 void set_light_importance(const Scene& scene, const EnvironmentLight& environment, BoundaryContext& context);

@@ -53,6 +53,13 @@ std::vector<Case> cases() {
       {"wall-floor", "tests/data/gradient/wall-floor.xml", {}, "wall:translate:0,0,1", 1e-2},
       // One OBJ of two overlapping spheres (a self-intersecting mesh) under an area light, translated.
       {"two-spheres", "tests/data/gradient/two-spheres.xml", {}, "spheres:translate:1,0,0", 1e-2},
+      // A sphere occluder between a floor and a small sphere light (a mesh emitter; Mitsuba 3's
+      // TranslateOccluderAreaLight configuration), translated: the light-aware importance of a
+      // light that is not a quad (edgetree::LightSphere).
+      {"sphere-light", "scenes/stability/sphere-light.xml", {}, "occluder:translate:1,0,0", 1e-2},
+      // The wing nut on a rough-metal floor under a small sphere light, translated: glossy vertices
+      // and a mesh emitter.
+      {"glossy-sphere-light", "scenes/stability/glossy-sphere-light.xml", {}, "wingnut:translate:1,0,0", 1e-2},
   };
 }
 

@@ -1,6 +1,6 @@
 #pragma once
 /// @file contour_set.h
-/// The contour set of a narrow BSDF lobe or of a small quad light (docs/architecture.md §5
+/// The contour set of a narrow BSDF lobe or of a small light (docs/architecture.md §5
 /// "Contour sets"): the silhouette edges of the surface that a ray along the lobe's axis (or
 /// toward the light) meets, found by walking over that mesh, within the lobe's (the light's) core.
 ///
@@ -33,7 +33,7 @@
 ///
 /// Light contour sets (docs/design-notes.md "Narrow self-shadow penumbrae"): where the lobe gives
 /// no core (a diffuse vertex, or a lobe wider than kContourMaxHalfAngle), the core is the cone
-/// from p that bounds a small quad light instead (boundary_term.h light_core: the light facing p
+/// from p that bounds a small light instead (light_core.h: the light, quad or light sphere, facing p
 /// with the largest radiance × solid angle, a circular cone of half-angle at most
 /// kContourMaxHalfAngle), and the probe rays go toward the light: in a penumbra the boundary
 /// integral is carried by the outline of the occluder in front of it, which may be millimetres

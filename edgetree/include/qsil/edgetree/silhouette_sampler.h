@@ -8,7 +8,7 @@
 /// probability 0; the others are chosen with probability
 ///   P(i) = (1 - eps) I_i / sum I + eps * G_i / sum G,  I_i = L_w / H^2 * fbar,  G_i = L_w / H^2,
 /// H the distance from p to the centre of B_p (at least half its diagonal), fbar the mean
-/// cosine-weighted BSDF over B_p's solid angle times the radiance (environment, every quad light;
+/// cosine-weighted BSDF over B_p's solid angle times the radiance (environment, every light;
 /// NodeWeight). The defensive share keeps P(i) > 0 where fbar = 0 but the integrand need not be.
 /// A leaf chooses among its silhouette edges the same way (leaf_edge_weight); t comes from
 /// EdgeMixture. Always-candidate edges compete with the forest roots at the top level, through
@@ -43,6 +43,19 @@ struct LightPolygon {
   int shape = -1;               ///< its shape in the scene (-1: none); a light probe's ray that hits it is a miss
 };
 
+/// A light that is not a quad (a mesh emitter: a sphere light, an emissive OBJ), known to the
+/// light-aware importance by a sphere that bounds its vertices. Seen from a point p outside the
+/// sphere it becomes a quad facing p that covers the sphere's whole cone (light_billboard), so
+/// every node and edge importance that handles quad lights handles it, and never gives a
+/// direction toward the emitter less radiance than the emitter's; from inside, it adds its
+/// radiance to the query's environment weight (enclosing_light_weight).
+struct LightSphere {
+  Vec3 centre = Vec3::Zero();  ///< world
+  double radius = 0;           ///< world units; every vertex of the emitter lies within it
+  double weight = 0;           ///< its radiance (luminance), as LightPolygon::weight
+  int shape = -1;              ///< its shape in the scene, as LightPolygon::shape
+};
+
 /// Everything the traversal needs to know about the shading point.
 struct SilhouetteQuery {
   Vec3 p = Vec3::Zero();  ///< shading point (world)
@@ -58,6 +71,9 @@ struct SilhouetteQuery {
   /// ALL lights (the paper supports one). Without lights: env_weight * fbar (env_weight 1 by
   /// default, so plain [QSS 3.5] importance).
   const std::vector<LightPolygon>* lights = nullptr;
+  /// Lights that are not quads (LightSphere): each a quad facing p (light_billboard) beside
+  /// `lights` wherever p lies outside its sphere. Null: none.
+  const std::vector<LightSphere>* light_spheres = nullptr;
   double env_weight = 1.0;
   /// Per shape: the luminance of its emitted radiance (0 for a shape that does not emit), or
   /// null. The outline of an emitter bounds a jump of that radiance: its edges weigh it.
@@ -92,6 +108,20 @@ inline bool light_toward(const LightPolygon& light, const SilhouetteQuery& q, st
   return true;
 }
 
+/// The quad that stands for `light` seen from `p` (LightSphere): in the plane through the
+/// sphere's centre c perpendicular to the direction a = (c - p) / D, D = |c - p|, a square
+/// centred at c with half-side D tan(beta), sin(beta) = radius / D, which holds the circle where
+/// the cone from p tangent to the sphere meets that plane; so every ray from p that meets the
+/// sphere passes through the square. Normal -a (the emitting side faces p), the light's weight
+/// and shape. False (`out` untouched) where p lies inside the sphere or on it (D <= radius: no
+/// quad holds the cone) or the light has no weight.
+bool light_billboard(const LightSphere& light, const Vec3& p, LightPolygon& out);
+
+/// The radiance (luminance) of the lights of `spheres` whose sphere holds `p` (D <= radius, where
+/// light_billboard gives no quad): seen from inside, a light may lie in any direction, so the
+/// light-aware importance counts it as part of the environment. 0 for none.
+double enclosing_light_weight(const std::vector<LightSphere>* spheres, const Vec3& p);
+
 /// A light as seen from one query point: the corners of its quad relative to p in the local
 /// shading frame, and the normals of the four sides of the pyramid from p over it, oriented so
 /// that n · w >= 0 for directions w inside. The per-query constants of the light-aware importance
@@ -103,8 +133,9 @@ struct LocalLight {
   double weight = 0;                ///< the light's radiance (luminance)
 };
 
-/// The lights of `q` that emit toward q.p (light_toward), in order, as LocalLight; `out` is
-/// cleared first. Empty when q.lights is null.
+/// The lights of `q` that emit toward q.p (light_toward), in order, as LocalLight: the quads of
+/// q.lights, then the quads of q.light_spheres facing q.p (light_billboard); `out` is cleared
+/// first. Empty when both are null.
 void local_lights(const SilhouetteQuery& q, std::vector<LocalLight>& out);
 
 /// A sampled edge point and its probability.

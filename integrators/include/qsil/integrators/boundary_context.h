@@ -16,8 +16,8 @@ namespace qsil {
 /// What the boundary term needs besides the path context.
 struct BoundaryContext {
   const edgetree::EdgeSampler* sampler = nullptr;  ///< the --boundary method's secondary edge sampler
-  /// The mesh adjacency for contour sets at glossy vertices and under small quad lights
-  /// (contour_probe; the quadric method in a scene with a glossy BSDF or a quad light), or null
+  /// The mesh adjacency for contour sets at glossy vertices and under small area lights
+  /// (contour_probe; the quadric method in a scene with a glossy BSDF or an area light), or null
   /// for none.
   const edgetree::ContourIndex* contours = nullptr;
   const SceneVelocities* velocities = nullptr;
@@ -32,6 +32,9 @@ struct BoundaryContext {
   /// boundary_traversals schedules. 0: no splitting. Set from default_split_speed(method).
   double split_speed = 0;
   std::vector<edgetree::LightPolygon> lights;  ///< quad area lights for I_light [QSS 3.6]
+  /// The other area lights (mesh emitters) for I_light, by their bounding spheres
+  /// (edgetree::LightSphere: a quad facing each shading point outside the sphere).
+  std::vector<edgetree::LightSphere> light_spheres;
   double env_weight = 1.0;                     ///< environment intensity (luminance of its mean)
   std::vector<double> emission;                ///< per shape: luminance of its emission (0: none)
   /// Per parameter: 1 / the largest |dx/dtheta_k| over all vertices (0: unused parameter), so that

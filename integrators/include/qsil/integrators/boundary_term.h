@@ -146,7 +146,8 @@ edgetree::SilhouetteQuery boundary_query(const BoundaryContext& boundary_ctx, co
   q.frame = sp.frame_value;
   q.ltc = edgetree::bsdf_ltc(*sp.bsdf, wo_local);
   q.lights = &boundary_ctx.lights;
-  q.env_weight = boundary_ctx.env_weight;
+  q.light_spheres = &boundary_ctx.light_spheres;
+  q.env_weight = boundary_ctx.env_weight + edgetree::enclosing_light_weight(q.light_spheres, q.p);
   q.emission = &boundary_ctx.emission;
   return q;
 }

@@ -16,7 +16,7 @@ namespace qsil {
 /// The contour probe of a boundary query (qsil/edgetree/contour_set.h). Its core: where q's LTC is
 /// glossy and the cone that bounds its core (ltc_core_cone with kContourConeMass) has a half-angle
 /// of at most kContourMaxHalfAngle, the lobe's core in world coordinates; elsewhere (a cosine or
-/// wide lobe) the cone of a small quad light (light_core). The probe is made where that cone meets
+/// wide lobe) the cone of a small light (light_core: a quad, or a light sphere's quad). The probe is made where that cone meets
 /// an eligible shape's bounding sphere (ContourIndex::cone_meets_shapes): the first hit of the ray
 /// from the shading point along the cone's axis, kept when it is on an eligible shape other than
 /// the probed light (a ray that reaches the light met nothing in front of it); where it is not (a
