@@ -6,6 +6,7 @@
 
 #include "pixel_loop.h"
 #include "render_setup.h"
+#include "vertex_recorder.h"
 #include "qsil/check.h"
 #include "qsil/error.h"
 #include "qsil/integrators/boundary_hook.h"
@@ -97,6 +98,7 @@ class GradientEstimator final : public Estimator::Impl, private RenderSetup {
     // fraction of them makes one more traversal, stratum 1 of the film.
     const double fraction = with_boundary ? boundary_ctx.sppi - std::floor(boundary_ctx.sppi) : 0.0;
     tbb::enumerable_thread_specific<edgetree::EdgeChoiceScratch> scratch;  // one per worker thread
+    tbb::enumerable_thread_specific<TopSamples> largest{TopSamples(options.largest_samples)};
     PathStats total;
     run_pixels(
         cam, layout, options, first, count, "grad",
@@ -120,10 +122,18 @@ class GradientEstimator final : public Estimator::Impl, private RenderSetup {
             out[layout.derivative_mean(k)] =
                 (out[layout.derivative(k, 0)] + out[layout.derivative(k, 1)] + out[layout.derivative(k, 2)]) / 3.0;
           }
+          if (options.largest_samples > 0) {
+            int kmax = 0;
+            for (int k = 1; k < K; ++k)
+              if (std::abs(out[layout.derivative_mean(k)]) > std::abs(out[layout.derivative_mean(kmax)])) kmax = k;
+            if (std::isfinite(out[layout.derivative_mean(kmax)]))
+              largest.local().offer(x, y, s, kmax, out[layout.derivative_mean(kmax)]);
+          }
           // Stratum 1: the samples that made the rate's fractional traversal (Film::standard_error).
           return fraction > 0 && traversals > int(boundary_ctx.sppi) ? 1 : 0;
         },
         r, total, fraction);
+    if (options.largest_samples > 0) trace_largest(options, largest, r);
     // ---- Primary silhouettes: sppp edge samples per pixel sample, splatted where they land.
     if (with_boundary) {
       const auto t0 = Clock::now();
@@ -145,6 +155,24 @@ class GradientEstimator final : public Estimator::Impl, private RenderSetup {
   }
 
  private:
+  /// The samples kept by the threads' `largest`, largest first, each retraced without the
+  /// boundary term from its own stream (qsil/integrators/sample_trace.h), into r.largest.
+  void trace_largest(const RenderOptions& options, const tbb::enumerable_thread_specific<TopSamples>& largest,
+                     RenderResult& r) const {
+    TopSamples all(options.largest_samples);
+    for (const TopSamples& t : largest) all.merge(t);
+    r.largest = all.sorted();
+    const Camera& cam = scene.camera;
+    const DualView<N> view{&scene, &vel};
+    for (SampleTrace& trace : r.largest) {
+      Sampler sampler(options.seed, uint64_t(trace.y) * cam.width + trace.x, uint64_t(trace.sample));
+      PathStats st;
+      const CameraRay ray = trace_camera_ray(ctx, trace.x, trace.y, sampler.next2(), st);
+      const VertexRecorder<N> recorder{&trace, trace.param};
+      recorder.finish(trace_path(ctx, view, {lift<Dual<N>>(cam.origin()), ray.dir, ray.hit}, sampler, st, recorder));
+    }
+  }
+
   SceneVelocities vel;
 };
 
@@ -257,6 +285,20 @@ void RenderResult::merge(const RenderResult& other) {
   boundary_seconds += other.boundary_seconds;
   traversals += other.traversals;
   zero_traversals += other.zero_traversals;
+  if (!other.largest.empty()) {
+    // Both lists hold the largest of their runs; the merged run keeps as many as the longer one.
+    TopSamples top(int(std::max(largest.size(), other.largest.size())));
+    const std::vector<SampleTrace>* lists[] = {&largest, &other.largest};
+    for (const auto* list : lists)
+      for (const SampleTrace& s : *list) top.offer(s.x, s.y, s.sample, s.param, s.value);
+    std::vector<SampleTrace> kept = top.sorted();
+    // offer() keeps no paths: take each kept sample's trace from the list it came from.
+    for (SampleTrace& k : kept)
+      for (const auto* list : lists)
+        for (const SampleTrace& s : *list)
+          if (s.x == k.x && s.y == k.y && s.sample == k.sample) k = s;
+    largest = std::move(kept);
+  }
 }
 
 std::string SetupReport::describe() const {

@@ -159,6 +159,31 @@ TEST(CLI, GradWritesTheDocumentedChannelsAttributesAndPreviews) {
   EXPECT_NE(r.out.find("image sum"), std::string::npos);
 }
 
+// --largest-samples K prints the K largest samples with their path vertices and writes the CSV
+// beside it (one row per vertex); the CSV without K is bad input.
+TEST(CLI, GradReportsTheLargestSamples) {
+  expect_error("grad scenes/shadow-quad.xml --spp 1 --param object:translate:0,1,0 --largest-samples-csv x.csv",
+               "--largest-samples");
+  expect_error("grad scenes/shadow-quad.xml --spp 1 --param object:translate:0,1,0 --largest-samples -2",
+               "--largest-samples");
+  const std::string out = tmp("qsil_grad_largest.exr"), csv = tmp("qsil_grad_largest.csv");
+  const CliRun r = run_qsil("grad scenes/shadow-quad.xml -q -D res=16 --spp 2 --param object:translate:0,1,0 -o " + out +
+                            " --largest-samples 3 --largest-samples-csv " + csv);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("#3 pixel ("), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("#4 pixel ("), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("vertex 1 on "), std::string::npos) << r.out;
+  std::FILE* f = std::fopen(csv.c_str(), "r");
+  ASSERT_NE(f, nullptr);
+  std::array<char, 256> line{};
+  ASSERT_NE(std::fgets(line.data(), int(line.size()), f), nullptr);
+  EXPECT_EQ(std::string(line.data()).rfind("rank,x,y,sample,param,value,interior,boundary", 0), 0u) << line.data();
+  int rows = 0;
+  while (std::fgets(line.data(), int(line.size()), f)) ++rows;
+  std::fclose(f);
+  EXPECT_GE(rows, 3);
+}
+
 TEST(CLI, ReverseErrorsExitWithCode2) {
   const std::string target = tmp("qsil_reverse_target.exr");
   ASSERT_EQ(run_qsil("render scenes/shadow-quad.xml -q -D res=16 --spp 1 -o " + target).code, 0);

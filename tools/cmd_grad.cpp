@@ -6,6 +6,7 @@
 
 #include "cli_common.h"
 #include "commands.h"
+#include "largest_samples.h"
 
 #include <cstdio>
 #include <optional>
@@ -20,6 +21,7 @@ const CommandRegistrar registrar{
          std::vector<std::string> params;
          BoundaryFlags boundary;
          std::string preview_dir;
+         std::string largest_csv;
        };
        auto flags = std::make_shared<Flags>();
        add_common_flags(app, *flags, "grad.exr");
@@ -31,8 +33,18 @@ const CommandRegistrar registrar{
                           "dihedral angle), none (interior term only: misses silhouettes, shadows, outlines)",
                           true);
        app.add_option("--preview-dir", flags->preview_dir, "Write primal.png and one diverging PNG per parameter here");
+       app.add_option("--largest-samples", flags->render.largest_samples,
+                      "Report the K samples of largest |derivative| and their paths, vertex by vertex (term, "
+                      "cosines, slide dt/dtheta, what each vertex adds): where a heavy tail comes from")
+           ->check(CLI::NonNegativeNumber);
+       app.add_option("--largest-samples-csv", flags->largest_csv,
+                      "Also write that report as CSV (one row per path vertex) to this file");
        return [flags]() {
          const ProcessGroup& group = process_group();
+         if (flags->render.largest_samples > 0 && group.size() > 1)
+           throw Error("--largest-samples: not under an MPI launcher (each rank sees only its own pixels)");
+         if (!flags->largest_csv.empty() && flags->render.largest_samples == 0)
+           throw Error("--largest-samples-csv needs --largest-samples K with K > 0");
          SceneEstimator set_up;
          set_up_estimator(*flags, flags->params, [&](const Scene&, const std::vector<ParameterSpec>& params) {
            return gradient_config(params, parse_method(flags->boundary.method, "--boundary", kBoundaryMethods),
@@ -54,6 +66,10 @@ const CommandRegistrar registrar{
                r.traversals ? 100.0 * double(r.zero_traversals) / double(r.traversals) : 0.0, flags->output.c_str());
            std::printf("  set-up: %s\n", setup.describe().c_str());
            write_gradient_outputs(*flags, estimator->config().params, r, flags->preview_dir, "grad/" + flags->boundary.method);
+           if (flags->render.largest_samples > 0) {
+             print_largest_samples(*set_up.scene, estimator->config().params, r.largest);
+             if (!flags->largest_csv.empty()) write_largest_samples_csv(flags->largest_csv, *set_up.scene, r.largest);
+           }
          });
          return 0;
        };

@@ -21,6 +21,7 @@
 
 #include "qsil/film.h"
 #include "qsil/integrators/method.h"
+#include "qsil/integrators/sample_trace.h"
 #include "qsil/parameters.h"
 #include "qsil/scene.h"
 
@@ -82,6 +83,9 @@ struct RenderOptions {
   /// gives the whole run's result bit for bit. parts = 1: the whole run.
   int part = 0;
   int parts = 1;
+  /// Gradient runs: keep the this many samples of largest |derivative| and trace their paths
+  /// (RenderResult::largest; qsil/integrators/sample_trace.h). 0: none (no cost).
+  int largest_samples = 0;
 };
 
 /// What a run produced and what it cost (set-up excluded: Estimator::setup()).
@@ -98,6 +102,9 @@ struct RenderResult {
   /// Part runs (RenderOptions::parts > 1) only: the primary boundary term's splats of this part's
   /// chunks, in the order the whole run adds them to its film; they are not in `film`.
   std::vector<FilmSplat> splats;
+  /// RenderOptions::largest_samples > 0, gradient runs only: the samples of largest |derivative|,
+  /// largest first, each with its path (the interior term, vertex by vertex).
+  std::vector<SampleTrace> largest;
 
   /// Adds the film and the counters of a run over a disjoint sample range of the same estimator
   /// (first_sample becomes the smaller one). Throws nothing; films must have the same layout and

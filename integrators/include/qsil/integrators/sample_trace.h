@@ -1,0 +1,95 @@
+#pragma once
+/// @file sample_trace.h
+/// The largest samples of a forward-mode gradient run, and where along their paths they came from
+/// (`qsil grad --largest-samples K`): a mean that agrees with finite differences can hide a tail in
+/// which one sample in a million is worth 1e5, and the first question about such a tail is which
+/// term, which path vertex, and at what cosine. The estimator keeps, per thread, the K samples of
+/// largest |derivative| (TopSamples), then traces each one's path again from its own sampler
+/// stream with a recording hook (VertexRecorder) and no boundary term: the path's decisions do not
+/// depend on the boundary term (it draws from a stream of its own), so the retrace is the same
+/// path, and its derivative is the sample's interior term exactly; the rest of the sample is its
+/// secondary boundary term. Primary boundary-term samples (splats) are not samples of a pixel
+/// and are not among them. The recording hook is integrators/vertex_recorder.h.
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+namespace qsil {
+
+/// One path vertex of a traced sample (derivatives with respect to the sample's parameter).
+struct VertexTrace {
+  int segments = 0;              ///< segments of the path before the vertex (1: the camera ray's hit)
+  int shape = -1, triangle = -1;  ///< what the vertex lies on (scene indices)
+  double cos_geometric = 0;      ///< |n_g . wo| (wo toward the previous vertex)
+  double cos_shading = 0;        ///< n_s . wo, n_s the shading normal as the BSDF uses it (adapted)
+  double dt = 0;                 ///< d(distance along the ray)/d(theta): the slide of the hit on its fixed ray
+  double dp = 0;                 ///< |dp/dtheta| (world units per unit of theta)
+  double dns = 0;                ///< |d(shading normal)/d(theta)| (per unit of theta)
+  /// The derivative (channel mean) the path gains from this vertex on until the next vertex: its
+  /// next-event estimate plus the emission found by the segment leaving it (or the environment
+  /// it escapes to). Summed over the vertices, with the emission the camera ray finds first
+  /// (SampleTrace::camera_emission), it is the sample's interior term.
+  double added = 0;
+};
+
+/// One sample of a gradient run and its path.
+struct SampleTrace {
+  int x = 0, y = 0;   ///< pixel
+  int sample = 0;     ///< sample index within the pixel (its sampler stream)
+  int param = 0;      ///< the parameter whose derivative is largest in magnitude
+  double value = 0;   ///< the sample's derivative (channel mean) for `param`: interior + secondary boundary
+  double interior = 0;  ///< of which the interior term (the retraced path's derivative)
+  double camera_emission = 0;  ///< the derivative of emission seen directly by the camera ray
+  std::vector<VertexTrace> vertices;  ///< in path order
+};
+
+/// Keeps the `capacity` samples of largest |value| offered to it (by (|value|, pixel, sample) so
+/// that the choice does not depend on the order of offers: runs on any thread count keep the
+/// same samples).
+class TopSamples {
+ public:
+  explicit TopSamples(int capacity = 0) : capacity_(std::max(0, capacity)) {}
+  int capacity() const { return capacity_; }
+  /// Offers a sample (x, y, sample index, parameter, derivative).
+  void offer(int x, int y, int sample, int param, double value) {
+    if (capacity_ == 0 || !(std::abs(value) > 0)) return;
+    SampleTrace s;
+    s.x = x;
+    s.y = y;
+    s.sample = sample;
+    s.param = param;
+    s.value = value;
+    if (int(heap_.size()) < capacity_) {
+      heap_.push_back(s);
+      std::push_heap(heap_.begin(), heap_.end(), larger);
+    } else if (larger(s, heap_.front())) {
+      std::pop_heap(heap_.begin(), heap_.end(), larger);
+      heap_.back() = s;
+      std::push_heap(heap_.begin(), heap_.end(), larger);
+    }
+  }
+  /// Adds every sample of `other` (same capacity).
+  void merge(const TopSamples& other) {
+    for (const SampleTrace& s : other.heap_) offer(s.x, s.y, s.sample, s.param, s.value);
+  }
+  /// The kept samples, largest |value| first.
+  std::vector<SampleTrace> sorted() const {
+    std::vector<SampleTrace> out = heap_;
+    std::sort(out.begin(), out.end(), larger);
+    return out;
+  }
+
+ private:
+  /// Strict order: larger |value| first; ties by pixel, then sample index (deterministic).
+  static bool larger(const SampleTrace& a, const SampleTrace& b) {
+    if (std::abs(a.value) != std::abs(b.value)) return std::abs(a.value) > std::abs(b.value);
+    if (a.y != b.y) return a.y < b.y;
+    if (a.x != b.x) return a.x < b.x;
+    return a.sample < b.sample;
+  }
+  int capacity_;
+  std::vector<SampleTrace> heap_;  ///< a heap whose front is the smallest kept sample
+};
+
+}  // namespace qsil

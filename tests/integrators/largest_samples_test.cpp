@@ -1,0 +1,88 @@
+// RenderOptions::largest_samples (qsil/integrators/sample_trace.h): the samples of largest
+// |derivative| of a gradient run and their retraced paths.
+// - Replay: with no boundary term (Method::None) a sample is its interior term, and the retrace
+//   from the sample's own stream must reproduce it exactly (a retrace from the wrong stream, or a
+//   path that differs, fails this); with the quadric boundary term the interior part is the same
+//   sample retraced, so it equals the None run's value of that sample.
+// - Bookkeeping: the camera's emission plus what each vertex adds is the interior term.
+// - Order and coverage: largest first; the largest |sample| bounds every pixel's |mean| (a mean
+//   of samples), and the kept samples do not depend on the thread count.
+// Scene: `direct` (Spot in front of a backdrop under an environment map) at 16², 16 spp.
+#include "qsil/integrators/estimator.h"
+#include "qsil/scene.h"
+#include "test_data.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+#include <tuple>
+
+namespace qsil {
+namespace {
+
+struct DirectRun {
+  RenderResult result;
+  FilmLayout layout;
+};
+
+DirectRun run_direct(Method method, int threads, int keep = 8) {
+  static const Scene scene = load_scene(test::data_file("scenes/direct.xml"), {{"res", "16"}, {"spp", "16"}});
+  const std::vector<ParameterSpec> params{parse_parameter("spot:translate:1,0,0", scene)};
+  const Estimator e(scene, EstimatorConfig::gradient(params, method));
+  RenderOptions o;
+  o.progress = false;
+  o.seed = 3;
+  o.threads = threads;
+  o.largest_samples = keep;
+  return {e.run(o), e.layout()};
+}
+
+TEST(LargestSamples, RetraceReproducesTheInteriorTerm) {
+  const DirectRun none = run_direct(Method::None, 2);
+  ASSERT_EQ(none.result.largest.size(), 8u);
+  for (const SampleTrace& s : none.result.largest) {
+    EXPECT_EQ(s.interior, s.value) << "pixel (" << s.x << ", " << s.y << ") sample " << s.sample;
+    ASSERT_FALSE(s.vertices.empty());
+    double sum = s.camera_emission;
+    for (const VertexTrace& v : s.vertices) sum += v.added;
+    EXPECT_NEAR(sum, s.interior, 1e-12 * std::abs(s.interior)) << "the vertices' parts sum to the interior term";
+  }
+  // With the boundary term, the interior part of a sample is the same path's derivative.
+  const DirectRun quadric = run_direct(Method::Quadric, 2, 64);
+  std::map<std::tuple<int, int, int>, double> interior;
+  for (const SampleTrace& s : run_direct(Method::None, 2, 100000).result.largest) interior[{s.x, s.y, s.sample}] = s.value;
+  int compared = 0;
+  for (const SampleTrace& s : quadric.result.largest) {
+    const auto it = interior.find({s.x, s.y, s.sample});
+    const double expected = it == interior.end() ? 0.0 : it->second;  // absent: a zero interior term
+    EXPECT_EQ(s.interior, expected) << "pixel (" << s.x << ", " << s.y << ") sample " << s.sample;
+    ++compared;
+  }
+  EXPECT_EQ(compared, 64);
+}
+
+TEST(LargestSamples, LargestFirstBoundEveryPixelAndIndependentOfThreads) {
+  const DirectRun a = run_direct(Method::Quadric, 1), b = run_direct(Method::Quadric, 2);
+  ASSERT_EQ(a.result.largest.size(), 8u);
+  for (size_t i = 1; i < a.result.largest.size(); ++i)
+    EXPECT_GE(std::abs(a.result.largest[i - 1].value), std::abs(a.result.largest[i].value));
+  const Film& film = a.result.film;
+  double largest_mean = 0;
+  for (int y = 0; y < film.height(); ++y)
+    for (int x = 0; x < film.width(); ++x)
+      largest_mean = std::max(largest_mean, std::abs(film.mean(a.layout.derivative_mean(0), x, y)));
+  EXPECT_GE(std::abs(a.result.largest[0].value), largest_mean);
+  EXPECT_GT(largest_mean, 0.0);
+  for (size_t i = 0; i < a.result.largest.size(); ++i) {
+    const SampleTrace &s = a.result.largest[i], &t = b.result.largest[i];
+    EXPECT_EQ(std::tie(s.x, s.y, s.sample, s.value), std::tie(t.x, t.y, t.sample, t.value));
+  }
+}
+
+TEST(LargestSamples, NoneKeptWithoutTheOption) {
+  EXPECT_TRUE(run_direct(Method::Quadric, 2, 0).result.largest.empty());
+}
+
+}  // namespace
+}  // namespace qsil

@@ -1,0 +1,27 @@
+#pragma once
+/// @file largest_samples.h
+/// `qsil grad --largest-samples K [--largest-samples-csv FILE]`: the report of a run's largest
+/// samples and their paths (qsil/integrators/sample_trace.h).
+
+#include "qsil/integrators/sample_trace.h"
+#include "qsil/parameters.h"
+#include "qsil/scene.h"
+
+#include <string>
+#include <vector>
+
+namespace qsil::cli {
+
+/// Prints `largest` (largest first) to stdout: per sample its pixel, sample index, parameter,
+/// derivative (channel mean), interior and secondary boundary parts, then one line per path
+/// vertex (segments before it, shape id, triangle, |n_g . wo|, n_s . wo, dt/dtheta, |dp/dtheta|,
+/// |dn_s/dtheta|, the derivative added from that vertex on).
+void print_largest_samples(const Scene& scene, const std::vector<ParameterSpec>& params,
+                           const std::vector<SampleTrace>& largest);
+
+/// Writes the same as CSV to `path`, one row per vertex (a sample without vertices: one row with
+/// empty vertex columns); whole or absent: throws qsil::Error naming the file when it cannot be
+/// written.
+void write_largest_samples_csv(const std::string& path, const Scene& scene, const std::vector<SampleTrace>& largest);
+
+}  // namespace qsil::cli
