@@ -255,6 +255,14 @@ TEST(ReverseMode, SecondaryBoundaryTermAgreesWithForwardModeAtAGlossyMirror) {
   expect_boundary_agreement(scene, "spot:translate:0,1,0", "spot", 8, 1);
 }
 
+TEST(ReverseMode, SecondaryBoundaryTermAgreesWithForwardModeUnderASphereLight) {
+  // A sphere occluder between a floor and a small sphere light (a mesh emitter, which the edge
+  // choice knows by its bounding sphere): the floor's penumbra, the boundary term alone.
+  const Scene scene =
+      load_scene(test::data_file("scenes/stability/sphere-light.xml"), {{"res", "16"}, {"spp", "256"}});
+  expect_boundary_agreement(scene, "occluder:translate:1,0,0", "occluder", 8, 0);
+}
+
 /// Reverse mode's gradient is bit-identical for 1 and 2 threads (a diffuse scene, and the glossy
 /// mirror whose vertices use contour sets).
 void expect_same_gradient_for_any_thread_count(const Scene& scene) {
