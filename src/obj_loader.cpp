@@ -11,12 +11,14 @@
 #define TINYOBJLOADER_IMPLEMENTATION
 #include <tiny_obj_loader.h>
 
+#include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
 #include <fstream>
+#include <string_view>
+#include <system_error>
 #include <unordered_map>
-#include <sstream>
 
 namespace qsil {
 
@@ -41,41 +43,56 @@ struct IndexPairHash {
   }
 };
 /// tinyobjloader reads a literal `nan` or `inf` coordinate, or a word, as 0 and a missing one as 0;
-/// scan the `v` lines first so that a bad coordinate is an error naming its line and value, never
-/// a silently wrong mesh. Coordinates beyond kMaxCoordinate are refused too (scene.h says why).
-void check_vertices(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  std::string line;
-  for (int number = 1; std::getline(in, line); ++number) {
-    const size_t start = line.find_first_not_of(" \t");
-    if (start == std::string::npos || line[start] != 'v') continue;
-    const size_t after = start + 1;  // `v` alone or `v` followed by blanks: a vertex line
-    if (after < line.size() && line[after] != ' ' && line[after] != '\t' && line[after] != '\r') continue;
-    const std::string where = path.string() + ":" + std::to_string(number) + ": ";
-    std::istringstream is(line.substr(after));
-    std::string token;
+/// scan the `v` lines of the file first (a read of its own; tinyobjloader's is the other) so that a
+/// bad coordinate is an error naming its line and value, never a silently wrong mesh. Coordinates
+/// beyond kMaxCoordinate are refused too (scene.h says why). A token is a number when strtod's
+/// grammar (without hexadecimal forms) consumes all of it: std::from_chars, after an optional
+/// leading '+'. Lines are split on '\n'; blanks are space, tab and '\r'.
+void check_vertices(const std::filesystem::path& path, const std::string& name) {
+  const auto blank = [](char c) { return c == ' ' || c == '\t' || c == '\r'; };
+  std::ifstream file(path, std::ios::binary);
+  if (!file) throw Error(name + ": cannot read the file");
+  std::string buffer;
+  for (int number = 1; std::getline(file, buffer); ++number) {
+    const std::string_view line = buffer;
+    size_t i = 0;
+    while (i < line.size() && (line[i] == ' ' || line[i] == '\t')) ++i;
+    if (i >= line.size() || line[i] != 'v') continue;
+    ++i;  // `v` alone or `v` followed by blanks: a vertex line
+    if (i < line.size() && !blank(line[i])) continue;
+    const auto where = [&] { return name + ":" + std::to_string(number) + ": "; };
     int k = 0;
-    for (; k < 3 && is >> token; ++k) {
-      if (!token.empty() && token.back() == '\r') token.pop_back();
-      char* end = nullptr;
-      const double x = std::strtod(token.c_str(), &end);
-      if (token.empty() || end != token.c_str() + token.size())
-        throw Error(where + "vertex coordinate '" + token + "' is not a number");
-      if (!std::isfinite(x)) throw Error(where + "non-finite coordinate '" + token + "' in a vertex");
+    for (; k < 3; ++k) {
+      while (i < line.size() && blank(line[i])) ++i;
+      if (i >= line.size()) break;
+      const size_t start = i;
+      while (i < line.size() && !blank(line[i])) ++i;
+      const std::string_view token = line.substr(start, i - start);
+      std::string_view digits = token;
+      if (digits.size() > 1 && digits[0] == '+' && digits[1] != '+' && digits[1] != '-') digits.remove_prefix(1);
+      double x = 0;
+      const auto [ptr, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), x);
+      // Out of range: strtod's overflow (inf, refused below) or underflow (0, accepted).
+      const bool range = ec == std::errc::result_out_of_range;
+      if ((ec != std::errc() && !range) || ptr != digits.data() + digits.size())
+        throw Error(where() + "vertex coordinate '" + std::string(token) + "' is not a number");
+      if (range) x = std::strtod(std::string(digits).c_str(), nullptr);
+      if (!std::isfinite(x)) throw Error(where() + "non-finite coordinate '" + std::string(token) + "' in a vertex");
       if (std::abs(x) > kMaxCoordinate)
-        throw Error(where + "vertex coordinate " + token +
+        throw Error(where() + "vertex coordinate " + std::string(token) +
                     " exceeds the largest supported magnitude 1e12 (ray "
                     "tracing is in float)");
     }
-    if (k < 3) throw Error(where + "vertex has " + std::to_string(k) + " coordinate(s), expected 3");
+    if (k < 3) throw Error(where() + "vertex has " + std::to_string(k) + " coordinate(s), expected 3");
   }
 }
+
 }  // namespace
 
 TriangleMesh load_obj(const std::filesystem::path& path, bool weld, std::vector<std::string>* warnings) {
   const std::string name = path.string();
   if (!std::filesystem::exists(path)) throw Error(name + ": file not found");
-  check_vertices(path);
+  check_vertices(path, name);
   tinyobj::ObjReaderConfig config;
   config.triangulate = true;
   config.vertex_color = false;

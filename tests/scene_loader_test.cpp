@@ -161,6 +161,37 @@ TEST(SceneLoaderTest, ObjWeldingJoinsEqualPositionsInFirstMetOrder) {
   std::filesystem::remove(p);
 }
 
+// The vertex check reads every form of number strtod reads in an OBJ (a leading '+', exponents,
+// CRLF line ends, tabs, an underflow to 0) and refuses, naming the line, what tinyobjloader would
+// silently read as 0: a word, a second sign, an overflow to infinity, a missing coordinate.
+TEST(SceneLoaderTest, ObjVertexCheckAcceptsNumbersAndNamesTheLineOfAnythingElse) {
+  const std::filesystem::path p = std::filesystem::temp_directory_path() / (std::to_string(::getpid()) + "_vcheck.obj");
+  auto write = [&](const std::string& text) {
+    std::ofstream out(p, std::ios::binary);
+    out << text;
+  };
+  write("# ok\r\nv +1.5e0 0 0\r\nv\t0 +2 -0.0\r\n  v 0 0 1e-400\r\nvn 0 0 1\r\nf 1 2 3\r\n");
+  const TriangleMesh m = load_obj(p);
+  ASSERT_EQ(m.num_vertices(), 3);
+  for (const Vec3& expected : {Vec3(1.5, 0, 0), Vec3(0, 2, 0), Vec3(0, 0, 0)})
+    EXPECT_NE(std::find(m.positions.begin(), m.positions.end(), expected), m.positions.end()) << expected.transpose();
+  for (const auto& [text, needle] : std::vector<std::pair<std::string, std::string>>{
+           {"v 0 0 0\nv 1 0 0\nv 0 1 x\nf 1 2 3\n", ":3: vertex coordinate 'x' is not a number"},
+           {"v 0 0 0\nv +-1 0 0\nv 0 1 0\nf 1 2 3\n", ":2: vertex coordinate '+-1' is not a number"},
+           {"v 0 0 0\nv 1 0 0\nv 0 1 1e400\nf 1 2 3\n", ":3: non-finite coordinate '1e400'"},
+           {"v 0 0 0\nv 1 0\nv 0 1 0\nf 1 2 3\n", ":2: vertex has 2 coordinate(s), expected 3"},
+           {"v 0 0 0\nv 1 0 0\nv 0 1 nan\nf 1 2 3", ":3: non-finite coordinate 'nan'"}}) {
+    write(text);
+    try {
+      load_obj(p);
+      ADD_FAILURE() << "no error for: " << text;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(p.string() + needle), std::string::npos) << e.what();
+    }
+  }
+  std::filesystem::remove(p);
+}
+
 TEST(SceneLoaderTest, RectangleGeometry) {
   const Scene s = load_scene(data("features.xml"));
   // lamp: the [-1,1]^2 square scaled 0.5, rotated +90 deg about x (normal +z -> -y), at y = 3.
