@@ -76,6 +76,43 @@ void set_vertices(Scene& scene, const std::string& id, const Array& v) {
   if (!shape.face_normals) mesh.normals = vertex_normals(mesh);
 }
 
+/// Replaces shape `id`'s mesh by vertex positions (V, 3) and triangles (T, 3) (vertex indices,
+/// counter-clockwise = outward), recomputing its area-weighted vertex normals (unless it uses face
+/// normals): what an optimiser does after a remeshing. Throws qsil::Error, naming the shape and
+/// the first offending row, for a wrong array shape, a non-finite or too large coordinate, an index
+/// out of range, or a triangle of zero area (no edge structure can hold it); nothing changes then.
+void set_mesh(Scene& scene, const std::string& id, const Array& v, const py::array_t<long long>& f) {
+  Shape& shape = scene.shapes[size_t(shape_index(scene, id))];
+  const std::string where = "set_mesh('" + id + "'): ";
+  if (v.ndim() != 2 || v.shape(1) != 3 || v.shape(0) < 3)
+    throw Error(where + "expected positions of shape (V, 3) with V >= 3");
+  if (f.ndim() != 2 || f.shape(1) != 3 || f.shape(0) < 1)
+    throw Error(where + "expected triangles of shape (T, 3) with T >= 1");
+  TriangleMesh mesh;
+  auto a = v.unchecked<2>();
+  for (py::ssize_t i = 0; i < v.shape(0); ++i) {
+    const Vec3 p(a(i, 0), a(i, 1), a(i, 2));
+    if (!p.allFinite() || p.cwiseAbs().maxCoeff() > kMaxCoordinate)
+      throw Error(where + "vertex " + std::to_string(i) + " is non-finite or beyond 1e12 scene units");
+    mesh.positions.push_back(p);
+  }
+  auto t = f.unchecked<2>();
+  for (py::ssize_t k = 0; k < f.shape(0); ++k) {
+    Eigen::Vector3i tri;
+    for (int r = 0; r < 3; ++r) {
+      if (t(k, r) < 0 || t(k, r) >= v.shape(0))
+        throw Error(where + "triangle " + std::to_string(k) + " refers to vertex " + std::to_string(t(k, r)) + " of " +
+                    std::to_string(v.shape(0)));
+      tri[r] = int(t(k, r));
+    }
+    mesh.triangles.push_back(tri);
+    if (!(mesh.area(mesh.num_triangles() - 1) > 0))
+      throw Error(where + "triangle " + std::to_string(k) + " has zero area");
+  }
+  if (!shape.face_normals) mesh.normals = vertex_normals(mesh);
+  shape.mesh = std::move(mesh);
+}
+
 /// Binds qsil.Scene: loading, the camera's size and sample count, shapes' vertices and triangles.
 void bind_scene(py::module_& m) {
   py::class_<Scene>(m, "Scene", "A scene loaded from Mitsuba 3 XML (geometry in world space)")
@@ -116,7 +153,12 @@ void bind_scene(py::module_& m) {
           },
           py::arg("shape"), "Triangles (T, 3) of a shape: vertex indices, counter-clockwise = outward")
       .def("set_vertices", &set_vertices, py::arg("shape"), py::arg("positions"),
-           "Sets a shape's vertex positions (V, 3) and recomputes its area-weighted vertex normals");
+           "Sets a shape's vertex positions (V, 3) and recomputes its area-weighted vertex normals")
+      .def("set_mesh", &set_mesh, py::arg("shape"), py::arg("positions"), py::arg("triangles"),
+           "Replaces a shape's mesh: positions (V, 3) and triangles (T, 3) of vertex indices, counter-clockwise = "
+           "outward (after a remeshing); recomputes its vertex normals. Every later render, grad or reverse builds its "
+           "edge structure (forest, creases, intersection curves) for the new mesh. Raises qsil.Error for bad input, "
+           "leaving the mesh as it was");
 }
 
 /// Binds qsil.render and qsil.grad (forward mode).

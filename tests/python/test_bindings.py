@@ -53,6 +53,69 @@ def test_set_vertices_round_trip_and_motion():
     assert np.allclose(s.vertices("spot"), v + np.array([0.3, 0.0, 0.0]))
 
 
+def icosphere(subdivisions=2, radius=0.5, centre=(0.0, 0.3, 0.0)):
+    """A closed icosphere (vertices, triangles), counter-clockwise seen from outside."""
+    t = (1.0 + 5.0 ** 0.5) / 2.0
+    v = [(-1, t, 0), (1, t, 0), (-1, -t, 0), (1, -t, 0), (0, -1, t), (0, 1, t), (0, -1, -t), (0, 1, -t),
+         (t, 0, -1), (t, 0, 1), (-t, 0, -1), (-t, 0, 1)]
+    f = [(0, 11, 5), (0, 5, 1), (0, 1, 7), (0, 7, 10), (0, 10, 11), (1, 5, 9), (5, 11, 4), (11, 10, 2),
+         (10, 7, 6), (7, 1, 8), (3, 9, 4), (3, 4, 2), (3, 2, 6), (3, 6, 8), (3, 8, 9), (4, 9, 5), (2, 4, 11),
+         (6, 2, 10), (8, 6, 7), (9, 8, 1)]
+    v = [np.array(p, float) / np.linalg.norm(p) for p in v]
+    for _ in range(subdivisions):
+        cache, new = {}, []
+
+        def mid(a, b):
+            key = (min(a, b), max(a, b))
+            if key not in cache:
+                m = v[a] + v[b]
+                v.append(m / np.linalg.norm(m))
+                cache[key] = len(v) - 1
+            return cache[key]
+
+        for a, b, c in f:
+            ab, bc, ca = mid(a, b), mid(b, c), mid(c, a)
+            new += [(a, ab, ca), (b, bc, ab), (c, ca, bc), (ab, bc, ca)]
+        f = new
+    return np.array(v) * radius + np.array(centre), np.array(f, dtype=np.int64)
+
+
+def test_set_mesh_replaces_vertices_and_triangles():
+    s = load()
+    before = qsil.render(s, spp=2, seed=1)
+    v, t = s.vertices("spot"), s.triangles("spot")
+    s.set_mesh("spot", v, t)
+    assert np.array_equal(qsil.render(s, spp=2, seed=1), before), "the same mesh renders the same image"
+    sv, st = icosphere()
+    s.set_mesh("spot", sv, st)
+    assert np.array_equal(s.vertices("spot"), sv) and np.array_equal(s.triangles("spot"), st)
+    assert np.abs(qsil.render(s, spp=2, seed=1) - before).sum() > 1.0
+    # The edge structure follows the new mesh: forward and reverse mode run on it, and reverse mode's
+    # gradient has one row per new vertex.
+    _, d = qsil.grad(s, ["spot:translate:1,0,0"], spp=2, seed=1)
+    assert np.isfinite(d).all() and np.abs(d).sum() > 0
+    g = qsil.reverse(s, ["spot"], np.ones((s.height, s.width, 3)), spp=2, seed=1)["gradient"]["spot"]
+    assert g.shape == sv.shape and np.isfinite(g).all() and np.abs(g).sum() > 0
+
+
+def test_set_mesh_rejects_bad_input_and_keeps_the_mesh():
+    s = load(res=8, spp=1)
+    v, t = s.vertices("spot"), s.triangles("spot")
+    bad = [
+        (lambda: s.set_mesh("spot", v[:, :2], t), "expected positions of shape (V, 3)"),
+        (lambda: s.set_mesh("spot", v, t[:, :2]), "expected triangles of shape (T, 3)"),
+        (lambda: s.set_mesh("spot", v, t + len(v)), "refers to vertex"),
+        (lambda: s.set_mesh("spot", v, np.array([[0, 0, 1]])), "triangle 0 has zero area"),
+        (lambda: s.set_mesh("spot", np.full_like(v, np.nan), t), "vertex 0 is non-finite"),
+        (lambda: s.set_mesh("cow", v, t), "shape 'cow': no shape with this id"),
+    ]
+    for call, needle in bad:
+        with pytest.raises(qsil.Error) as e:
+            call()
+        assert needle in str(e.value) and "\n" not in str(e.value), str(e.value)
+    assert np.array_equal(s.vertices("spot"), v) and np.array_equal(s.triangles("spot"), t)
+
+
 def test_reverse_equals_forward_mode_on_the_same_paths():
     # Spot above a GGX mirror, 5 segments (paths with several hits on Spot and the mirror).
     s = load(MIRROR, res=16, spp=2, max_depth=5)
