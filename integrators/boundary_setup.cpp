@@ -52,7 +52,7 @@ BoundarySetup build_boundary_setup(const Scene& scene, Method method, bool inter
     out.forest = forest.get();
     // Contour sets for narrow lobes and small area lights: the quadric method only (quadric-box
     // is the paper's ablation, kept as the paper traverses), in scenes with a glossy BSDF on some
-    // shape or a quad light (set_light_importance's).
+    // shape or an area light (a quad or a mesh emitter: set_light_importance's lights).
     const bool glossy = std::any_of(scene.shapes.begin(), scene.shapes.end(), [&](const Shape& s) {
       return s.bsdf >= 0 && scene.bsdfs[size_t(s.bsdf)].type == BSDFDesc::Type::RoughConductor;
     });
