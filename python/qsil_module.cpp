@@ -154,6 +154,18 @@ void bind_scene(py::module_& m) {
           py::arg("shape"), "Triangles (T, 3) of a shape: vertex indices, counter-clockwise = outward")
       .def("set_vertices", &set_vertices, py::arg("shape"), py::arg("positions"),
            "Sets a shape's vertex positions (V, 3) and recomputes its area-weighted vertex normals")
+      .def(
+          "set_resolution",
+          [](Scene& s, int width, int height) {
+            if (width < 1 || width > (1 << 16) || height < 1 || height > (1 << 16))
+              throw Error("set_resolution(" + std::to_string(width) + ", " + std::to_string(height) +
+                          "): width and height must be in [1, 65536]");
+            s.camera.width = width;
+            s.camera.height = height;
+          },
+          py::arg("width"), py::arg("height"),
+          "Sets the film's size in pixels (coarse-to-fine optimisation); the field of view along the camera's fov_axis "
+          "is kept, as when the XML's film size changes. Raises qsil.Error outside [1, 65536]")
       .def("set_mesh", &set_mesh, py::arg("shape"), py::arg("positions"), py::arg("triangles"),
            "Replaces a shape's mesh: positions (V, 3) and triangles (T, 3) of vertex indices, counter-clockwise = "
            "outward (after a remeshing); recomputes its vertex normals. Every later render, grad or reverse builds its "
@@ -179,14 +191,16 @@ void bind_forward(py::module_& m) {
 
   const auto grad =
       [](const Scene& scene, const std::vector<std::string>& params, int spp, uint64_t seed, int threads,
-         const std::string& boundary, double sppi, double sppp) {
+         const std::string& boundary, double sppi, double sppp, bool intersection_curves) {
         const Method method = parse_method(boundary, "boundary", kBoundaryMethods);
         const std::vector<ParameterSpec> specs = parse_parameters(params, scene);
         std::optional<Estimator> e;
         std::optional<RenderResult> r;
         {
           py::gil_scoped_release release;
-          e.emplace(scene, EstimatorConfig::gradient(specs, method, sppi, sppp));
+          EstimatorConfig config = EstimatorConfig::gradient(specs, method, sppi, sppp);
+          config.intersection_curves = intersection_curves;
+          e.emplace(scene, std::move(config));
           r = e->run(options(spp, seed, threads));
         }
         const FilmLayout& layout = e->layout();
@@ -202,14 +216,16 @@ void bind_forward(py::module_& m) {
   m.def("grad", grad,
       py::arg("scene"), py::arg("params"), py::arg("spp") = 0, py::arg("seed") = 0, py::arg("threads") = 0,
       py::arg("boundary") = "quadric", py::arg("sppi") = 0, py::arg("sppp") = kDefaultSppp,
+      py::arg("intersection_curves") = true,
       "Forward mode: (image (H, W, 3), derivatives (K, H, W, 3)) for 1-8 parameter specs "
       "('ID:translate:X,Y,Z', 'ID:rotate:X,Y,Z', 'ID:scale', 'ID:vertex:I:X,Y,Z'). sppi: secondary "
       "boundary-term samples per shading point on average over a pixel's samples (0: the method's default, 0.5 for "
-      "quadric); sppp: primary edge samples per pixel sample (`qsil grad --help`)");
+      "quadric); sppp: primary edge samples per pixel sample (`qsil grad --help`); intersection_curves=False: do not "
+      "sample the curves where surfaces cross (to measure what they add; biased where surfaces cross)");
   // The keyword names before 2026-11-25 (boundary_spp, primary_samples): the same function.
   m.def("grad", grad, py::arg("scene"), py::arg("params"), py::arg("spp") = 0, py::arg("seed") = 0,
         py::arg("threads") = 0, py::arg("boundary") = "quadric", py::arg("boundary_spp") = 0,
-        py::arg("primary_samples") = kDefaultSppp,
+        py::arg("primary_samples") = kDefaultSppp, py::arg("intersection_curves") = true,
         "The same, with the old keyword names boundary_spp (= sppi) and primary_samples (= sppp)");
 
 }
@@ -218,7 +234,7 @@ void bind_forward(py::module_& m) {
 void bind_reverse(py::module_& m) {
   const auto reverse =
       [](const Scene& scene, const std::vector<std::string>& shapes, const Array& adjoint, int spp, uint64_t seed,
-         int threads, const std::string& boundary, double sppi, double sppp) {
+         int threads, const std::string& boundary, double sppi, double sppp, bool intersection_curves) {
         const Method method = parse_method(boundary, "boundary", kBoundaryMethods);
         const int W = scene.camera.width, H = scene.camera.height;
         if (adjoint.ndim() != 3 || adjoint.shape(0) != H || adjoint.shape(1) != W || adjoint.shape(2) != 3)
@@ -229,7 +245,7 @@ void bind_reverse(py::module_& m) {
         std::optional<ReverseResult> r;
         {
           py::gil_scoped_release release;
-          const ReverseEstimator e(scene, ReverseConfig{indices, method, sppi, sppp});
+          const ReverseEstimator e(scene, ReverseConfig{indices, method, sppi, sppp, intersection_curves});
           r = e.run(w, options(spp, seed, threads));
         }
         Array image({H, W, 3});
@@ -253,13 +269,13 @@ void bind_reverse(py::module_& m) {
   m.def("reverse", reverse,
       py::arg("scene"), py::arg("shapes"), py::arg("adjoint"), py::arg("spp") = 0, py::arg("seed") = 0,
       py::arg("threads") = 0, py::arg("boundary") = "quadric", py::arg("sppi") = 0,
-      py::arg("sppp") = kDefaultSppp,
+      py::arg("sppp") = kDefaultSppp, py::arg("intersection_curves") = true,
       "Reverse mode: for the loss L = sum(adjoint * I), a dict with 'image' (H, W, 3), 'loss' (of that image), "
-      "'gradient' {shape id: dL/dx (V, 3)}, 'seconds', 'nonfinite'; sppi and sppp as for grad");
+      "'gradient' {shape id: dL/dx (V, 3)}, 'seconds', 'nonfinite'; sppi, sppp and intersection_curves as for grad");
   // The keyword names before 2026-11-25 (boundary_spp, primary_samples): the same function.
   m.def("reverse", reverse, py::arg("scene"), py::arg("shapes"), py::arg("adjoint"), py::arg("spp") = 0,
         py::arg("seed") = 0, py::arg("threads") = 0, py::arg("boundary") = "quadric", py::arg("boundary_spp") = 0,
-        py::arg("primary_samples") = kDefaultSppp,
+        py::arg("primary_samples") = kDefaultSppp, py::arg("intersection_curves") = true,
         "The same, with the old keyword names boundary_spp (= sppi) and primary_samples (= sppp)");
 }
 

@@ -116,6 +116,38 @@ def test_set_mesh_rejects_bad_input_and_keeps_the_mesh():
     assert np.array_equal(s.vertices("spot"), v) and np.array_equal(s.triangles("spot"), t)
 
 
+def test_set_resolution_changes_the_film_and_back():
+    s = load(res=16, spp=1)
+    before = qsil.render(s, spp=1, seed=4)
+    s.set_resolution(24, 12)
+    assert (s.width, s.height) == (24, 12)
+    assert qsil.render(s, spp=1, seed=4).shape == (12, 24, 3)
+    assert qsil.grad(s, ["spot:translate:1,0,0"], spp=1)[1].shape == (1, 12, 24, 3)
+    s.set_resolution(16, 16)
+    assert np.array_equal(qsil.render(s, spp=1, seed=4), before)
+    for w, h in ((0, 16), (16, -1), (1 << 17, 16)):
+        with pytest.raises(qsil.Error) as e:
+            s.set_resolution(w, h)
+        assert "must be in [1, 65536]" in str(e.value)
+    assert (s.width, s.height) == (16, 16)
+
+
+def test_intersection_curves_switch_reaches_both_modes():
+    # A sphere sunk into a floor: the curve where they cross is sampled unless switched off, so the
+    # derivative changes; where nothing crosses (Spot under a light), the switch changes nothing.
+    sunk = qsil.Scene(os.path.join(ROOT, "tests", "data", "gradient", "sunk-sphere.xml"), {"res": "16", "spp": "4"})
+    on = qsil.grad(sunk, ["sphere:translate:0,1,0"], spp=4, seed=3)[1]
+    off = qsil.grad(sunk, ["sphere:translate:0,1,0"], spp=4, seed=3, intersection_curves=False)[1]
+    assert not np.array_equal(on, off)
+    w = np.ones((16, 16, 3))
+    g_on = qsil.reverse(sunk, ["sphere"], w, spp=4, seed=3)["gradient"]["sphere"]
+    g_off = qsil.reverse(sunk, ["sphere"], w, spp=4, seed=3, intersection_curves=False)["gradient"]["sphere"]
+    assert not np.array_equal(g_on, g_off)
+    s = load(res=8, spp=2)
+    a = qsil.grad(s, ["spot:translate:1,0,0"], spp=2, seed=3)[1]
+    assert np.array_equal(a, qsil.grad(s, ["spot:translate:1,0,0"], spp=2, seed=3, intersection_curves=False)[1])
+
+
 def test_reverse_equals_forward_mode_on_the_same_paths():
     # Spot above a GGX mirror, 5 segments (paths with several hits on Spot and the mirror).
     s = load(MIRROR, res=16, spp=2, max_depth=5)
