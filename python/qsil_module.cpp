@@ -11,6 +11,7 @@
 #include "qsil/integrators/reverse.h"
 #include "qsil/integrators/method.h"
 #include "qsil/parameters.h"
+#include "qsil/remesh.h"
 #include "qsil/scene.h"
 
 #include <pybind11/numpy.h>
@@ -111,6 +112,36 @@ void set_mesh(Scene& scene, const std::string& id, const Array& v, const py::arr
   }
   if (!shape.face_normals) mesh.normals = vertex_normals(mesh);
   shape.mesh = std::move(mesh);
+}
+
+/// qsil.remesh: positions (V, 3) and triangles (T, 3) remeshed toward a target edge length
+/// (isotropic_remesh), as a (positions, triangles) tuple.
+py::tuple remesh(const Array& v, const py::array_t<long long>& f, double target_edge_length, int iterations) {
+  if (v.ndim() != 2 || v.shape(1) != 3 || f.ndim() != 2 || f.shape(1) != 3)
+    throw Error("remesh: expected positions (V, 3) and triangles (T, 3)");
+  TriangleMesh mesh;
+  auto a = v.unchecked<2>();
+  for (py::ssize_t i = 0; i < v.shape(0); ++i) {
+    const Vec3 p(a(i, 0), a(i, 1), a(i, 2));
+    if (!p.allFinite()) throw Error("remesh: vertex " + std::to_string(i) + " is non-finite");
+    mesh.positions.push_back(p);
+  }
+  auto t = f.unchecked<2>();
+  for (py::ssize_t k = 0; k < f.shape(0); ++k) mesh.triangles.emplace_back(int(t(k, 0)), int(t(k, 1)), int(t(k, 2)));
+  TriangleMesh out;
+  {
+    py::gil_scoped_release release;
+    out = isotropic_remesh(mesh, target_edge_length, iterations);
+  }
+  Array pv({out.num_vertices(), 3});
+  auto pa = pv.mutable_unchecked<2>();
+  for (int i = 0; i < out.num_vertices(); ++i)
+    for (int r = 0; r < 3; ++r) pa(i, r) = out.positions[size_t(i)][r];
+  py::array_t<long long> pf({out.num_triangles(), 3});
+  auto fa = pf.mutable_unchecked<2>();
+  for (int k = 0; k < out.num_triangles(); ++k)
+    for (int r = 0; r < 3; ++r) fa(k, r) = out.triangles[size_t(k)][r];
+  return py::make_tuple(pv, pf);
 }
 
 /// Binds qsil.Scene: loading, the camera's size and sample count, shapes' vertices and triangles.
@@ -289,4 +320,9 @@ PYBIND11_MODULE(qsil, m) {
   qsil::bind_scene(m);
   qsil::bind_forward(m);
   qsil::bind_reverse(m);
+  m.def("remesh", &qsil::remesh, py::arg("positions"), py::arg("triangles"), py::arg("target_edge_length"),
+        py::arg("iterations") = 3,
+        "Isotropic remeshing (CGAL's Polygon Mesh Processing) of a manifold, consistently oriented triangle mesh "
+        "toward edges of target_edge_length: (positions (V', 3), triangles (T', 3)), orientation and border kept. "
+        "Raises qsil.Error for a bad target, iterations < 1 or a mesh CGAL cannot hold");
 }

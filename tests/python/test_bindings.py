@@ -148,6 +148,51 @@ def test_intersection_curves_switch_reaches_both_modes():
     assert np.array_equal(a, qsil.grad(s, ["spot:translate:1,0,0"], spp=2, seed=3, intersection_curves=False)[1])
 
 
+def mesh_edges(F):
+    """Directed edges (T*3, 2) of triangles F."""
+    return np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
+
+
+def signed_volume(V, F):
+    return np.einsum("ij,ij->i", V[F[:, 0]], np.cross(V[F[:, 1]], V[F[:, 2]])).sum() / 6.0
+
+
+def test_remesh_reaches_the_target_length_and_keeps_a_closed_outward_mesh():
+    v, f = icosphere(2, radius=1.0, centre=(0.0, 0.0, 0.0))
+    d = mesh_edges(f)
+    target = 0.5 * np.linalg.norm(v[d[:, 0]] - v[d[:, 1]], axis=1).mean()
+    V, F = qsil.remesh(v, f, target)
+    E = mesh_edges(F)
+    lengths = np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1)
+    assert abs(lengths.mean() / target - 1) < 0.15, lengths.mean() / target
+    assert len(F) > 2 * len(f), "a finer mesh"
+    # Closed, manifold and consistently oriented: each directed edge once, and its reverse once.
+    directed = {tuple(e) for e in E}
+    assert len(directed) == len(E) and all((b, a) in directed for a, b in directed)
+    assert len(V) - len(E) // 2 + len(F) == 2, "a sphere's Euler characteristic"
+    # Outward, and on the input surface (within the icosphere's own distance from the unit sphere).
+    assert abs(signed_volume(V, F) / signed_volume(v, f) - 1) < 0.02
+    assert np.abs(np.linalg.norm(V, axis=1) - 1).max() < 0.05
+
+
+def test_remesh_output_renders_and_bad_input_raises():
+    v, f = icosphere(2, radius=0.5, centre=(0.0, 0.3, 0.0))
+    V, F = qsil.remesh(v, f, 0.1, iterations=2)
+    s = load(res=8, spp=1)
+    s.set_mesh("spot", V, F)
+    assert np.isfinite(qsil.render(s, spp=1)).all()
+    bad = [(lambda: qsil.remesh(v, f, 0.0), "not a positive finite number"),
+           (lambda: qsil.remesh(v, f, np.nan), "not a positive finite number"),
+           (lambda: qsil.remesh(v, f, 0.1, iterations=0), "iterations 0 < 1"),
+           (lambda: qsil.remesh(v, f + len(v), 0.1), "refers to vertex"),
+           (lambda: qsil.remesh(v, np.concatenate([f, f[:1]]), 0.1), "not a manifold"),
+           (lambda: qsil.remesh(v[:, :2], f, 0.1), "expected positions (V, 3)")]
+    for call, needle in bad:
+        with pytest.raises(qsil.Error) as e:
+            call()
+        assert needle in str(e.value) and "\n" not in str(e.value), str(e.value)
+
+
 def test_reverse_equals_forward_mode_on_the_same_paths():
     # Spot above a GGX mirror, 5 segments (paths with several hits on Spot and the mirror).
     s = load(MIRROR, res=16, spp=2, max_depth=5)
