@@ -40,34 +40,6 @@ from scipy.spatial import cKDTree
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
-def icosphere(subdiv, centre, radius):
-    """Vertices (V, 3) and counter-clockwise triangles (T, 3) of a subdivided icosahedron."""
-    t = (1 + 5 ** 0.5) / 2
-    v = [(-1, t, 0), (1, t, 0), (-1, -t, 0), (1, -t, 0), (0, -1, t), (0, 1, t), (0, -1, -t), (0, 1, -t),
-         (t, 0, -1), (t, 0, 1), (-t, 0, -1), (-t, 0, 1)]
-    f = [(0, 11, 5), (0, 5, 1), (0, 1, 7), (0, 7, 10), (0, 10, 11), (1, 5, 9), (5, 11, 4), (11, 10, 2), (10, 7, 6),
-         (7, 1, 8), (3, 9, 4), (3, 4, 2), (3, 2, 6), (3, 6, 8), (3, 8, 9), (4, 9, 5), (2, 4, 11), (6, 2, 10),
-         (8, 6, 7), (9, 8, 1)]
-    v = [np.array(p, float) / np.linalg.norm(p) for p in v]
-    for _ in range(subdiv):
-        mid = {}
-
-        def midpoint(a, b):
-            key = (min(a, b), max(a, b))
-            if key not in mid:
-                p = v[a] + v[b]
-                v.append(p / np.linalg.norm(p))
-                mid[key] = len(v) - 1
-            return mid[key]
-
-        nf = []
-        for a, b, c in f:
-            ab, bc, ca = midpoint(a, b), midpoint(b, c), midpoint(c, a)
-            nf += [(a, ab, ca), (b, bc, ab), (c, ca, bc), (ab, bc, ca)]
-        f = nf
-    return np.array(v) * radius + centre, np.array(f)
-
-
 def write_obj(path, vertices, triangles):
     with open(path, "w") as out:
         for p in vertices:
@@ -105,15 +77,6 @@ def view_rotation(i, views):
     return rotation_y(2 * math.pi * i / views) @ rotation_x(math.radians(30 if i % 2 == 0 else -30))
 
 
-def laplacian(n, triangles):
-    """Combinatorial Laplacian (n x n, sparse): degree on the diagonal, -1 per edge."""
-    e = np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]])
-    e = np.unique(np.sort(e, axis=1), axis=0)
-    a = sp.coo_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(n, n))
-    a = (a + a.T).tocsr()
-    return sp.diags(np.asarray(a.sum(axis=1)).ravel()) - a
-
-
 def distances(a, b):
     """Chamfer (mean of both directions' mean nearest distance) and Hausdorff distance."""
     da, _ = cKDTree(b).query(a)
@@ -137,6 +100,7 @@ def main():
     args = ap.parse_args()
     sys.path.insert(0, os.path.join(args.build, "python"))
     import qsil  # noqa: E402  (built module)
+    from qsil_shape import combinatorial_laplacian, icosphere  # noqa: E402  (python/, copied beside it)
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -163,8 +127,8 @@ def main():
     x0 = scene.vertices("spot")
     tris = scene.triangles("spot")
     n = len(x0)
-    solve = spla.factorized((sp.identity(n) + args.smooth * laplacian(n, tris)).tocsc())
-    M = (sp.identity(n) + args.smooth * laplacian(n, tris)).tocsr()
+    solve = spla.factorized((sp.identity(n) + args.smooth * combinatorial_laplacian(tris, n)).tocsc())
+    M = (sp.identity(n) + args.smooth * combinatorial_laplacian(tris, n)).tocsr()
 
     def evaluate(x):
         """Fixed-seed evaluation loss (64 spp per view) and the images."""

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 import qsil
+import qsil_shape
 
 ROOT = os.environ.get("QSIL_SOURCE_DIR", os.path.join(os.path.dirname(__file__), "..", ".."))
 SELFSHADOW = os.path.join(ROOT, "tests", "data", "gradient", "spot-selfshadow.xml")
@@ -54,30 +55,8 @@ def test_set_vertices_round_trip_and_motion():
 
 
 def icosphere(subdivisions=2, radius=0.5, centre=(0.0, 0.3, 0.0)):
-    """A closed icosphere (vertices, triangles), counter-clockwise seen from outside."""
-    t = (1.0 + 5.0 ** 0.5) / 2.0
-    v = [(-1, t, 0), (1, t, 0), (-1, -t, 0), (1, -t, 0), (0, -1, t), (0, 1, t), (0, -1, -t), (0, 1, -t),
-         (t, 0, -1), (t, 0, 1), (-t, 0, -1), (-t, 0, 1)]
-    f = [(0, 11, 5), (0, 5, 1), (0, 1, 7), (0, 7, 10), (0, 10, 11), (1, 5, 9), (5, 11, 4), (11, 10, 2),
-         (10, 7, 6), (7, 1, 8), (3, 9, 4), (3, 4, 2), (3, 2, 6), (3, 6, 8), (3, 8, 9), (4, 9, 5), (2, 4, 11),
-         (6, 2, 10), (8, 6, 7), (9, 8, 1)]
-    v = [np.array(p, float) / np.linalg.norm(p) for p in v]
-    for _ in range(subdivisions):
-        cache, new = {}, []
-
-        def mid(a, b):
-            key = (min(a, b), max(a, b))
-            if key not in cache:
-                m = v[a] + v[b]
-                v.append(m / np.linalg.norm(m))
-                cache[key] = len(v) - 1
-            return cache[key]
-
-        for a, b, c in f:
-            ab, bc, ca = mid(a, b), mid(b, c), mid(c, a)
-            new += [(a, ab, ca), (b, bc, ab), (c, ca, bc), (ab, bc, ca)]
-        f = new
-    return np.array(v) * radius + np.array(centre), np.array(f, dtype=np.int64)
+    """qsil_shape.icosphere with this file's defaults (a sphere where Spot stands)."""
+    return qsil_shape.icosphere(subdivisions, centre, radius)
 
 
 def test_set_mesh_replaces_vertices_and_triangles():
