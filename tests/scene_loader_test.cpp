@@ -330,7 +330,7 @@ TEST(SceneLoaderTest, MissingFileNamesThePath) {
 // ---------------------------------------------------------------------------------------------
 
 TEST(SceneLoaderTest, BundledScenesLoadWithoutWarnings) {
-  for (const char* name : {"spot-mirror.xml", "shadow-quad.xml", "direct.xml"}) {
+  for (const char* name : {"spot-mirror.xml", "shadow-quad.xml", "direct.xml", "two-mirrors.xml"}) {
     SCOPED_TRACE(name);
     std::vector<std::string> warnings;
     const Scene s = load_scene(bundled(name), {}, &warnings);
@@ -382,6 +382,46 @@ TEST(SceneLoaderTest, SpotMirrorShowsSpotOnlyInTheMirror) {
   const int pixels = cam.width * cam.height;
   EXPECT_GE(on_mirror, 0.9 * pixels) << "the mirror should fill the view";
   EXPECT_GE(reflected_hits, 0.2 * pixels) << "Spot should fill a good part of the mirror";
+}
+
+// The inverse-rendering set-up of [QSS] 5.5: the bunny is behind the camera (no direct ray meets
+// its box), and each of the two mirrors reflects pixel-centre rays onto it, from directions whose
+// means differ by more than 10 degrees (two views).
+TEST(SceneLoaderTest, TwoMirrorsShowTheBunnyOnlyInTheMirrorsFromTwoSides) {
+  const Scene s = load_scene(bundled("two-mirrors.xml"));
+  const Box3 box = shape(s, "bunny").mesh.bounds();
+  const Camera& cam = s.camera;
+  const Vec3 o = cam.origin();
+  int direct_hits = 0;
+  for (int j = 0; j <= 2 * cam.height; ++j)
+    for (int i = 0; i <= 2 * cam.width; ++i) direct_hits += ray_hits_box(o, cam.direction(0.5 * i, 0.5 * j), box);
+  EXPECT_EQ(direct_hits, 0);
+  std::array<Vec3, 2> mean_dir{Vec3::Zero(), Vec3::Zero()};
+  std::array<int, 2> reflected{0, 0};
+  int k = 0;
+  for (const char* id : {"mirror-left", "mirror-right"}) {
+    const Shape& mirror = shape(s, id);
+    EXPECT_EQ(s.bsdfs[mirror.bsdf].type, BSDFDesc::Type::RoughConductor);
+    EXPECT_DOUBLE_EQ(s.bsdfs[mirror.bsdf].alpha, 0.01);
+    const Vec3 n = mirror.mesh.face_cross(0).normalized();
+    for (int j = 0; j < cam.height; ++j)
+      for (int i = 0; i < cam.width; ++i) {
+        const Vec3 d = cam.direction(i + 0.5, j + 0.5);
+        const auto hit = test::ray_hits_mesh(o, d, mirror.mesh);
+        if (!hit || d.dot(n) >= 0) continue;
+        const Vec3 r = d - 2 * d.dot(n) * n;
+        if (!ray_hits_box(o + hit->t * d, r, box)) continue;
+        ++reflected[size_t(k)];
+        mean_dir[size_t(k)] += r;
+      }
+    ++k;
+  }
+  const int pixels = cam.width * cam.height;
+  for (int m = 0; m < 2; ++m) EXPECT_GE(reflected[size_t(m)], 0.03 * pixels) << "mirror " << m;
+  const double angle = std::acos(mean_dir[0].normalized().dot(mean_dir[1].normalized())) * 180 / kPi;
+  std::printf("two-mirrors: %d and %d of %d pixels see the bunny; the views are %.1f deg apart\n", reflected[0],
+              reflected[1], pixels, angle);
+  EXPECT_GT(angle, 10.0);
 }
 
 TEST(SceneLoaderTest, ShadowQuadGeometry) {
