@@ -288,16 +288,9 @@ void RenderResult::merge(const RenderResult& other) {
   if (!other.largest.empty()) {
     // Both lists hold the largest of their runs; the merged run keeps as many as the longer one.
     TopSamples top(int(std::max(largest.size(), other.largest.size())));
-    const std::vector<SampleTrace>* lists[] = {&largest, &other.largest};
-    for (const auto* list : lists)
-      for (const SampleTrace& s : *list) top.offer(s.x, s.y, s.sample, s.param, s.value);
-    std::vector<SampleTrace> kept = top.sorted();
-    // offer() keeps no paths: take each kept sample's trace from the list it came from.
-    for (SampleTrace& k : kept)
-      for (const auto* list : lists)
-        for (const SampleTrace& s : *list)
-          if (s.x == k.x && s.y == k.y && s.sample == k.sample) k = s;
-    largest = std::move(kept);
+    for (const SampleTrace& s : largest) top.offer(s);
+    for (const SampleTrace& s : other.largest) top.offer(s);
+    largest = top.sorted();
   }
 }
 

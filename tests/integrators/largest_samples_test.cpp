@@ -80,6 +80,32 @@ TEST(LargestSamples, LargestFirstBoundEveryPixelAndIndependentOfThreads) {
   }
 }
 
+// Runs over disjoint sample ranges merge (RenderResult::merge) into the run over their union:
+// the same samples, values and paths.
+TEST(LargestSamples, MergedRangesKeepTheWholeRunsSamples) {
+  static const Scene scene = load_scene(test::data_file("scenes/direct.xml"), {{"res", "16"}, {"spp", "16"}});
+  const std::vector<ParameterSpec> params{parse_parameter("spot:translate:1,0,0", scene)};
+  const Estimator e(scene, EstimatorConfig::gradient(params, Method::Quadric));
+  auto run = [&](int first, int spp) {
+    RenderOptions o;
+    o.progress = false;
+    o.seed = 3;
+    o.first_sample = first;
+    o.spp = spp;
+    o.largest_samples = 8;
+    return e.run(o);
+  };
+  RenderResult merged = run(0, 8);
+  merged.merge(run(8, 8));
+  const RenderResult whole = run(0, 16);
+  ASSERT_EQ(merged.largest.size(), whole.largest.size());
+  for (size_t i = 0; i < whole.largest.size(); ++i) {
+    const SampleTrace &a = merged.largest[i], &b = whole.largest[i];
+    EXPECT_EQ(std::tie(a.x, a.y, a.sample, a.value, a.interior), std::tie(b.x, b.y, b.sample, b.value, b.interior));
+    EXPECT_EQ(a.vertices.size(), b.vertices.size());
+  }
+}
+
 TEST(LargestSamples, NoneKeptWithoutTheOption) {
   EXPECT_TRUE(run_direct(Method::Quadric, 2, 0).result.largest.empty());
 }

@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 #include <vector>
 
 namespace qsil {
@@ -46,32 +47,35 @@ struct SampleTrace {
 
 /// Keeps the `capacity` samples of largest |value| offered to it (by (|value|, pixel, sample) so
 /// that the choice does not depend on the order of offers: runs on any thread count keep the
-/// same samples).
+/// same samples), each with whatever path it was offered with.
 class TopSamples {
  public:
   explicit TopSamples(int capacity = 0) : capacity_(std::max(0, capacity)) {}
-  int capacity() const { return capacity_; }
-  /// Offers a sample (x, y, sample index, parameter, derivative).
+  /// Offers a sample without a path yet (x, y, sample index, parameter, derivative).
   void offer(int x, int y, int sample, int param, double value) {
-    if (capacity_ == 0 || !(std::abs(value) > 0)) return;
     SampleTrace s;
     s.x = x;
     s.y = y;
     s.sample = sample;
     s.param = param;
     s.value = value;
+    offer(std::move(s));
+  }
+  /// Offers a sample as it is (its path kept if it is kept). A zero value is never kept.
+  void offer(SampleTrace s) {
+    if (capacity_ == 0 || !(std::abs(s.value) > 0)) return;
     if (int(heap_.size()) < capacity_) {
-      heap_.push_back(s);
+      heap_.push_back(std::move(s));
       std::push_heap(heap_.begin(), heap_.end(), larger);
     } else if (larger(s, heap_.front())) {
       std::pop_heap(heap_.begin(), heap_.end(), larger);
-      heap_.back() = s;
+      heap_.back() = std::move(s);
       std::push_heap(heap_.begin(), heap_.end(), larger);
     }
   }
-  /// Adds every sample of `other` (same capacity).
+  /// Adds every sample of `other`.
   void merge(const TopSamples& other) {
-    for (const SampleTrace& s : other.heap_) offer(s.x, s.y, s.sample, s.param, s.value);
+    for (const SampleTrace& s : other.heap_) offer(s);
   }
   /// The kept samples, largest |value| first.
   std::vector<SampleTrace> sorted() const {
