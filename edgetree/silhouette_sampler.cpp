@@ -241,13 +241,7 @@ void push_local_light(const LightPolygon& light, const SilhouetteQuery& q, std::
 
 void local_lights(const SilhouetteQuery& q, std::vector<LocalLight>& out) {
   out.clear();
-  if (q.lights)
-    for (const LightPolygon& light : *q.lights) push_local_light(light, q, out);
-  if (q.light_spheres) {
-    LightPolygon quad;
-    for (const LightSphere& sphere : *q.light_spheres)
-      if (light_billboard(sphere, q.p, quad)) push_local_light(quad, q, out);
-  }
+  for_each_light_quad(q, [&](const LightPolygon& light) { push_local_light(light, q, out); });
 }
 
 NodeWeight leaf_edge_weight(const Edge& e, const SilhouetteQuery& q) {

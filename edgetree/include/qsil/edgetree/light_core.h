@@ -22,7 +22,6 @@ namespace qsil::edgetree {
 /// core is that cone. Returns false (probe untouched) where no light qualifies or the cone's half-angle is above
 /// kContourMaxHalfAngle. `shape` receives the light's shape (its probe rays pass through it).
 inline bool light_core(const SilhouetteQuery& q, ContourProbe& probe, int& shape) {
-  if (!q.lights && !q.light_spheres) return false;
   LightPolygon best;
   bool found = false;
   double best_weight = 0;
@@ -46,13 +45,7 @@ inline bool light_core(const SilhouetteQuery& q, ContourProbe& probe, int& shape
       found = true;
     }
   };
-  if (q.lights)
-    for (const LightPolygon& l : *q.lights) consider(l);
-  if (q.light_spheres) {
-    LightPolygon quad;
-    for (const LightSphere& l : *q.light_spheres)
-      if (light_billboard(l, q.p, quad)) consider(quad);
-  }
+  for_each_light_quad(q, consider);
   if (!found) return false;
   const Vec3 axis = (best_centre - q.p).normalized();
   double cos_half = 1;

@@ -117,6 +117,19 @@ inline bool light_toward(const LightPolygon& light, const SilhouetteQuery& q, st
 /// quad holds the cone) or the light has no weight.
 bool light_billboard(const LightSphere& light, const Vec3& p, LightPolygon& out);
 
+/// Calls f(light) for every light of query q as a quad: those of q.lights, then, for each of
+/// q.light_spheres with p outside its sphere, the quad that stands for it (light_billboard).
+template <class F>
+void for_each_light_quad(const SilhouetteQuery& q, F&& f) {
+  if (q.lights)
+    for (const LightPolygon& light : *q.lights) f(light);
+  if (q.light_spheres) {
+    LightPolygon quad;
+    for (const LightSphere& sphere : *q.light_spheres)
+      if (light_billboard(sphere, q.p, quad)) f(quad);
+  }
+}
+
 /// The radiance (luminance) of the lights of `spheres` whose sphere holds `p` (D <= radius, where
 /// light_billboard gives no quad): seen from inside, a light may lie in any direction, so the
 /// light-aware importance counts it as part of the environment. 0 for none.
