@@ -56,6 +56,19 @@ Array film_image(const Film& film, Channel&& channel) {
   return out;
 }
 
+/// The rows of a (V, 3) array as positions; throws qsil::Error "<where>vertex i is non-finite or
+/// beyond 1e12 scene units" for the first that is (kMaxCoordinate, as the OBJ loader refuses).
+std::vector<Vec3> checked_positions(const Array& v, const std::string& where) {
+  auto a = v.unchecked<2>();
+  std::vector<Vec3> pos(size_t(v.shape(0)));
+  for (py::ssize_t i = 0; i < v.shape(0); ++i) {
+    pos[size_t(i)] = Vec3(a(i, 0), a(i, 1), a(i, 2));
+    if (!pos[size_t(i)].allFinite() || pos[size_t(i)].cwiseAbs().maxCoeff() > kMaxCoordinate)
+      throw Error(where + "vertex " + std::to_string(i) + " is non-finite or beyond 1e12 scene units");
+  }
+  return pos;
+}
+
 /// Sets shape `id`'s vertex positions from a (V, 3) array and recomputes its area-weighted vertex
 /// normals (unless it uses face normals), as a displaced scene does. Throws qsil::Error for a
 /// wrong shape or a non-finite or too large coordinate.
@@ -65,15 +78,7 @@ void set_vertices(Scene& scene, const std::string& id, const Array& v) {
   if (v.ndim() != 2 || v.shape(1) != 3 || v.shape(0) != mesh.num_vertices())
     throw Error("set_vertices('" + id + "'): expected an array of shape (" + std::to_string(mesh.num_vertices()) +
                 ", 3)");
-  auto a = v.unchecked<2>();
-  std::vector<Vec3> pos(size_t(mesh.num_vertices()));
-  for (py::ssize_t i = 0; i < v.shape(0); ++i) {
-    pos[size_t(i)] = Vec3(a(i, 0), a(i, 1), a(i, 2));
-    if (!pos[size_t(i)].allFinite() || pos[size_t(i)].cwiseAbs().maxCoeff() > kMaxCoordinate)
-      throw Error("set_vertices('" + id + "'): vertex " + std::to_string(i) +
-                  " is non-finite or beyond 1e12 scene units");
-  }
-  mesh.positions = std::move(pos);
+  mesh.positions = checked_positions(v, "set_vertices('" + id + "'): ");
   if (!shape.face_normals) mesh.normals = vertex_normals(mesh);
 }
 
@@ -90,13 +95,7 @@ void set_mesh(Scene& scene, const std::string& id, const Array& v, const py::arr
   if (f.ndim() != 2 || f.shape(1) != 3 || f.shape(0) < 1)
     throw Error(where + "expected triangles of shape (T, 3) with T >= 1");
   TriangleMesh mesh;
-  auto a = v.unchecked<2>();
-  for (py::ssize_t i = 0; i < v.shape(0); ++i) {
-    const Vec3 p(a(i, 0), a(i, 1), a(i, 2));
-    if (!p.allFinite() || p.cwiseAbs().maxCoeff() > kMaxCoordinate)
-      throw Error(where + "vertex " + std::to_string(i) + " is non-finite or beyond 1e12 scene units");
-    mesh.positions.push_back(p);
-  }
+  mesh.positions = checked_positions(v, where);
   auto t = f.unchecked<2>();
   for (py::ssize_t k = 0; k < f.shape(0); ++k) {
     Eigen::Vector3i tri;
