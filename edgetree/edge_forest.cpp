@@ -7,6 +7,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <utility>
 
 namespace qsil::edgetree {
 
@@ -33,6 +35,9 @@ NodeFit fit_range(const std::vector<Edge>& edges, const std::vector<Vec4>& face_
   for (int fi : faces) planes.push_back(face_planes[size_t(fi)]);
   return fit_node(planes, wedges, n.bp, parent, opt);
 }
+
+/// The size of a dual box: the sum of its extents (0 for a bound without one).
+float box_size(const NodeBound& b) { return float((b.bq_hi - b.bq_lo).sum()); }
 
 }  // namespace
 
@@ -85,12 +90,85 @@ EdgeForest EdgeForest::fit(EdgeSet set, const NodeFitOptions& options) {
       }
     st.build_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
+  f.fit_options_ = {options};
+  f.fitted_box_size_.resize(f.bounds_.size());
+  for (size_t b = 0; b < f.bounds_.size(); ++b) f.fitted_box_size_[b] = box_size(f.bounds_[b]);
   // What only fitting needed.
   f.trees_.clear();
   f.trees_.shrink_to_fit();
   return f;
 }
 
-size_t EdgeForest::memory_bytes() const { return EdgeSet::memory_bytes() + bounds_.capacity() * sizeof(NodeBound); }
+RefitReport EdgeForest::refit(std::span<const ForestShapeInput> shapes) {
+  const auto t0 = std::chrono::steady_clock::now();
+  RefitReport report;
+  if (fit_options_.empty()) {
+    report.reason = "the forest was not fitted";
+    return report;
+  }
+  if (!refit_edges(shapes, report)) return report;
+  const NodeFitOptions& options = fit_options_.front();
+  constexpr std::uint16_t kFitFlags = kNodeUnrejectable | kNodeBoxOnly | kNodeInherited | kNodeUsedLp;
+  // Per node: 0 untouched, 1 refitted, 2 fitted anew (D failed), 3 fitted anew (the offsets failed);
+  // and log(box growth) of the refitted ones. Summed in node order afterwards (deterministic).
+  std::vector<std::uint8_t> outcome(shapes_nodes_end_, 0);
+  std::vector<double> log_growth(shapes_nodes_end_, 0.0);
+  tbb::parallel_for(size_t(0), shapes_nodes_end_, [&](size_t i) {
+    ForestNode& n = nodes_[i];
+    if (n.bound < 0 || n.unrejectable()) return;  // an unrejectable node stays so: sound
+    NodeBound& b = bounds_[size_t(n.bound)];
+    thread_local std::vector<Wedge> wedges;
+    wedges.clear();
+    for (int k = n.edge_begin; k < n.edge_end; ++k) wedges.push_back({edges_[size_t(k)].q0, edges_[size_t(k)].q1});
+    const NodeRefit r = refit_node(wedges, n.box_only(), b);
+    if (r == NodeRefit::Refitted) {
+      outcome[i] = 1;
+      const double s0 = fitted_box_size_[size_t(n.bound)], s1 = box_size(b);
+      if (s0 > 0.0 && s1 > 0.0) log_growth[i] = std::log(s1 / s0);
+      return;
+    }
+    // Fitted anew from the patch's unique face planes (no parent to inherit from: a node with
+    // too few planes is box-only, which is sound).
+    thread_local std::vector<std::pair<int, int>> faces;  // (face, edge) pairs
+    faces.clear();
+    for (int k = n.edge_begin; k < n.edge_end; ++k) {
+      faces.push_back({edges_[size_t(k)].f0, 2 * k});
+      faces.push_back({edges_[size_t(k)].f1, 2 * k + 1});
+    }
+    std::sort(faces.begin(), faces.end());
+    thread_local std::vector<Vec4> planes;
+    planes.clear();
+    for (size_t j = 0; j < faces.size(); ++j)
+      if (j == 0 || faces[j].first != faces[j - 1].first) {
+        const Edge& e = edges_[size_t(faces[j].second / 2)];
+        planes.push_back(faces[j].second % 2 ? e.q1 : e.q0);
+      }
+    NodeFit fit = fit_node(planes, wedges, n.bp, nullptr, options);
+    n.flags = std::uint16_t((n.flags & ~kFitFlags) | fit.flags);
+    b = fit.bound;
+    fitted_box_size_[size_t(n.bound)] = box_size(b);
+    outcome[i] = r == NodeRefit::BoxOnly ? 3 : 2;
+  });
+  double sum_log = 0.0;
+  int growth_nodes = 0;
+  for (size_t i = 0; i < shapes_nodes_end_; ++i) {
+    if (outcome[i] == 0) continue;
+    ++report.bounds;
+    if (outcome[i] >= 2) ++report.refitted_fully;
+    if (nodes_[i].box_only()) ++report.box_only;
+    if (outcome[i] == 1) {
+      sum_log += log_growth[i];
+      ++growth_nodes;
+    }
+  }
+  report.box_growth = growth_nodes ? std::exp(sum_log / growth_nodes) : 1.0;
+  report.refitted = true;
+  report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return report;
+}
+
+size_t EdgeForest::memory_bytes() const {
+  return EdgeSet::memory_bytes() + bounds_.capacity() * sizeof(NodeBound) + fitted_box_size_.capacity() * sizeof(float);
+}
 
 }  // namespace qsil::edgetree

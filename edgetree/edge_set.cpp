@@ -17,6 +17,44 @@ namespace qsil::edgetree {
 
 namespace {
 
+/// FNV-1a hash of a mesh's triangles (a refit's check that the topology is the one built).
+std::uint64_t triangle_hash(const TriangleMesh& mesh) {
+  std::uint64_t h = 1469598103934665603ull;
+  for (const auto& t : mesh.triangles)
+    for (int k = 0; k < 3; ++k) {
+      h ^= std::uint64_t(std::uint32_t(t[k]));
+      h *= 1099511628211ull;
+    }
+  return h;
+}
+
+/// The crease rule of a shape: every non-flat edge of a flat-shaded one.
+CreaseSet crease_rule(const ForestShapeInput& in) { return in.face_normals ? CreaseSet::All : in.creases; }
+
+/// Whether an interior edge of class `cls` is a crease under rule `creases` (as
+/// shape_always_edges decides).
+bool is_crease_class(EdgeClass cls, CreaseSet creases) {
+  return (cls == EdgeClass::Concave && creases != CreaseSet::None) ||
+         (cls == EdgeClass::Convex && creases == CreaseSet::All);
+}
+
+/// B_p, L_w and L_w's smooth-crease part of node n over its edges in `edges` (the tree's array).
+/// Retired edges (Edge::retired) are in B_p, as in the node's bound, but weigh nothing.
+void node_extent(ForestNode& n, const std::vector<Edge>& edges) {
+  const bool always = n.always();
+  n.bp = Box3();
+  n.lw = 0.0;
+  n.lw_smooth = 0.0;
+  for (int k = n.edge_begin; k < n.edge_end; ++k) {
+    const Edge& e = edges[size_t(k)];
+    n.bp.expand(e.p0);
+    n.bp.expand(e.p1);
+    if (e.retired) continue;
+    n.lw += always ? always_edge_weight(e) : e.length * e.angle;
+    if (e.smooth_crease && e.cls == EdgeClass::Concave) n.lw_smooth += always_edge_weight(e);
+  }
+}
+
 // Splits [b, e) into 2..4 groups: one binary SAH split, then each half again if it is larger
 // than a leaf [QSS 4.1: three binary splits per level].
 std::vector<std::pair<int, int>> split4(std::vector<Edge>& edges, int b, int e, const EdgeSetOptions& opt) {
@@ -84,15 +122,7 @@ std::vector<std::pair<int, int>> build_topology(std::vector<Edge>& edges, int eb
     ++depth;
   }
   // ---- B_p and L_w of every node (edges are in their final order now), in parallel
-  tbb::parallel_for(nbase, int(nodes.size()), [&](int i) {
-    ForestNode& n = nodes[i];
-    for (int k = n.edge_begin; k < n.edge_end; ++k) {
-      n.bp.expand(edges[k].p0);
-      n.bp.expand(edges[k].p1);
-      n.lw += always ? always_edge_weight(edges[k]) : edges[k].length * edges[k].angle;
-      if (edges[k].smooth_crease && edges[k].cls == EdgeClass::Concave) n.lw_smooth += always_edge_weight(edges[k]);
-    }
-  });
+  tbb::parallel_for(nbase, int(nodes.size()), [&](int i) { node_extent(nodes[size_t(i)], edges); });
   return levels;
 }
 
@@ -111,13 +141,11 @@ Edge forest_edge(const MeshEdgeSet& set, const TriangleMesh& mesh, int idx) {
 std::vector<Edge> shape_always_edges(const ForestShapeInput& in, const MeshEdgeSet& set,
                                            std::vector<char>& is_crease, ForestShapeStats& st) {
   const TriangleMesh& mesh = *in.mesh;
-  const CreaseSet creases = in.face_normals ? CreaseSet::All : in.creases;
+  const CreaseSet creases = crease_rule(in);
   std::vector<Edge> always;
   for (int idx : set.always) always.push_back(forest_edge(set, mesh, idx));
   for (size_t idx = 0; idx < set.edges.size(); ++idx) {
-    const EdgeClass cls = set.edges[idx].cls;
-    if ((cls == EdgeClass::Concave && creases != CreaseSet::None) ||
-        (cls == EdgeClass::Convex && creases == CreaseSet::All)) {
+    if (is_crease_class(set.edges[idx].cls, creases)) {
       is_crease[idx] = 1;
       always.push_back(forest_edge(set, mesh, int(idx)));
       always.back().crease = true;
@@ -195,9 +223,155 @@ EdgeSet EdgeSet::build(std::span<const ForestShapeInput> shapes, const EdgeSetOp
     count_nodes(f.nodes_, nbase, st);
     st.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     f.stats_.push_back(st);
+    // ---- what a refit needs: the topology's fingerprint and the edges in no array
+    f.shape_records_.push_back(
+        {in.shape, mesh.num_vertices(), mesh.num_triangles(), triangle_hash(mesh), in.face_normals, in.creases});
+    for (const MeshEdge& e : set.edges)
+      if (e.cls == EdgeClass::Flat) f.flat_edges_.push_back({e.v0, e.v1, e.f0, e.f1, e.shape});
   }
+  f.options_ = opt;
+  f.shapes_nodes_end_ = f.nodes_.size();
+  f.shapes_always_end_ = f.always_.size();
+  f.shapes_always_roots_end_ = f.always_roots_.size();
+  f.shapes_loose_end_ = f.loose_always_edges_.size();
   if (opt.intersection_curves) add_crossings(f, shapes, opt);
   return f;
+}
+
+bool EdgeSet::refit_edges(std::span<const ForestShapeInput> shapes, RefitReport& report) {
+  // ---- the input must be the shapes built, with the same topology and crease rules
+  if (shapes.size() != shape_records_.size()) {
+    report.reason = std::to_string(shapes.size()) + " shapes given, " + std::to_string(shape_records_.size()) + " built";
+    return false;
+  }
+  int max_shape = 0;
+  for (size_t i = 0; i < shapes.size(); ++i) {
+    const ShapeRecord& r = shape_records_[i];
+    const ForestShapeInput& in = shapes[i];
+    const std::string name = "shape " + std::to_string(r.shape) + ": ";
+    if (in.shape != r.shape || !in.mesh) {
+      report.reason = name + "not given in the place it was built";
+      return false;
+    }
+    if (in.mesh->num_vertices() != r.vertices || in.mesh->num_triangles() != r.triangles ||
+        triangle_hash(*in.mesh) != r.triangle_hash) {
+      report.reason = name + "its triangles changed (a refit keeps the topology)";
+      return false;
+    }
+    if (in.face_normals != r.face_normals || in.creases != r.creases) {
+      report.reason = name + "its crease rule changed";
+      return false;
+    }
+    max_shape = std::max(max_shape, r.shape);
+  }
+  std::vector<const ForestShapeInput*> input(size_t(max_shape) + 1, nullptr);
+  std::vector<size_t> place(size_t(max_shape) + 1, 0);
+  for (size_t i = 0; i < shapes.size(); ++i) {
+    input[size_t(shapes[i].shape)] = &shapes[i];
+    place[size_t(shapes[i].shape)] = i;
+  }
+  // ---- face planes of the moved meshes
+  std::vector<std::vector<Vec4>> planes(input.size());
+  for (const ForestShapeInput& in : shapes) {
+    std::vector<Vec4>& pl = planes[size_t(in.shape)];
+    pl.resize(size_t(in.mesh->num_triangles()));
+    tbb::parallel_for(0, in.mesh->num_triangles(), [&](int f) { pl[size_t(f)] = face_plane(*in.mesh, f); });
+  }
+  // ---- back to the shapes' own arrays: promoted creases and crossings are made anew below
+  nodes_.resize(shapes_nodes_end_);
+  always_.resize(shapes_always_end_);
+  always_roots_.resize(shapes_always_roots_end_);
+  loose_always_edges_.resize(shapes_loose_end_);
+  crossing_groups_.clear();
+  crossings_.reset();
+  crossing_stats_ = {};
+  // ---- every edge to its new place and class; tree edges now creases are retired
+  auto move_edge = [&](MeshEdge& e, Vec3* p0, Vec3* p1) {
+    const TriangleMesh& mesh = *input[size_t(e.shape)]->mesh;
+    const std::vector<Vec4>& pl = planes[size_t(e.shape)];
+    const Vec3 a = mesh.positions[size_t(e.v0)], b = mesh.positions[size_t(e.v1)];
+    if (p0) *p0 = a;
+    if (p1) *p1 = b;
+    e.length = (b - a).norm();
+    e.q0 = pl[size_t(e.f0)];
+    if (e.f1 >= 0) e.q1 = pl[size_t(e.f1)];
+    if (e.cls == EdgeClass::Convex || e.cls == EdgeClass::Concave || e.cls == EdgeClass::Flat)
+      e.cls = classify_interior_edge(mesh, e);
+  };
+  tbb::parallel_for(size_t(0), edges_.size(), [&](size_t k) {
+    Edge& e = edges_[k];
+    move_edge(e, &e.p0, &e.p1);
+    e.retired = is_crease_class(e.cls, crease_rule(*input[size_t(e.shape)]));
+  });
+  tbb::parallel_for(size_t(0), always_.size(), [&](size_t k) { move_edge(always_[k], &always_[k].p0, &always_[k].p1); });
+  report.edges = int(edges_.size() + always_.size());
+  // ---- the promoted creases, per shape in input order (deterministic: array order)
+  std::vector<std::vector<Edge>> promoted(shapes.size());
+  for (const Edge& e : edges_)
+    if (e.retired) {
+      Edge c = e;
+      c.retired = false;
+      c.crease = true;
+      c.smooth_crease = !input[size_t(e.shape)]->face_normals;
+      promoted[place[size_t(e.shape)]].push_back(c);
+      ++report.retired;
+    }
+  for (const FlatEdge& fe : flat_edges_) {
+    Edge e;
+    e.v0 = fe.v0;
+    e.v1 = fe.v1;
+    e.f0 = fe.f0;
+    e.f1 = fe.f1;
+    e.shape = fe.shape;
+    e.cls = EdgeClass::Flat;
+    move_edge(e, &e.p0, &e.p1);
+    const ForestShapeInput& in = *input[size_t(fe.shape)];
+    // Bent now: a crease (the crease branch covers a silhouette too); a concave edge that is no
+    // crease is culled as the build culls it.
+    if (e.cls == EdgeClass::Flat || (e.cls == EdgeClass::Concave && crease_rule(in) == CreaseSet::None &&
+                                     !options_.edges.keep_concave))
+      continue;
+    e.crease = true;
+    e.smooth_crease = !in.face_normals;
+    promoted[place[size_t(fe.shape)]].push_back(e);
+    ++report.unflattened;
+  }
+  for (size_t i = 0; i < shapes.size(); ++i) {
+    if (promoted[i].empty()) continue;
+    const int abase = int(always_.size());
+    always_.insert(always_.end(), promoted[i].begin(), promoted[i].end());
+    const int aend = int(always_.size());
+    if (aend - abase > options_.always_tree_min_edges) {
+      int depth = 0;
+      build_topology(always_, abase, aend, shapes[i].shape, /*always=*/true, options_, nodes_, always_roots_, depth);
+    } else {
+      for (int a = abase; a < aend; ++a) loose_always_edges_.push_back(a);
+    }
+  }
+  // ---- B_p and L_w of the shapes' nodes (the promoted trees have theirs from build_topology),
+  // bottom-up: a leaf from its edges, an inner node from its children (larger indices)
+  for (size_t i = shapes_nodes_end_; i-- > 0;) {
+    ForestNode& n = nodes_[i];
+    if (n.is_leaf()) {
+      node_extent(n, n.always() ? always_ : edges_);
+      continue;
+    }
+    n.bp = Box3();
+    n.lw = n.lw_smooth = 0.0;
+    for (int c = n.first; c < n.first + n.count; ++c) {
+      const ForestNode& child = nodes_[size_t(c)];
+      n.bp.expand(child.bp);
+      n.lw += child.lw;
+      n.lw_smooth += child.lw_smooth;
+    }
+  }
+  // ---- the intersection curves of the moved surfaces
+  if (options_.intersection_curves) {
+    const auto t0 = std::chrono::steady_clock::now();
+    add_crossings(*this, shapes, options_);
+    report.crossing_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  }
+  return true;
 }
 
 void EdgeSet::add_crossings(EdgeSet& f, std::span<const ForestShapeInput> shapes, const EdgeSetOptions& opt) {
@@ -270,6 +444,7 @@ std::vector<ForestShapeInput> forest_inputs(const Scene& scene) {
 
 size_t EdgeSet::memory_bytes() const {
   return nodes_.capacity() * sizeof(ForestNode) + edges_.capacity() * sizeof(Edge) +
+         flat_edges_.capacity() * sizeof(FlatEdge) +
          always_.capacity() * sizeof(Edge) + (crossings_ ? crossings_->capacity() * sizeof(CrossingSegment) : 0) +
          (roots_.capacity() + always_roots_.capacity() + loose_always_edges_.capacity()) * sizeof(int);
 }

@@ -21,6 +21,19 @@ Vec4 face_plane(const TriangleMesh& mesh, int f) {
   return Vec4(n.x(), n.y(), n.z(), -n.dot(x0));
 }
 
+EdgeClass classify_interior_edge(const TriangleMesh& mesh, MeshEdge& e) {
+  // Bend angle between the outward normals (atan2 is accurate near 0 and pi).
+  const Vec3 n0 = e.q0.head<3>(), n1 = e.q1.head<3>();
+  e.angle = std::atan2(n0.cross(n1).norm(), n0.dot(n1));
+  if (e.angle < kFlatAngle) return EdgeClass::Flat;
+  // Concave iff the other face's opposite vertex d is on the positive side of f0's plane
+  // (meshes README). Evaluated relative to a vertex of f0 with the unnormalised normal.
+  const int d = opposite_vertex_index(mesh, e, e.f1);
+  const Vec3 a = mesh.positions[size_t(mesh.triangles[size_t(e.f0)][0])];
+  const double side = mesh.face_cross(e.f0).dot(mesh.positions[size_t(d)] - a);
+  return side > 0.0 ? EdgeClass::Concave : EdgeClass::Convex;
+}
+
 namespace {
 // One directed half-edge: key (min vertex, max vertex), its face, and whether it runs min -> max.
 struct HalfEdge {
@@ -69,19 +82,7 @@ MeshEdgeSet build_mesh_edges(const TriangleMesh& mesh, int shape, const EdgeOpti
     } else if (half[i].forward == half[i + 1].forward) {
       e.cls = EdgeClass::Inconsistent;
     } else {
-      // Interior edge: bend angle between the outward normals (atan2 is accurate near 0 and pi).
-      const Vec3 n0 = e.q0.head<3>(), n1 = e.q1.head<3>();
-      e.angle = std::atan2(n0.cross(n1).norm(), n0.dot(n1));
-      if (e.angle < kFlatAngle) {
-        e.cls = EdgeClass::Flat;
-      } else {
-        // Concave iff the other face's opposite vertex d is on the positive side of f0's plane
-        // (meshes README). Evaluated relative to a vertex of f0 with the unnormalised normal.
-        const int d = opposite_vertex_index(mesh, e, e.f1);
-        const Vec3 a = mesh.positions[mesh.triangles[e.f0][0]];
-        const double side = mesh.face_cross(e.f0).dot(mesh.positions[d] - a);
-        e.cls = side > 0.0 ? EdgeClass::Concave : EdgeClass::Convex;
-      }
+      e.cls = classify_interior_edge(mesh, e);
     }
     out.counts[static_cast<int>(e.cls)]++;
     const int idx = int(out.edges.size());

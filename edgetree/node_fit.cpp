@@ -62,15 +62,17 @@ bool node_quadric(std::span<const Vec4> local, const NodeFit* parent, const Node
   return have;
 }
 
-/// The offsets lambda0, lambda1 of Q_f along b.D over every wedge (world frame) [QSS 4.2,
-/// Appendix D], padded, and from them b.G0 = A^T Q0 A and b.delta (local frame); false: the node
-/// must be box-only (b.G0 and b.delta then zero).
-bool fit_offsets(const Mat4& qf, std::span<const Wedge> wedges, NodeBound& b) {
+/// The offsets lambda0, lambda1 of Q_f along b.D over every wedge [QSS 4.2, Appendix D], padded,
+/// and from them b.G0 = A^T Q0 A and b.delta (local frame); `wedge_planes` holds each wedge's two
+/// planes in b.frame, in turn (q0, q1, q0, q1, ...). False: the node must be box-only (b.G0 and
+/// b.delta then zero).
+bool fit_offsets(const Mat4& qf, std::span<const Vec4> wedge_planes, NodeBound& b) {
   const Vec4& D = b.D;
   double l0 = kInf, l1 = -kInf, lscale = 0.0;
   const double qmax = qf.cwiseAbs().maxCoeff();
-  for (const Wedge& w : wedges) {
-    const Vec4 q0 = b.frame.plane(w.q0), q1 = b.frame.plane(w.q1);
+  for (size_t i = 0; i + 1 < wedge_planes.size(); i += 2) {
+    const Vec4& q0 = wedge_planes[i];
+    const Vec4& q1 = wedge_planes[i + 1];
     const double d0 = D.dot(q0), d1 = D.dot(q1);
     if (!(d0 > 0.0 && d1 > 0.0)) return false;
     const Vec2 r = wedge_lambda_range(qf, D, q0, q1);
@@ -139,8 +141,36 @@ NodeFit fit_node(std::span<const Vec4> planes, std::span<const Wedge> wedges, co
   }
 
   // ---- offsets lambda0, lambda1 over every wedge [QSS 4.2, Appendix D]
-  if (!fit_offsets(qf, wedges, b)) out.flags |= kNodeBoxOnly;
+  std::vector<Vec4> wedge_planes;
+  wedge_planes.reserve(2 * wedges.size());
+  for (const Wedge& w : wedges) {
+    wedge_planes.push_back(b.frame.plane(w.q0));
+    wedge_planes.push_back(b.frame.plane(w.q1));
+  }
+  if (!fit_offsets(qf, wedge_planes, b)) out.flags |= kNodeBoxOnly;
   return out;
+}
+
+NodeRefit refit_node(std::span<const Wedge> wedges, bool box_only, NodeBound& b) {
+  if (wedges.empty()) return NodeRefit::Failed;
+  // The quadric the offsets were fitted for, before the dual box overwrites nothing of it.
+  Mat4 qf = Mat4::Zero();
+  if (!box_only) {
+    qf = b.A * b.G0 * b.A.transpose() - b.lambda0 * b.D * b.D.transpose();
+    qf = 0.5 * (qf + qf.transpose()).eval();
+    const double mx = qf.cwiseAbs().maxCoeff();
+    if (!(mx > 0.0) || !qf.allFinite()) return NodeRefit::Failed;
+    qf /= mx;
+  }
+  thread_local std::vector<Vec4> local;
+  local.clear();
+  for (const Wedge& w : wedges) {
+    local.push_back(b.frame.plane(w.q0));
+    local.push_back(b.frame.plane(w.q1));
+  }
+  if (!fit_dual_box(local, b)) return NodeRefit::Failed;
+  if (box_only) return NodeRefit::Refitted;
+  return fit_offsets(qf, local, b) ? NodeRefit::Refitted : NodeRefit::BoxOnly;
 }
 
 }  // namespace qsil::edgetree

@@ -22,6 +22,10 @@
 
 #include <atomic>
 #include <cmath>
+#include <map>
+#include <tuple>
+#include <utility>
+#include <vector>
 #include <random>
 #include <string>
 
@@ -153,6 +157,167 @@ TEST(SlowForestSoundness, Degenerate) {
   expect_sound(transformed(mesh_file("torus.obj"), 1.0, Vec3(1e4, 1e4, -1e4)), 100000, 15, "torus+1e4");
   expect_sound(transformed(mesh_file("bunny.obj"), 1e-4, Vec3::Zero()), 100000, 16, "bunny*1e-4");
   expect_sound(make_sheet(40, -0.003), 100000, 17, "sheet");
+}
+
+// ---- refit forests (EdgeForest::refit) after the vertices moved
+
+// `mesh` with every vertex moved by an isotropic Gaussian of standard deviation sigma times the
+// bounding-box diagonal (fixed seed).
+TriangleMesh jittered(TriangleMesh m, double sigma, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> g(0.0, sigma * m.bounds().diagonal());
+  for (auto& p : m.positions) p += Vec3(g(rng), g(rng), g(rng));
+  return m;
+}
+
+// A smooth displacement: every vertex pushed along x by amp * diagonal * sin(3 y / diagonal).
+TriangleMesh swirled(TriangleMesh m, double amp) {
+  const double d = m.bounds().diagonal();
+  for (auto& p : m.positions) p.x() += amp * d * std::sin(3.0 * p.y() / d);
+  return m;
+}
+
+// Builds the forest of `before` (smooth shading: its concave edges are creases), moves the
+// vertices to those of `after` in place and refits. `mesh` holds `after` on return.
+EdgeForest refit_forest(const TriangleMesh& before, const TriangleMesh& after, TriangleMesh& mesh, RefitReport* report,
+                        CreaseSet creases = CreaseSet::Concave) {
+  mesh = before;
+  ForestShapeInput in{&mesh, 0, false, creases};
+  EdgeForest f = EdgeForest::build(std::span(&in, 1));
+  mesh.positions = after.positions;
+  const RefitReport r = f.refit(std::span(&in, 1));
+  EXPECT_TRUE(r.refitted) << r.reason;
+  if (report) *report = r;
+  return f;
+}
+
+// The rejection test of a refit forest is sound: zero false rejects over the soundness set of
+// the moved mesh, in quadric and box modes, for jitter of 1e-3 and 1e-2 of the diagonal (the
+// latter flips many edges between convex and concave) and a smooth displacement.
+void expect_refit_sound(const TriangleMesh& mesh0, unsigned seed, const std::string& name) {
+  for (const auto& [label, moved] :
+       {std::pair<std::string, TriangleMesh>{"jitter 1e-3", jittered(mesh0, 1e-3, seed)},
+        {"jitter 1e-2", jittered(mesh0, 1e-2, seed + 1)},
+        {"swirl 0.05", swirled(mesh0, 0.05)}}) {
+    TriangleMesh mesh;
+    RefitReport rep;
+    const EdgeForest f = refit_forest(mesh0, moved, mesh, &rep);
+    const SoundnessResult r = check_forest(f, shading_points(mesh, 4000, seed));
+    EXPECT_GT(r.tests, 0) << name << " " << label;
+    EXPECT_EQ(r.false_rejects_quadric, 0) << name << " " << label << " quadric, of " << r.tests;
+    EXPECT_EQ(r.false_rejects_box, 0) << name << " " << label << " box, of " << r.tests;
+    EXPECT_GT(rep.bounds, 0) << name << " " << label;
+    std::printf("[%s, %s] refit: %d bounds (%d anew, %d box-only), %d retired, %d unflattened, box growth %.3f; "
+                "false-accept rate quadric %.3f\n",
+                name.c_str(), label.c_str(), rep.bounds, rep.refitted_fully, rep.box_only, rep.retired,
+                rep.unflattened, rep.box_growth, r.no_sil ? double(r.accepts_no_sil_quadric) / r.no_sil : 0.0);
+  }
+}
+
+TEST(ForestRefitSoundness, Spot) { expect_refit_sound(mesh_file("spot.obj"), 21, "spot"); }
+TEST(ForestRefitSoundness, Cube) { expect_refit_sound(make_cube(8), 22, "cube"); }
+TEST(ForestRefitSoundness, Sheet) { expect_refit_sound(make_sheet(24, -0.01), 23, "sheet"); }
+
+// An edge's identity across forests: shape and vertex pair.
+std::tuple<int, int, int> edge_key(const Edge& e) { return {e.shape, e.v0, e.v1}; }
+
+// Per point, the mesh edges that are discontinuities (is_discontinuity) in the edge arrays of `f`,
+// counted with multiplicity (a tree edge and its crease copy both counting would be a double count).
+// The segments of intersection curves are no mesh edges (NoMotionAndCrossings checks those).
+std::map<std::tuple<int, int, int>, int> discontinuities(const EdgeForest& f, const Vec3& p) {
+  std::map<std::tuple<int, int, int>, int> out;
+  for (const auto* arr : {&f.edges(), &f.always_edges()})
+    for (const Edge& e : *arr)
+      if (!e.crossing && is_discontinuity(e, p)) ++out[edge_key(e)];
+  return out;
+}
+
+// What a refit holds as discontinuities is what a forest built anew on the moved mesh holds, each
+// edge once: no edge lost when it flips between convex and concave or stops being flat, none
+// counted twice (a retired tree edge and its crease copy). With the soundness of the rejection
+// test above, every discontinuity stays reachable. Fails if retiring, promoting or unflattening
+// is left out (checked by breaking each).
+TEST(ForestRefit, SameDiscontinuitiesAsARebuild) {
+  for (const auto& [name, mesh0] : {std::pair<std::string, TriangleMesh>{"spot", mesh_file("spot.obj")},
+                                    {"cube", make_cube(6)}}) {
+    const TriangleMesh moved = jittered(mesh0, 1e-2, 31);
+    TriangleMesh mesh;
+    RefitReport rep;
+    const EdgeForest refit = refit_forest(mesh0, moved, mesh, &rep);
+    ForestShapeInput in{&mesh, 0, false, CreaseSet::Concave};
+    const EdgeForest rebuilt = EdgeForest::build(std::span(&in, 1));
+    if (name == "spot") {
+      EXPECT_GT(rep.retired, 0) << name << ": the jitter should flip convex edges to concave";
+    } else {
+      EXPECT_GT(rep.unflattened, 0) << name << ": the jitter should bend flat edges";
+    }
+    EXPECT_TRUE(rep.rebuild_advised()) << name << ": a jitter of 1e-2 of the diagonal leaves a loose forest";
+    int checked = 0;
+    for (const Vec3& p : shading_points(mesh, 300, 32)) {
+      const auto a = discontinuities(refit, p), b = discontinuities(rebuilt, p);
+      for (const auto& [key, count] : a) ASSERT_EQ(count, 1) << name << ": an edge counted twice";
+      // A refit keeps a crease that became convex (a conservative extra candidate), so the
+      // refit's set may be larger; the rebuilt one's must be in it.
+      for (const auto& [key, count] : b) {
+        ASSERT_TRUE(a.count(key)) << name << ": edge (" << std::get<1>(key) << ", " << std::get<2>(key)
+                                  << ") is a discontinuity after a rebuild, not after the refit";
+        ++checked;
+      }
+    }
+    EXPECT_GT(checked, 1000) << name;
+  }
+}
+
+// A refit with the vertices where they were changes no bound beyond rounding, retires nothing
+// and finds the same intersection curves; moving one of two cubes into the other makes the refit
+// find their crossing, as a rebuild does.
+TEST(ForestRefit, NoMotionAndCrossings) {
+  TriangleMesh a = make_cube(4), b = transformed(make_cube(4), 1.0, Vec3(3, 0.3, 0.2));
+  std::vector<ForestShapeInput> in{{&a, 0, false, CreaseSet::Concave}, {&b, 1, false, CreaseSet::Concave}};
+  EdgeForest f = EdgeForest::build(in);
+  const std::vector<NodeBound> before = f.bounds();
+  RefitReport r = f.refit(in);
+  ASSERT_TRUE(r.refitted) << r.reason;
+  EXPECT_EQ(r.retired, 0);
+  EXPECT_EQ(r.unflattened, 0);
+  EXPECT_EQ(r.refitted_fully, 0);
+  EXPECT_NEAR(r.box_growth, 1.0, 1e-9);
+  EXPECT_FALSE(r.rebuild_advised());
+  for (size_t i = 0; i < before.size(); ++i) {
+    EXPECT_LT((f.bounds()[i].bq_hi - before[i].bq_hi).cwiseAbs().maxCoeff(), 1e-6) << "bound " << i;
+    EXPECT_LT((f.bounds()[i].bq_lo - before[i].bq_lo).cwiseAbs().maxCoeff(), 1e-6) << "bound " << i;
+  }
+  EXPECT_TRUE(f.crossing_groups().empty());
+  for (auto& p : b.positions) p.x() -= 1.5;  // now overlapping a
+  r = f.refit(in);
+  ASSERT_TRUE(r.refitted) << r.reason;
+  const EdgeForest rebuilt = EdgeForest::build(in);
+  ASSERT_EQ(rebuilt.crossing_groups().size(), 1u);
+  ASSERT_EQ(f.crossing_groups().size(), 1u);
+  EXPECT_EQ(f.crossing_groups()[0].segments, rebuilt.crossing_groups()[0].segments);
+  EXPECT_EQ(f.always_edges().size(), rebuilt.always_edges().size());
+}
+
+// A refit refuses what is not a move of the vertices built, changing nothing.
+TEST(ForestRefit, RefusesOtherTopology) {
+  TriangleMesh a = make_cube(4);
+  ForestShapeInput in{&a, 0, false, CreaseSet::Concave};
+  EdgeForest f = EdgeForest::build(std::span(&in, 1));
+  const size_t edges = f.edges().size();
+  std::swap(a.triangles[0][1], a.triangles[0][2]);
+  RefitReport r = f.refit(std::span(&in, 1));
+  EXPECT_FALSE(r.refitted);
+  EXPECT_NE(r.reason.find("shape 0: its triangles changed"), std::string::npos) << r.reason;
+  EXPECT_EQ(f.edges().size(), edges);
+  std::swap(a.triangles[0][1], a.triangles[0][2]);
+  in.creases = CreaseSet::All;
+  r = f.refit(std::span(&in, 1));
+  EXPECT_FALSE(r.refitted);
+  EXPECT_NE(r.reason.find("crease rule"), std::string::npos) << r.reason;
+  in.creases = CreaseSet::Concave;
+  EXPECT_FALSE(f.refit({}).refitted);
+  EXPECT_TRUE(f.refit({}).rebuild_advised());
+  EXPECT_TRUE(f.refit(std::span(&in, 1)).refitted);
 }
 
 // ---- degenerate patches fitted directly

@@ -15,10 +15,12 @@
 #include "qsil/math.h"
 #include "qsil/scene.h"
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <memory>
 #include <span>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -52,6 +54,10 @@ struct Edge : MeshEdge {
   /// it is no silhouette, its radiance jumps only in the slivers where one face's shading normal
   /// and geometric normal disagree, which few paths find (docs/design-notes.md "Crease samples").
   bool smooth_crease = false;
+  /// A silhouette-tree edge that a refit (EdgeForest::refit) found bent the other way: its
+  /// copy among the always-candidates (a crease) stands for it. It stays in its tree (node
+  /// bounds may cover more planes than needed: sound) but is a discontinuity for no point.
+  bool retired = false;
   /// For a segment of an intersection curve: its crossing triangles, planes and how its ends
   /// move (owned by the EdgeSet, shared by its copies); null for a mesh edge.
   const CrossingSegment* crossing = nullptr;
@@ -69,7 +75,9 @@ inline SceneVelocities::Block edge_end_velocity(const Edge& e, int end, const Sc
 /// True iff the radiance seen from p can jump across edge e: a silhouette or boundary edge
 /// (edge_is_silhouette), or a crease (its shading jumps there whether or not it is a
 /// silhouette). Edge samplers return only such edges.
-inline bool is_discontinuity(const Edge& e, const Vec3& p) { return e.crease || edge_is_silhouette(e, p); }
+inline bool is_discontinuity(const Edge& e, const Vec3& p) {
+  return !e.retired && (e.crease || edge_is_silhouette(e, p));
+}
 
 /// Weight of an always-candidate edge in its tree's L_w (units * rad): a crease bounds a jump
 /// that grows with its bend angle (length * angle, as tree edges); a boundary, non-manifold or
@@ -182,6 +190,44 @@ struct CrossingGroup {
   int segments = 0;            ///< number of its segments
 };
 
+/// Box growth (RefitReport::box_growth) beyond which a refit forest should be built anew: at 1.1
+/// the false-accept share of the rejection test is about 15 % (relative) above a new build's on
+/// spot, bunny and an 82k-triangle blob (tools/bench/bench_refit;
+/// docs/experiments/2026-11-25-refit.md).
+inline constexpr double kRefitMaxBoxGrowth = 1.1;
+/// Share of edges promoted to always-candidate creases (retired + unflattened) beyond which a
+/// refit forest should be built anew: each is a candidate for every shading point, where a
+/// build would put a convex one back in a silhouette tree (a teapot's flat edges all bend at the
+/// first step: same record).
+inline constexpr double kRefitMaxPromotedShare = 0.01;
+
+/// What a refit (EdgeForest::refit) did, or why it could not.
+struct RefitReport {
+  bool refitted = false;  ///< false: nothing changed, rebuild (`reason` says why)
+  std::string reason;     ///< why not, naming the shape ("shape 2: triangles changed")
+  int edges = 0;          ///< mesh edges updated (tree and always-candidates)
+  /// Silhouette-tree edges now bent the other way (concave on a shape whose concave edges are
+  /// creases), retired from their tree and added to the always-candidates as creases.
+  int retired = 0;
+  /// Edges flat at build time that now bend, added to the always-candidates as creases.
+  int unflattened = 0;
+  int bounds = 0;         ///< fitted inner nodes whose dual bound was refitted (D, A, Q_f kept)
+  int refitted_fully = 0; ///< ...of which fitted anew (D no longer separated their planes, or
+                          ///< the offsets failed)
+  int box_only = 0;       ///< ...of which have no quadric pair after it
+  /// Geometric mean over refitted nodes of (dual-box size now) / (dual-box size when fitted),
+  /// the size the sum of the box's extents: how much looser the refit bounds are.
+  double box_growth = 1.0;
+  double seconds = 0.0;   ///< wall time, intersection curves included
+  double crossing_seconds = 0.0;  ///< ...of which finding the intersection curves anew
+  /// Whether the refit forest is loose enough that a build anew pays (kRefitMaxBoxGrowth,
+  /// kRefitMaxPromotedShare), or the refit did not happen.
+  bool rebuild_advised() const {
+    return !refitted || box_growth > kRefitMaxBoxGrowth ||
+           double(retired + unflattened) > kRefitMaxPromotedShare * double(std::max(edges, 1));
+  }
+};
+
 /// The candidate edges of several shapes and their SAH hierarchy (see the file comment).
 class EdgeSet {
  public:
@@ -267,6 +313,31 @@ class EdgeSet {
   static void add_crossings(EdgeSet& f, std::span<const ForestShapeInput> shapes, const EdgeSetOptions& opt);
   std::vector<ForestShapeStats> stats_;
   std::vector<ShapeTree> trees_;  ///< per input shape
+  /// A shape as built, what a refit checks its input against: vertex and triangle counts, a hash
+  /// of the triangles (a refit needs the same topology) and the crease rule.
+  struct ShapeRecord {
+    int shape = 0;
+    int vertices = 0, triangles = 0;
+    std::uint64_t triangle_hash = 0;
+    bool face_normals = false;
+    CreaseSet creases = CreaseSet::None;
+  };
+  std::vector<ShapeRecord> shape_records_;
+  /// An edge that was flat when built (in no array), as a refit needs it to find those that bend.
+  struct FlatEdge {
+    int v0, v1, f0, f1, shape;
+  };
+  std::vector<FlatEdge> flat_edges_;
+  EdgeSetOptions options_;  ///< the options of the build (a refit finds crossings the same way)
+  /// Array sizes after the shapes' own edges and trees: a refit truncates to them, then adds its
+  /// promoted creases and the intersection curves anew.
+  size_t shapes_nodes_end_ = 0, shapes_always_end_ = 0, shapes_always_roots_end_ = 0, shapes_loose_end_ = 0;
+  /// The edge half of EdgeForest::refit: checks `shapes` against shape_records_ (nothing changes
+  /// and report.reason is set when they differ), moves every edge to the new positions and
+  /// reclassifies it, retires tree edges now concave creases and promotes them and the edges that
+  /// stopped being flat to always-candidate creases, recomputes B_p and L_w of the shapes' nodes,
+  /// and finds the intersection curves anew. Returns false when it changed nothing.
+  bool refit_edges(std::span<const ForestShapeInput> shapes, RefitReport& report);
   std::vector<CrossingGroup> crossing_groups_;
   std::shared_ptr<const std::vector<CrossingSegment>> crossings_;  ///< shared by copies: edges point into it
   IntersectionCurveStats crossing_stats_;

@@ -84,6 +84,13 @@ Vec4 face_plane(const TriangleMesh& mesh, int f);
 /// Cost O(T log T). The input mesh is not modified.
 MeshEdgeSet build_mesh_edges(const TriangleMesh& mesh, int shape = 0, const EdgeOptions& options = {});
 
+/// The class of an interior, consistently oriented edge e of `mesh` (faces f0 and f1 and their
+/// planes q0 and q1 set, from the same positions), writing its bend angle (radians) into
+/// e.angle: Flat below kFlatAngle, else Concave or Convex (see EdgeClass). What
+/// build_mesh_edges does for such an edge, and what a refit (EdgeForest::refit) redoes when the
+/// vertices move.
+EdgeClass classify_interior_edge(const TriangleMesh& mesh, MeshEdge& e);
+
 /// The index (into mesh.positions) of the vertex of face `face` (one of edge e's faces, an index
 /// into mesh.triangles) that is not on the edge.
 inline int opposite_vertex_index(const TriangleMesh& mesh, const MeshEdge& e, int face) {

@@ -68,4 +68,20 @@ struct NodeFit {
 NodeFit fit_node(std::span<const Vec4> planes, std::span<const Wedge> wedges, const Box3& bp, const NodeFit* parent,
                  const NodeFitOptions& options = {});
 
+/// What refit_node did.
+enum class NodeRefit {
+  Refitted,  ///< dual box and offsets recomputed (a box-only bound: its dual box)
+  BoxOnly,   ///< dual box recomputed, the offsets failed: the bound is now box-only
+  Failed,    ///< D no longer separates the planes (Z.q <= 0 for one): fit the node anew
+};
+
+/// Refits `b`, a bound made by fit_node (box_only: its node is kNodeBoxOnly), to the wedges of
+/// its patch after the vertices moved (world frame, same wedges in the same order): keeps the
+/// frame, D, A and the quadric Q_f (recovered as A G0 A^T - lambda0 D D^T, A being orthonormal)
+/// and recomputes the dual box and the offsets lambda0, lambda1, hence G0 and delta, over the new
+/// planes [QSS 3.2, 4.2; Appendix D]. As sound as a fit: every plane of `wedges` satisfies the
+/// refitted bound; only its tightness depends on how far the planes moved. After Failed, `b` is
+/// unspecified (the caller fits the node anew).
+NodeRefit refit_node(std::span<const Wedge> wedges, bool box_only, NodeBound& b);
+
 }  // namespace qsil::edgetree
