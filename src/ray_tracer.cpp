@@ -287,6 +287,7 @@ void for_each_overlapping_triangle_pair(std::span<const TriangleMesh* const> mes
   if (!device) throw Error("Embree: cannot create device");
   rtcSetDeviceErrorFunction(device, embree_error, nullptr);
   RTCScene scene = rtcNewScene(device);
+  rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_LOW);
   for (size_t i = 0; i < cm.size(); ++i) {
     RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER);
     rtcSetGeometryUserPrimitiveCount(geom, unsigned(cm[i].boxes.size()));
