@@ -70,16 +70,61 @@ ContourIndex ContourIndex::build(std::span<const ForestShapeInput> shapes, const
       m.vertex_edges[size_t(fill[size_t(m.edges[i].v1)]++)] = int(i);
     }
   }
-  // Link every edge of the set to its mesh edge (one pass over the set).
+  index.link(set);
+  return index;
+}
+
+bool ContourIndex::refit(std::span<const ForestShapeInput> shapes, const EdgeSet& set) {
+  for (const ForestShapeInput& in : shapes) {
+    if (!in.mesh || in.mesh->num_triangles() == 0) continue;
+    if (in.shape < 0 || in.shape >= int(meshes_.size())) return false;
+    const Mesh& m = meshes_[size_t(in.shape)];
+    if (m.mesh != in.mesh || m.face_edges.size() != in.mesh->triangles.size() ||
+        m.vertex_begin.size() != in.mesh->positions.size() + 1)
+      return false;
+  }
+  for (const ForestShapeInput& in : shapes) {
+    if (!in.mesh || in.mesh->num_triangles() == 0) continue;
+    const TriangleMesh& tm = *in.mesh;
+    Mesh& m = meshes_[size_t(in.shape)];
+    std::vector<Vec4> planes(size_t(tm.num_triangles()));
+    for (int f = 0; f < tm.num_triangles(); ++f) planes[size_t(f)] = face_plane(tm, f);
+    for (MeshEdge& e : m.edges) {
+      e.length = (tm.positions[size_t(e.v1)] - tm.positions[size_t(e.v0)]).norm();
+      e.q0 = planes[size_t(e.f0)];
+      if (e.f1 >= 0) e.q1 = planes[size_t(e.f1)];
+      if (e.cls == EdgeClass::Convex || e.cls == EdgeClass::Concave || e.cls == EdgeClass::Flat)
+        e.cls = classify_interior_edge(tm, e);
+    }
+    const Box3 box = tm.bounds();
+    m.centre = box.center();
+    m.radius = 0;
+    for (const Vec3& v : tm.positions) m.radius = std::max(m.radius, (v - m.centre).norm());
+  }
+  link(set);
+  return true;
+}
+
+void ContourIndex::link(const EdgeSet& set) {
+  for (Mesh& m : meshes_) m.entries.assign(m.edges.size(), nullptr);
+  // One pass over the set; an edge in both arrays (a retired tree edge and its crease copy,
+  // EdgeForest::refit) links to its always-candidate, the one that is a discontinuity.
   for (const auto* arr : {&set.edges(), &set.always_edges()})
     for (const Edge& fe : *arr) {
-      if (fe.crossing || fe.shape < 0 || fe.shape >= int(index.meshes_.size())) continue;  // no mesh edge
-      Mesh& m = index.meshes_[size_t(fe.shape)];
+      if (fe.crossing || fe.shape < 0 || fe.shape >= int(meshes_.size())) continue;  // no mesh edge
+      Mesh& m = meshes_[size_t(fe.shape)];
       if (!m.mesh) continue;
-      const int i = find_edge(m, fe.v0, fe.v1);
-      if (i >= 0) m.entries[size_t(i)] = &fe;
+      // The edges at fe.v0 (CSR), a handful, rather than a search over all of them.
+      const int lo = std::min(fe.v0, fe.v1), hi = std::max(fe.v0, fe.v1);
+      if (lo < 0 || size_t(lo) + 1 >= m.vertex_begin.size()) continue;
+      for (int k = m.vertex_begin[size_t(lo)]; k < m.vertex_begin[size_t(lo) + 1]; ++k) {
+        const int i = m.vertex_edges[size_t(k)];
+        if (m.edges[size_t(i)].v0 == lo && m.edges[size_t(i)].v1 == hi) {
+          m.entries[size_t(i)] = &fe;
+          break;
+        }
+      }
     }
-  return index;
 }
 
 int ContourIndex::find_edge(const Mesh& m, int a, int b) {

@@ -12,7 +12,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <span>
 #include <string>
+#include <vector>
 
 namespace qsil {
 namespace {
@@ -35,6 +37,47 @@ edgetree::LightSphere light_sphere(const Shape& s, int index) {
   return light;
 }
 
+/// The contour index (the quadric method in a scene with a glossy BSDF or an area light) and the
+/// sampler of an edge forest's method over `forest`, into `out` (both point into the forest).
+void make_forest_sampler(const Scene& scene, Method method, std::span<const edgetree::ForestShapeInput> inputs,
+                         const edgetree::EdgeForest& forest, BoundarySetup& out) {
+  // Contour sets for narrow lobes and small area lights: the quadric method only (quadric-box
+  // is the paper's ablation, kept as the paper traverses), in scenes with a glossy BSDF on some
+  // shape or an area light (a quad or a mesh emitter: set_light_importance's lights).
+  const bool glossy = std::any_of(scene.shapes.begin(), scene.shapes.end(), [&](const Shape& s) {
+    return s.bsdf >= 0 && scene.bsdfs[size_t(s.bsdf)].type == BSDFDesc::Type::RoughConductor;
+  });
+  const bool area_light =
+      std::any_of(scene.shapes.begin(), scene.shapes.end(), [](const Shape& s) { return s.is_emitter; });
+  if (method == Method::Quadric && (glossy || area_light))
+    out.contours = std::make_unique<edgetree::ContourIndex>(edgetree::ContourIndex::build(inputs, forest));
+  out.sampler = std::make_unique<edgetree::QuadricEdgeSampler>(forest, node_test(method));
+  out.forest = &forest;
+}
+
+/// What set_up_boundary_term and update_boundary_term do once `boundary` is built or refitted:
+/// `boundary_ctx`'s sampler, contour index, eligibility (`moving` and every shape, extended with
+/// the crossing groups) and light importance; the primary edges; the set-up report.
+void attach_boundary(const Scene& scene, const RayTracer& tracer, Method method, const std::vector<bool>& moving,
+                     const EnvironmentLight& environment, const BoundarySetup& boundary, BoundaryContext& boundary_ctx,
+                     PrimaryEdges& primary, SetupReport& setup) {
+  boundary_ctx.sampler = boundary.sampler.get();
+  boundary_ctx.contours = boundary.contours.get();
+  boundary_ctx.moving = moving;
+  boundary_ctx.all.assign(scene.shapes.size(), true);
+  // A crossing group moves where either of its shapes does.
+  for (const edgetree::CrossingGroup& g : boundary.edges->crossing_groups()) {
+    const size_t id = size_t(g.id);
+    if (boundary_ctx.moving.size() <= id) boundary_ctx.moving.resize(id + 1, false);
+    if (boundary_ctx.all.size() <= id) boundary_ctx.all.resize(id + 1, true);
+    auto moves = [&](int s) { return s >= 0 && s < int(moving.size()) && moving[size_t(s)]; };
+    boundary_ctx.moving[id] = moves(g.shape0) || moves(g.shape1);
+  }
+  set_light_importance(scene, environment, boundary_ctx);
+  primary = find_primary_edges(scene, *boundary.edges, boundary_ctx.moving, tracer);
+  describe_boundary_setup(boundary, method, int(primary.edges.size()), setup);
+}
+
 }  // namespace
 
 BoundarySetup build_boundary_setup(const Scene& scene, Method method, bool intersection_curves) {
@@ -49,18 +92,7 @@ BoundarySetup build_boundary_setup(const Scene& scene, Method method, bool inter
     options.fit.fit_quadrics = uses_quadrics(method);
     options.intersection_curves = intersection_curves;
     auto forest = std::make_unique<edgetree::EdgeForest>(edgetree::EdgeForest::build(inputs, options));
-    out.forest = forest.get();
-    // Contour sets for narrow lobes and small area lights: the quadric method only (quadric-box
-    // is the paper's ablation, kept as the paper traverses), in scenes with a glossy BSDF on some
-    // shape or an area light (a quad or a mesh emitter: set_light_importance's lights).
-    const bool glossy = std::any_of(scene.shapes.begin(), scene.shapes.end(), [&](const Shape& s) {
-      return s.bsdf >= 0 && scene.bsdfs[size_t(s.bsdf)].type == BSDFDesc::Type::RoughConductor;
-    });
-    const bool area_light =
-        std::any_of(scene.shapes.begin(), scene.shapes.end(), [](const Shape& s) { return s.is_emitter; });
-    if (method == Method::Quadric && (glossy || area_light))
-      out.contours = std::make_unique<edgetree::ContourIndex>(edgetree::ContourIndex::build(inputs, *forest));
-    out.sampler = std::make_unique<edgetree::QuadricEdgeSampler>(*forest, node_test(method));
+    make_forest_sampler(scene, method, inputs, *forest, out);
     out.edges = std::move(forest);
   } else {
     edgetree::EdgeSetOptions options;
@@ -142,24 +174,35 @@ void set_up_boundary_term(const Scene& scene, const RayTracer& tracer, Method me
                           BoundarySetup& boundary, BoundaryContext& boundary_ctx, PrimaryEdges& primary, SetupReport& setup,
                           bool intersection_curves) {
   boundary = build_boundary_setup(scene, method, intersection_curves);
-  boundary_ctx.sampler = boundary.sampler.get();
-  boundary_ctx.contours = boundary.contours.get();
   boundary_ctx.velocities = velocities;
-  boundary_ctx.moving = moving;
-  boundary_ctx.all.assign(scene.shapes.size(), true);
-  // A crossing group moves where either of its shapes does.
-  for (const edgetree::CrossingGroup& g : boundary.edges->crossing_groups()) {
-    const size_t id = size_t(g.id);
-    if (boundary_ctx.moving.size() <= id) boundary_ctx.moving.resize(id + 1, false);
-    if (boundary_ctx.all.size() <= id) boundary_ctx.all.resize(id + 1, true);
-    auto moves = [&](int s) { return s >= 0 && s < int(moving.size()) && moving[size_t(s)]; };
-    boundary_ctx.moving[id] = moves(g.shape0) || moves(g.shape1);
-  }
   boundary_ctx.sppi = sppi > 0 ? sppi : default_sppi(method);
   boundary_ctx.split_speed = default_split_speed(method);
-  set_light_importance(scene, environment, boundary_ctx);
-  primary = find_primary_edges(scene, *boundary.edges, boundary_ctx.moving, tracer);
-  describe_boundary_setup(boundary, method, int(primary.edges.size()), setup);
+  attach_boundary(scene, tracer, method, moving, environment, boundary, boundary_ctx, primary, setup);
+}
+
+edgetree::RefitReport update_boundary_term(const Scene& scene, const RayTracer& tracer, Method method,
+                                           const std::vector<bool>& moving, const EnvironmentLight& environment,
+                                           BoundarySetup& boundary, BoundaryContext& boundary_ctx, PrimaryEdges& primary,
+                                           SetupReport& setup, bool intersection_curves) {
+  const auto t0 = std::chrono::steady_clock::now();
+  edgetree::RefitReport report;
+  report.reason = "not an edge forest";
+  if (boundary.forest) {
+    // The primary edges point into the forest's edges (the sampler reads the forest anew at
+    // every query; the contour index is linked anew below).
+    primary = {};
+    auto& forest = static_cast<edgetree::EdgeForest&>(*boundary.edges);
+    const std::vector<edgetree::ForestShapeInput> inputs = edgetree::forest_inputs(scene);
+    report = forest.refit(inputs);
+    if (!report.rebuild_advised()) {
+      if (boundary.contours && !boundary.contours->refit(inputs, forest))
+        *boundary.contours = edgetree::ContourIndex::build(inputs, forest);
+      boundary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    }
+  }
+  if (report.rebuild_advised()) boundary = build_boundary_setup(scene, method, intersection_curves);
+  attach_boundary(scene, tracer, method, moving, environment, boundary, boundary_ctx, primary, setup);
+  return report;
 }
 
 }  // namespace qsil

@@ -375,6 +375,43 @@ ReverseEstimator::ReverseEstimator(const Scene& scene, ReverseConfig config) {
 ReverseEstimator::~ReverseEstimator() = default;
 ReverseEstimator::ReverseEstimator(ReverseEstimator&&) noexcept = default;
 ReverseEstimator& ReverseEstimator::operator=(ReverseEstimator&&) noexcept = default;
+ReverseUpdate ReverseEstimator::update() {
+  Impl& m = *impl_;
+  const auto t0 = std::chrono::steady_clock::now();
+  ReverseUpdate out;
+  if (!m.tracer.update_meshes(m.scene)) {
+    // Another topology (a remeshing): set up anew.
+    impl_ = std::make_unique<Impl>(m.scene, m.config);
+    out.reason = "vertex or triangle counts changed: set up anew";
+    out.seconds = out.edge_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    impl_->setup.seconds = out.seconds;
+    return out;
+  }
+  m.lights.area_lights = AreaLights(m.scene);
+  m.ctx = m.lights.context(m.scene, m.tracer);
+  if (samples_edges(m.config.method)) {
+    const auto te = std::chrono::steady_clock::now();
+    const edgetree::RefitReport r =
+        update_boundary_term(m.scene, m.tracer, m.config.method, m.chosen, m.lights.environment, m.boundary,
+                             m.boundary_ctx, m.primary, m.setup, m.config.intersection_curves);
+    out.edge_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - te).count();
+    out.refitted = !r.rebuild_advised();
+    if (out.refitted) {
+      out.box_growth = r.box_growth;
+    } else {
+      out.reason = !r.refitted ? r.reason
+                   : r.box_growth > edgetree::kRefitMaxBoxGrowth
+                       ? "box growth " + std::to_string(r.box_growth)
+                       : std::to_string(r.retired + r.unflattened) + " edges promoted to creases";
+    }
+  } else {
+    out.reason = "no boundary term";
+  }
+  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  m.setup.seconds = out.seconds;
+  return out;
+}
+
 const ReverseConfig& ReverseEstimator::config() const { return impl_->config; }
 const SetupReport& ReverseEstimator::setup() const { return impl_->setup; }
 

@@ -260,17 +260,74 @@ void bind_forward(py::module_& m) {
 
 }
 
-/// Binds qsil.reverse (reverse mode).
+/// The adjoint image (H, W, 3) of a reverse-mode run as the estimator takes it, row-major RGB.
+/// Throws qsil::Error for another shape.
+std::vector<double> adjoint_weights(const Scene& scene, const Array& adjoint) {
+  const int W = scene.camera.width, H = scene.camera.height;
+  if (adjoint.ndim() != 3 || adjoint.shape(0) != H || adjoint.shape(1) != W || adjoint.shape(2) != 3)
+    throw Error("adjoint image: expected an array of shape (" + std::to_string(H) + ", " + std::to_string(W) +
+                ", 3)");
+  return std::vector<double>(adjoint.data(), adjoint.data() + adjoint.size());
+}
+
+/// A reverse-mode result as qsil.reverse returns it: 'image' (H, W, 3), 'loss', 'gradient'
+/// {shape id: (V, 3)}, 'seconds', 'nonfinite'.
+py::dict reverse_dict(const ReverseResult& r, const std::vector<std::string>& shapes) {
+  Array image({r.height, r.width, 3});
+  std::copy(r.image.begin(), r.image.end(), image.mutable_data());
+  py::dict gradient;
+  for (size_t i = 0; i < shapes.size(); ++i) {
+    Array g({py::ssize_t(r.gradient[i].size()), py::ssize_t(3)});
+    auto a = g.mutable_unchecked<2>();
+    for (size_t v = 0; v < r.gradient[i].size(); ++v)
+      for (int c = 0; c < 3; ++c) a(py::ssize_t(v), c) = r.gradient[i][v][c];
+    gradient[py::str(shapes[i])] = g;
+  }
+  py::dict out;
+  out["image"] = image;
+  out["loss"] = r.loss;
+  out["gradient"] = gradient;
+  out["seconds"] = r.seconds;
+  out["nonfinite"] = r.nonfinite;
+  return out;
+}
+
+/// FNV-1a hash of the film's size and every shape's vertex positions and triangles: what
+/// ReverseEstimator.run checks against the set-up it has (a change without update() would render
+/// stale geometry or primary edges).
+uint64_t meshes_fingerprint(const Scene& scene) {
+  uint64_t h = 1469598103934665603ull;
+  auto mix = [&](const void* data, size_t bytes) {
+    const auto* b = static_cast<const unsigned char*>(data);
+    for (size_t i = 0; i < bytes; ++i) {
+      h ^= b[i];
+      h *= 1099511628211ull;
+    }
+  };
+  mix(&scene.camera.width, sizeof(scene.camera.width));
+  mix(&scene.camera.height, sizeof(scene.camera.height));
+  for (const Shape& s : scene.shapes) {
+    mix(s.mesh.positions.data(), s.mesh.positions.size() * sizeof(Vec3));
+    mix(s.mesh.triangles.data(), s.mesh.triangles.size() * sizeof(s.mesh.triangles[0]));
+  }
+  return h;
+}
+
+/// qsil.ReverseEstimator: reverse mode set up once and kept across an optimiser's steps.
+struct PyReverseEstimator {
+  const Scene* scene;
+  std::vector<std::string> shapes;
+  std::unique_ptr<ReverseEstimator> estimator;
+  uint64_t fingerprint = 0;  ///< meshes_fingerprint of the scene as set up
+};
+
+/// Binds qsil.reverse (reverse mode) and qsil.ReverseEstimator.
 void bind_reverse(py::module_& m) {
   const auto reverse =
       [](const Scene& scene, const std::vector<std::string>& shapes, const Array& adjoint, int spp, uint64_t seed,
          int threads, const std::string& boundary, double sppi, double sppp, bool intersection_curves) {
         const Method method = parse_method(boundary, "boundary", kBoundaryMethods);
-        const int W = scene.camera.width, H = scene.camera.height;
-        if (adjoint.ndim() != 3 || adjoint.shape(0) != H || adjoint.shape(1) != W || adjoint.shape(2) != 3)
-          throw Error("adjoint image: expected an array of shape (" + std::to_string(H) + ", " + std::to_string(W) +
-                      ", 3)");
-        const std::vector<double> w(adjoint.data(), adjoint.data() + adjoint.size());
+        const std::vector<double> w = adjoint_weights(scene, adjoint);
         const std::vector<int> indices = resolve_shapes(scene, shapes);
         std::optional<ReverseResult> r;
         {
@@ -278,24 +335,66 @@ void bind_reverse(py::module_& m) {
           const ReverseEstimator e(scene, ReverseConfig{indices, method, sppi, sppp, intersection_curves});
           r = e.run(w, options(spp, seed, threads));
         }
-        Array image({H, W, 3});
-        std::copy(r->image.begin(), r->image.end(), image.mutable_data());
-        py::dict gradient;
-        for (size_t i = 0; i < shapes.size(); ++i) {
-          Array g({py::ssize_t(r->gradient[i].size()), py::ssize_t(3)});
-          auto a = g.mutable_unchecked<2>();
-          for (size_t v = 0; v < r->gradient[i].size(); ++v)
-            for (int c = 0; c < 3; ++c) a(py::ssize_t(v), c) = r->gradient[i][v][c];
-          gradient[py::str(shapes[i])] = g;
-        }
-        py::dict out;
-        out["image"] = image;
-        out["loss"] = r->loss;
-        out["gradient"] = gradient;
-        out["seconds"] = r->seconds;
-        out["nonfinite"] = r->nonfinite;
-        return out;
+        return reverse_dict(*r, shapes);
       };
+  py::class_<PyReverseEstimator>(
+      m, "ReverseEstimator",
+      "Reverse mode set up once for an optimisation: run() as qsil.reverse, update() after the scene's meshes "
+      "changed (set_vertices: the edge forest is refitted, the ray tracer's vertices moved; set_mesh: set up anew)")
+      .def(py::init([](const Scene& scene, const std::vector<std::string>& shapes, const std::string& boundary,
+                       double sppi, double sppp, bool intersection_curves) {
+             const Method method = parse_method(boundary, "boundary", kBoundaryMethods);
+             const std::vector<int> indices = resolve_shapes(scene, shapes);
+             auto p = std::make_unique<PyReverseEstimator>();
+             p->scene = &scene;
+             p->shapes = shapes;
+             p->fingerprint = meshes_fingerprint(scene);
+             py::gil_scoped_release release;
+             p->estimator = std::make_unique<ReverseEstimator>(
+                 scene, ReverseConfig{indices, method, sppi, sppp, intersection_curves});
+             return p;
+           }),
+           py::arg("scene"), py::arg("shapes"), py::arg("boundary") = "quadric", py::arg("sppi") = 0,
+           py::arg("sppp") = kDefaultSppp, py::arg("intersection_curves") = true, py::keep_alive<1, 2>(),
+           "Sets up reverse mode for `shapes` of `scene` (kept alive by the estimator); arguments as for qsil.reverse")
+      .def(
+          "run",
+          [](const PyReverseEstimator& self, const Array& adjoint, int spp, uint64_t seed, int threads) {
+            if (meshes_fingerprint(*self.scene) != self.fingerprint)
+              throw Error(
+                  "ReverseEstimator.run: the scene's meshes or film size changed since it was set up; call update() "
+                  "first");
+            const std::vector<double> w = adjoint_weights(*self.scene, adjoint);
+            std::optional<ReverseResult> r;
+            {
+              py::gil_scoped_release release;
+              r = self.estimator->run(w, options(spp, seed, threads));
+            }
+            return reverse_dict(*r, self.shapes);
+          },
+          py::arg("adjoint"), py::arg("spp") = 0, py::arg("seed") = 0, py::arg("threads") = 0,
+          "As qsil.reverse on the scene as of the last update(): a dict with 'image', 'loss', 'gradient', "
+          "'seconds', 'nonfinite'")
+      .def(
+          "update",
+          [](PyReverseEstimator& self) {
+            std::optional<ReverseUpdate> u;
+            {
+              py::gil_scoped_release release;
+              u = self.estimator->update();
+            }
+            self.fingerprint = meshes_fingerprint(*self.scene);
+            py::dict out;
+            out["refitted"] = u->refitted;
+            out["reason"] = u->reason;
+            out["box_growth"] = u->box_growth;
+            out["seconds"] = u->seconds;
+            out["edge_seconds"] = u->edge_seconds;
+            return out;
+          },
+          "After the scene's meshes changed: a dict with 'refitted' (the edge forest was refitted, not built anew), "
+          "'reason' (why it was built anew), 'box_growth', 'seconds' (the whole update), 'edge_seconds' (the edge "
+          "structure's part)");
   m.def("reverse", reverse,
       py::arg("scene"), py::arg("shapes"), py::arg("adjoint"), py::arg("spp") = 0, py::arg("seed") = 0,
       py::arg("threads") = 0, py::arg("boundary") = "quadric", py::arg("sppi") = 0,

@@ -16,6 +16,7 @@
 #include <limits>
 #include <mutex>
 #include <tuple>
+#include <utility>
 
 namespace qsil {
 
@@ -76,6 +77,8 @@ struct RayTracer::Impl {
     g_invalid_rays.fetch_add(1, std::memory_order_relaxed);
   }
   std::vector<char> one_sided;       ///< per geometry (= shape index)
+  /// Per geometry: vertex and triangle counts as built (update_meshes keeps them).
+  std::vector<std::pair<size_t, size_t>> counts;
   Vec3 local_origin = Vec3::Zero();  ///< Embree's coordinates are world coordinates minus this
 };
 
@@ -122,9 +125,37 @@ RayTracer::RayTracer(const Scene& scene, const Vec3& local_origin) : impl_(std::
     rtcCommitGeometry(geom);
     rtcAttachGeometryByID(impl.scene, geom, unsigned(s));
     rtcReleaseGeometry(geom);
+    impl.counts.emplace_back(pos.size(), mesh.triangles.size());
   }
   rtcCommitScene(impl.scene);
   if (rtcGetDeviceError(impl.device) != RTC_ERROR_NONE) throw Error("Embree: scene build failed");
+}
+
+bool RayTracer::update_meshes(const Scene& scene) {
+  Impl& impl = *impl_;
+  if (scene.shapes.size() != impl.counts.size()) return false;
+  for (size_t s = 0; s < scene.shapes.size(); ++s) {
+    const TriangleMesh& mesh = scene.shapes[s].mesh;
+    if (mesh.positions.size() != impl.counts[s].first || mesh.triangles.size() != impl.counts[s].second)
+      return false;
+  }
+  for (size_t s = 0; s < scene.shapes.size(); ++s) {
+    RTCGeometry geom = rtcGetGeometry(impl.scene, unsigned(s));
+    auto* vb = static_cast<float*>(rtcGetGeometryBufferData(geom, RTC_BUFFER_TYPE_VERTEX, 0));
+    const auto& pos = scene.shapes[s].mesh.positions;
+    for (size_t i = 0; i < pos.size(); ++i)
+      for (int k = 0; k < 3; ++k) vb[3 * i + k] = float(pos[i][k] - impl.local_origin[k]);
+    rtcUpdateGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0);
+    auto* ib = static_cast<unsigned*>(rtcGetGeometryBufferData(geom, RTC_BUFFER_TYPE_INDEX, 0));
+    const auto& tri = scene.shapes[s].mesh.triangles;
+    for (size_t f = 0; f < tri.size(); ++f)
+      for (int k = 0; k < 3; ++k) ib[3 * f + k] = unsigned(tri[f][k]);
+    rtcUpdateGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0);
+    rtcCommitGeometry(geom);
+  }
+  rtcCommitScene(impl.scene);
+  if (rtcGetDeviceError(impl.device) != RTC_ERROR_NONE) throw Error("Embree: scene update failed");
+  return true;
 }
 
 RayTracer::~RayTracer() {

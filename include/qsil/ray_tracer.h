@@ -67,6 +67,12 @@ class RayTracer {
   /// The same with a given local origin (e.g. a displaced copy of a scene that must round its
   /// static geometry exactly as the original: finite differences).
   RayTracer(const Scene& scene, const Vec3& local_origin);
+  /// Takes every shape's current vertex positions and triangles from `scene` (the scene built,
+  /// with the same vertex and triangle counts: an optimiser's step) and rebuilds the acceleration
+  /// structure over them, keeping the local origin. Returns false, changing nothing, when the
+  /// number of shapes or a shape's vertex or triangle count differs (build a new tracer then).
+  /// Throws qsil::Error if Embree fails. Not to be called while another thread queries.
+  bool update_meshes(const Scene& scene);
   ~RayTracer();
   RayTracer(const RayTracer&) = delete;
   RayTracer& operator=(const RayTracer&) = delete;

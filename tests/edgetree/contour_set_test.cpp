@@ -30,6 +30,7 @@
 #include <cmath>
 #include <random>
 #include <set>
+#include <utility>
 
 namespace qsil::edgetree {
 namespace {
@@ -186,6 +187,52 @@ TEST(ContourSet, SpotSetsHoldSilhouettesInTheConeButNoConcaveEdge) {
   std::printf("[ measured ] %d non-empty sets, %d of them with concave silhouettes in the cone\n", nonempty,
               with_concave);
   EXPECT_GE(with_concave, 20) << "concave silhouettes must be in reach for the test to have power";
+}
+
+/// The (v0, v1) pairs of a set of edges: the same edges across two forests.
+std::set<std::pair<int, int>> keys(const std::set<const Edge*>& edges) {
+  std::set<std::pair<int, int>> out;
+  for (const Edge* e : edges) out.insert({e->v0, e->v1});
+  return out;
+}
+
+TEST(ContourSet, RefitIndexGivesTheSetsOfANewBuild) {
+  // Spot moved by a smooth displacement (some convex edges turn concave): the index refitted with
+  // its refitted forest (ContourIndex::refit, EdgeForest::refit) gives, for 200 random cones, the
+  // same edges as an index built anew on a forest built anew. Fails when the refit leaves the
+  // edges' planes, classes or links as they were.
+  std::vector<TriangleMesh> meshes{baselines_test::test_mesh("spot.obj")};
+  std::vector<ForestShapeInput> in{{&meshes[0], 0, false, CreaseSet::Concave}};
+  EdgeForest forest = EdgeForest::build(in);
+  ContourIndex index = ContourIndex::build(in, forest);
+  const double d = meshes[0].bounds().diagonal();
+  for (Vec3& x : meshes[0].positions) x += 0.01 * d * Vec3(std::sin(9 * x.y() / d), std::cos(7 * x.z() / d), 0.0);
+  const RefitReport r = forest.refit(in);
+  ASSERT_TRUE(r.refitted) << r.reason;
+  EXPECT_GT(r.retired, 0) << "the displacement should turn convex edges concave";
+  ASSERT_TRUE(index.refit(in, forest));
+  const EdgeForest new_forest = EdgeForest::build(in);
+  const ContourIndex new_index = ContourIndex::build(in, new_forest);
+  const Box3 box = meshes[0].bounds();
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(0, 1);
+  int nonempty = 0;
+  for (int i = 0; i < 200; ++i) {
+    const Vec3 dir = Vec3(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5).normalized();
+    const Vec3 p = box.center() + (1.5 + 1.5 * u(rng)) * box.diagonal() * dir;
+    const Vec3 target = meshes[0].positions[size_t(u(rng) * meshes[0].num_vertices()) % meshes[0].positions.size()];
+    const ContourProbe probe = probe_of(meshes[0], p, target - p, 0.1);
+    if (probe.count == 0) continue;
+    const auto got = keys(contour(index, p, probe)), want = keys(contour(new_index, p, probe));
+    EXPECT_EQ(got, want) << "case " << i;
+    nonempty += !want.empty();
+  }
+  EXPECT_GE(nonempty, 50);
+  // Another mesh than the one indexed: refused.
+  std::vector<TriangleMesh> other{meshes[0]};
+  other[0].triangles.pop_back();
+  std::vector<ForestShapeInput> in_other{{&other[0], 0, false, CreaseSet::Concave}};
+  EXPECT_FALSE(index.refit(in_other, forest));
 }
 
 /// Integral of the LTC density over the directions within angle `half` of `axis`, by a midpoint

@@ -204,6 +204,40 @@ def test_reverse_with_the_boundary_term_is_finite_and_deterministic():
     assert np.count_nonzero(np.abs(a["gradient"]["spot"]).sum(axis=1)) > 100
 
 
+def test_reverse_estimator_equals_reverse_and_follows_the_scene():
+    s = load(res=12, spp=2)
+    adj = np.random.default_rng(3).uniform(-1, 1, (s.height, s.width, 3))
+    est = qsil.ReverseEstimator(s, ["spot"])
+    a, b = est.run(adj, spp=2, seed=5), qsil.reverse(s, ["spot"], adj, spp=2, seed=5)
+    assert np.array_equal(a["image"], b["image"])
+    assert np.array_equal(a["gradient"]["spot"], b["gradient"]["spot"])
+    # Moved vertices: refitted, the image that of a new set-up (the paths do not depend on the
+    # edge structure); without update() run refuses the stale set-up.
+    v = s.vertices("spot")
+    s.set_vertices("spot", v + 0.01 * np.sin(5 * v[:, [1]]))
+    with pytest.raises(qsil.Error, match="call update"):
+        est.run(adj, spp=1)
+    u = est.update()
+    assert u["refitted"] and u["reason"] == "" and u["edge_seconds"] <= u["seconds"], u
+    a, b = est.run(adj, spp=2, seed=5), qsil.reverse(s, ["spot"], adj, spp=2, seed=5)
+    assert np.array_equal(a["image"], b["image"])
+    assert np.isfinite(a["gradient"]["spot"]).all()
+    # A new mesh (other counts): set up anew, the same result as qsil.reverse bit for bit.
+    sv, st = icosphere()
+    s.set_mesh("spot", sv, st)
+    u = est.update()
+    assert not u["refitted"] and "counts changed" in u["reason"], u
+    a, b = est.run(adj, spp=2, seed=5), qsil.reverse(s, ["spot"], adj, spp=2, seed=5)
+    assert a["gradient"]["spot"].shape == sv.shape
+    assert np.array_equal(a["gradient"]["spot"], b["gradient"]["spot"])
+    # A new film size needs an update too (the primary edges).
+    s.set_resolution(8, 8)
+    with pytest.raises(qsil.Error, match="film size"):
+        est.run(np.ones((8, 8, 3)), spp=1)
+    est.update()
+    assert est.run(np.ones((8, 8, 3)), spp=1)["image"].shape == (8, 8, 3)
+
+
 def test_old_keyword_names_set_the_same_rates():
     # sppi / sppp, as Mitsuba 3 names them; boundary_spp / primary_samples, the names before them,
     # still set the same values: equal images, and unequal to the defaults'.

@@ -131,6 +131,13 @@ class ContourIndex {
   /// The meshes and `set` must outlive the index.
   static ContourIndex build(std::span<const ForestShapeInput> shapes, const EdgeSet& set);
 
+  /// Brings the index up to date after the meshes' vertices moved and `set` was refitted
+  /// (EdgeForest::refit, which moves its edges): the edges' planes and classes, the bounding
+  /// spheres, and the links to `set`'s edges. O(T). Returns false, changing nothing, when a
+  /// shape's mesh is not the one indexed or its vertex or face count changed (build anew then);
+  /// the triangles themselves are the refit's to check.
+  bool refit(std::span<const ForestShapeInput> shapes, const EdgeSet& set);
+
   /// The contour set for shading point p and `probe` (see the file comment): the union over the
   /// probe's hits on eligible, indexed shapes (`eligible` as SilhouetteQuery::eligible: null
   /// means every shape) of the walks from each hit (in planes through its ray) and the contour
@@ -166,6 +173,8 @@ class ContourIndex {
   };
   /// Index of the edge (a, b) in m.edges (sorted by (v0, v1), v0 < v1), -1 if none.
   static int find_edge(const Mesh& m, int a, int b);
+  /// Links every mesh edge to its entry in `set` (Mesh::entries).
+  void link(const EdgeSet& set);
   std::vector<Mesh> meshes_;  ///< by shape index (empty Mesh for shapes not in the input)
   int total_edges_ = 0;       ///< edges of all meshes
 };

@@ -29,6 +29,7 @@
 #include "qsil/scene.h"
 
 #include <memory>
+#include <string>
 #include <vector>
 
 namespace qsil {
@@ -63,6 +64,16 @@ struct ReverseResult {
   uint64_t replays = 0;          ///< extra passes of paths with more than two chosen-shape hits
 };
 
+/// What ReverseEstimator::update did.
+struct ReverseUpdate {
+  bool refitted = false;    ///< the edge forest was refitted (false: built anew, or no boundary term)
+  std::string reason;       ///< why it was built anew (RefitReport::reason, or "box growth G", "N
+                            ///< edges promoted"); empty when refitted
+  double box_growth = 1.0;  ///< RefitReport::box_growth of the refit (1 when built anew)
+  double seconds = 0;       ///< wall time of the whole update
+  double edge_seconds = 0;  ///< ...of which the edge structure (refit or build, sampler, contour index)
+};
+
 /// Reverse mode set up for one scene (the scene must outlive it). Movable, not copyable.
 class ReverseEstimator {
  public:
@@ -83,6 +94,18 @@ class ReverseEstimator {
   /// ("adjoint image: non-finite weight at pixel (x, y)"), for an empty range, or for
   /// options.parts > 1 (not supported).
   ReverseResult run(const std::vector<double>& adjoint, const RenderOptions& options) const;
+
+  /// Brings the set-up up to date after the scene's meshes changed, at a fraction of a new
+  /// set-up's cost when only vertex positions did (e.g. Python's set_vertices: an optimiser's
+  /// step): the ray tracer's meshes taken anew (RayTracer::update_meshes), the area lights
+  /// collected anew, the environment light kept,
+  /// the edge forest refitted (update_boundary_term: built anew when the refit refuses or advises
+  /// it) and the primary edges found anew. The estimates are as unbiased as a new estimator's;
+  /// they differ from its estimates only in which edges the boundary term draws. When a shape's
+  /// vertex or triangle count changed (a remeshing, Python's set_mesh) everything is set up anew,
+  /// as by the constructor; a shape whose triangles changed with the same counts gets its forest
+  /// built anew (the refit refuses it).
+  ReverseUpdate update();
 
   /// The configuration given.
   const ReverseConfig& config() const;
