@@ -226,8 +226,11 @@ EdgeSet EdgeSet::build(std::span<const ForestShapeInput> shapes, const EdgeSetOp
     // ---- what a refit needs: the topology's fingerprint and the edges in no array
     f.shape_records_.push_back(
         {in.shape, mesh.num_vertices(), mesh.num_triangles(), triangle_hash(mesh), in.face_normals, in.creases});
+    // Edges in no array: flat ones, and concave ones culled (no crease rule, keep_concave off).
     for (const MeshEdge& e : set.edges)
-      if (e.cls == EdgeClass::Flat) f.flat_edges_.push_back({e.v0, e.v1, e.f0, e.f1, e.shape});
+      if (e.cls == EdgeClass::Flat ||
+          (e.cls == EdgeClass::Concave && crease_rule(in) == CreaseSet::None && !opt.edges.keep_concave))
+        f.flat_edges_.push_back({e.v0, e.v1, e.f0, e.f1, e.shape});
   }
   f.options_ = opt;
   f.shapes_nodes_end_ = f.nodes_.size();
@@ -326,8 +329,8 @@ bool EdgeSet::refit_edges(std::span<const ForestShapeInput> shapes, RefitReport&
     e.cls = EdgeClass::Flat;
     move_edge(e, &e.p0, &e.p1);
     const ForestShapeInput& in = *input[size_t(fe.shape)];
-    // Bent now: a crease (the crease branch covers a silhouette too); a concave edge that is no
-    // crease is culled as the build culls it.
+    // Bent (or turned convex) now: a crease (the crease branch covers a silhouette too); a
+    // concave edge that is no crease is culled as the build culls it.
     if (e.cls == EdgeClass::Flat || (e.cls == EdgeClass::Concave && crease_rule(in) == CreaseSet::None &&
                                      !options_.edges.keep_concave))
       continue;

@@ -168,6 +168,11 @@ NodeRefit refit_node(std::span<const Wedge> wedges, bool box_only, NodeBound& b)
     local.push_back(b.frame.plane(w.q0));
     local.push_back(b.frame.plane(w.q1));
   }
+  // The fit's own guard (choose_offset_direction): every plane at least kMinZq off the slice's
+  // horizon, or the node is fitted anew.
+  const Vec4 Z = b.A.col(3);
+  for (const Vec4& q : local)
+    if (!(Z.dot(q) > kMinZq * q.norm())) return NodeRefit::Failed;
   if (!fit_dual_box(local, b)) return NodeRefit::Failed;
   if (box_only) return NodeRefit::Refitted;
   return fit_offsets(qf, local, b) ? NodeRefit::Refitted : NodeRefit::BoxOnly;

@@ -81,10 +81,12 @@ void set_up_boundary_term(const Scene& scene, const RayTracer& tracer, Method me
 /// Brings a boundary term set up by set_up_boundary_term up to date after the vertices of `scene`
 /// moved (the same shapes and triangles: an optimiser's step; `tracer` already updated): an edge
 /// forest is refitted (EdgeForest::refit) and built anew only when the refit refuses or advises
-/// it (RefitReport::rebuild_advised); another method's edge set is built anew. Then the sampler
-/// and contour index are made anew (they point into the edges) and attached to `boundary_ctx`
-/// with the crossing groups' eligibility and the light importance, as set_up_boundary_term does,
-/// and the primary edges are found anew. `boundary_ctx`'s velocities and sample rates are kept.
+/// it (RefitReport::rebuild_advised); another method's edge set is built anew. A refitted
+/// forest keeps its sampler (it reads the forest at every query) and refits its contour index
+/// (ContourIndex::refit, which relinks the moved edges); both are attached to `boundary_ctx` with
+/// the crossing groups' eligibility and the light importance, as set_up_boundary_term does, and
+/// the primary edges are found anew. `boundary_ctx`'s velocities and sample rates are kept. If it
+/// throws, `boundary` is unusable (ReverseEstimator::update then sets up anew at its next call).
 /// Returns the refit's report (refitted false: built anew; reason "not an edge forest" for the
 /// other methods).
 edgetree::RefitReport update_boundary_term(const Scene& scene, const RayTracer& tracer, Method method,

@@ -362,6 +362,9 @@ class ReverseEstimator::Impl : public RenderSetup {
 
   const Scene& scene;
   ReverseConfig config;
+  /// False after an update() that threw: the structures may not match the scene (run refuses,
+  /// the next update sets up anew).
+  bool valid = true;
   std::vector<bool> chosen;
   std::vector<int> chosen_index;
   SetupReport setup;
@@ -379,10 +382,13 @@ ReverseUpdate ReverseEstimator::update() {
   Impl& m = *impl_;
   const auto t0 = std::chrono::steady_clock::now();
   ReverseUpdate out;
-  if (!m.tracer.update_meshes(m.scene)) {
-    // Another topology (a remeshing): set up anew.
+  const bool failed_before = !m.valid;
+  m.valid = false;  // until this update has finished
+  if (failed_before || !m.tracer.update_meshes(m.scene)) {
+    // Another topology (a remeshing), or a failed update: set up anew.
     impl_ = std::make_unique<Impl>(m.scene, m.config);
-    out.reason = "vertex or triangle counts changed: set up anew";
+    out.reason =
+        failed_before ? "the last update failed: set up anew" : "vertex or triangle counts changed: set up anew";
     out.seconds = out.edge_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     impl_->setup.seconds = out.seconds;
     return out;
@@ -409,6 +415,7 @@ ReverseUpdate ReverseEstimator::update() {
   }
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   m.setup.seconds = out.seconds;
+  m.valid = true;
   return out;
 }
 
@@ -417,6 +424,7 @@ const SetupReport& ReverseEstimator::setup() const { return impl_->setup; }
 
 ReverseResult ReverseEstimator::run(const std::vector<double>& adjoint, const RenderOptions& options) const {
   const Impl& m = *impl_;
+  if (!m.valid) throw Error("reverse mode: the last update() failed; call update() again");
   const Scene& scene = m.scene;
   const int W = scene.camera.width, H = scene.camera.height;
   check_adjoint(adjoint, W, H);

@@ -19,6 +19,7 @@
 #include <pybind11/stl.h>
 
 #include <cmath>
+#include <mutex>
 #include <optional>
 
 namespace py = pybind11;
@@ -319,6 +320,7 @@ struct PyReverseEstimator {
   std::vector<std::string> shapes;
   std::unique_ptr<ReverseEstimator> estimator;
   uint64_t fingerprint = 0;  ///< meshes_fingerprint of the scene as set up
+  std::mutex lock;           ///< run and update from several Python threads: one at a time
 };
 
 /// Binds qsil.reverse (reverse mode) and qsil.ReverseEstimator.
@@ -359,7 +361,7 @@ void bind_reverse(py::module_& m) {
            "Sets up reverse mode for `shapes` of `scene` (kept alive by the estimator); arguments as for qsil.reverse")
       .def(
           "run",
-          [](const PyReverseEstimator& self, const Array& adjoint, int spp, uint64_t seed, int threads) {
+          [](PyReverseEstimator& self, const Array& adjoint, int spp, uint64_t seed, int threads) {
             if (meshes_fingerprint(*self.scene) != self.fingerprint)
               throw Error(
                   "ReverseEstimator.run: the scene's meshes or film size changed since it was set up; call update() "
@@ -368,6 +370,7 @@ void bind_reverse(py::module_& m) {
             std::optional<ReverseResult> r;
             {
               py::gil_scoped_release release;
+              const std::lock_guard<std::mutex> hold(self.lock);
               r = self.estimator->run(w, options(spp, seed, threads));
             }
             return reverse_dict(*r, self.shapes);
@@ -381,6 +384,7 @@ void bind_reverse(py::module_& m) {
             std::optional<ReverseUpdate> u;
             {
               py::gil_scoped_release release;
+              const std::lock_guard<std::mutex> hold(self.lock);
               u = self.estimator->update();
             }
             self.fingerprint = meshes_fingerprint(*self.scene);

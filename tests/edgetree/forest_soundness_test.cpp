@@ -236,20 +236,23 @@ std::map<std::tuple<int, int, int>, int> discontinuities(const EdgeForest& f, co
 // edge once: no edge lost when it flips between convex and concave or stops being flat, none
 // counted twice (a retired tree edge and its crease copy). With the soundness of the rejection
 // test above, every discontinuity stays reachable. Fails if retiring, promoting or unflattening
-// is left out (checked by breaking each).
+// is left out (checked by breaking each); also where concave edges are culled (CreaseSet::None)
+// and some turn convex.
 TEST(ForestRefit, SameDiscontinuitiesAsARebuild) {
-  for (const auto& [name, mesh0] : {std::pair<std::string, TriangleMesh>{"spot", mesh_file("spot.obj")},
-                                    {"cube", make_cube(6)}}) {
+  for (const auto& [name, mesh0, creases] :
+       {std::tuple<std::string, TriangleMesh, CreaseSet>{"spot", mesh_file("spot.obj"), CreaseSet::Concave},
+        {"cube", make_cube(6), CreaseSet::Concave},
+        {"spot, concave edges culled", mesh_file("spot.obj"), CreaseSet::None}}) {
     const TriangleMesh moved = jittered(mesh0, 1e-2, 31);
     TriangleMesh mesh;
     RefitReport rep;
-    const EdgeForest refit = refit_forest(mesh0, moved, mesh, &rep);
-    ForestShapeInput in{&mesh, 0, false, CreaseSet::Concave};
+    const EdgeForest refit = refit_forest(mesh0, moved, mesh, &rep, creases);
+    ForestShapeInput in{&mesh, 0, false, creases};
     const EdgeForest rebuilt = EdgeForest::build(std::span(&in, 1));
     if (name == "spot") {
       EXPECT_GT(rep.retired, 0) << name << ": the jitter should flip convex edges to concave";
     } else {
-      EXPECT_GT(rep.unflattened, 0) << name << ": the jitter should bend flat edges";
+      EXPECT_GT(rep.unflattened, 0) << name << ": the jitter should bend flat edges or turn culled ones convex";
     }
     EXPECT_TRUE(rep.rebuild_advised()) << name << ": a jitter of 1e-2 of the diagonal leaves a loose forest";
     int checked = 0;

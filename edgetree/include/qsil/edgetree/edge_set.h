@@ -209,7 +209,8 @@ struct RefitReport {
   /// Silhouette-tree edges now bent the other way (concave on a shape whose concave edges are
   /// creases), retired from their tree and added to the always-candidates as creases.
   int retired = 0;
-  /// Edges flat at build time that now bend, added to the always-candidates as creases.
+  /// Edges in no array at build time (flat, or concave and culled) that now bend (or turned
+  /// convex), added to the always-candidates as creases.
   int unflattened = 0;
   int bounds = 0;         ///< fitted inner nodes whose dual bound was refitted (D, A, Q_f kept)
   int refitted_fully = 0; ///< ...of which fitted anew (D no longer separated their planes, or
@@ -279,7 +280,8 @@ class EdgeSet {
     const ForestNode& n = node(i);
     return {(n.always() ? always_.data() : edges_.data()) + n.edge_begin, size_t(n.edge_end - n.edge_begin)};
   }
-  /// Per-shape statistics, in input order.
+  /// Per-shape statistics of the build, in input order (a refit leaves them as built; its own
+  /// counts are in RefitReport).
   const std::vector<ForestShapeStats>& stats() const { return stats_; }
   /// The crossing groups (intersection curves between a pair of shapes), by (shape0, shape1);
   /// empty when no surfaces cross or EdgeSetOptions::intersection_curves is off.
@@ -323,7 +325,8 @@ class EdgeSet {
     CreaseSet creases = CreaseSet::None;
   };
   std::vector<ShapeRecord> shape_records_;
-  /// An edge that was flat when built (in no array), as a refit needs it to find those that bend.
+  /// An edge in no array when built (flat, or concave and culled: CreaseSet::None without
+  /// keep_concave), as a refit needs it to find those that bend or turn convex.
   struct FlatEdge {
     int v0, v1, f0, f1, shape;
   };

@@ -72,7 +72,8 @@ NodeFit fit_node(std::span<const Vec4> planes, std::span<const Wedge> wedges, co
 enum class NodeRefit {
   Refitted,  ///< dual box and offsets recomputed (a box-only bound: its dual box)
   BoxOnly,   ///< dual box recomputed, the offsets failed: the bound is now box-only
-  Failed,    ///< D no longer separates the planes (Z.q <= 0 for one): fit the node anew
+  Failed,    ///< D no longer separates the planes (Z.q <= kMinZq |q| for one, the fit's own
+             ///< guard): fit the node anew
 };
 
 /// Refits `b`, a bound made by fit_node (box_only: its node is kNodeBoxOnly), to the wedges of

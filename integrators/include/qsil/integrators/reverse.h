@@ -104,7 +104,9 @@ class ReverseEstimator {
   /// they differ from its estimates only in which edges the boundary term draws. When a shape's
   /// vertex or triangle count changed (a remeshing, Python's set_mesh) everything is set up anew,
   /// as by the constructor; a shape whose triangles changed with the same counts gets its forest
-  /// built anew (the refit refuses it).
+  /// built anew (the refit refuses it). If it throws (qsil::Error from Embree, out of memory),
+  /// run() refuses until an update() succeeds, which then sets up anew. Not to be called while
+  /// run() runs.
   ReverseUpdate update();
 
   /// The configuration given.
