@@ -14,25 +14,25 @@ namespace qsil::edgetree {
 
 namespace {
 
-// Fits one inner node from its edge range; `face_planes` are the shape's face planes.
-NodeFit fit_range(const std::vector<Edge>& edges, const std::vector<Vec4>& face_planes, const ForestNode& n,
-                  const NodeFit* parent, const NodeFitOptions& opt) {
-  // Unique face planes of the patch (faces identified by index within the shape).
-  std::vector<int> faces;
+// Fits one inner node from its edge range: its wedges, and its unique face planes in face order
+// (faces identified by index within the shape; each edge carries its faces' planes).
+NodeFit fit_range(const std::vector<Edge>& edges, const ForestNode& n, const NodeFit* parent,
+                  const NodeFitOptions& opt) {
+  std::vector<std::pair<int, const Vec4*>> faces;  // (face, its plane)
   faces.reserve(size_t(2) * (n.edge_end - n.edge_begin));
   std::vector<Wedge> wedges;
   wedges.reserve(size_t(n.edge_end - n.edge_begin));
   for (int i = n.edge_begin; i < n.edge_end; ++i) {
     const Edge& e = edges[size_t(i)];
-    faces.push_back(e.f0);
-    faces.push_back(e.f1);
+    faces.push_back({e.f0, &e.q0});
+    faces.push_back({e.f1, &e.q1});
     wedges.push_back({e.q0, e.q1});
   }
-  std::sort(faces.begin(), faces.end());
-  faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
+  std::sort(faces.begin(), faces.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
   std::vector<Vec4> planes;
   planes.reserve(faces.size());
-  for (int fi : faces) planes.push_back(face_planes[size_t(fi)]);
+  for (size_t j = 0; j < faces.size(); ++j)
+    if (j == 0 || faces[j].first != faces[j - 1].first) planes.push_back(*faces[j].second);
   return fit_node(planes, wedges, n.bp, parent, opt);
 }
 
@@ -67,7 +67,7 @@ EdgeForest EdgeForest::fit(EdgeSet set, const NodeFitOptions& options) {
         ForestNode& n = f.nodes_[size_t(i)];
         if (n.is_leaf()) return;
         const NodeFit* parent = n.parent >= 0 ? &fits[size_t(f.nodes_[size_t(n.parent)].bound - bbase)] : nullptr;
-        NodeFit fit = fit_range(f.edges_, tree.face_planes, n, parent, options);
+        NodeFit fit = fit_range(f.edges_, n, parent, options);
         n.flags |= fit.flags;
         f.bounds_[size_t(n.bound)] = fit.bound;
         fits[size_t(n.bound - bbase)] = std::move(fit);
@@ -127,23 +127,9 @@ RefitReport EdgeForest::refit(std::span<const ForestShapeInput> shapes) {
       if (s0 > 0.0 && s1 > 0.0) log_growth[i] = std::log(s1 / s0);
       return;
     }
-    // Fitted anew from the patch's unique face planes (no parent to inherit from: a node with
-    // too few planes is box-only, which is sound).
-    thread_local std::vector<std::pair<int, int>> faces;  // (face, edge) pairs
-    faces.clear();
-    for (int k = n.edge_begin; k < n.edge_end; ++k) {
-      faces.push_back({edges_[size_t(k)].f0, 2 * k});
-      faces.push_back({edges_[size_t(k)].f1, 2 * k + 1});
-    }
-    std::sort(faces.begin(), faces.end());
-    thread_local std::vector<Vec4> planes;
-    planes.clear();
-    for (size_t j = 0; j < faces.size(); ++j)
-      if (j == 0 || faces[j].first != faces[j - 1].first) {
-        const Edge& e = edges_[size_t(faces[j].second / 2)];
-        planes.push_back(faces[j].second % 2 ? e.q1 : e.q0);
-      }
-    NodeFit fit = fit_node(planes, wedges, n.bp, nullptr, options);
+    // Fitted anew as at build, but with no parent to inherit from (a node with too few planes is
+    // box-only, which is sound).
+    const NodeFit fit = fit_range(edges_, n, nullptr, options);
     n.flags = std::uint16_t((n.flags & ~kFitFlags) | fit.flags);
     b = fit.bound;
     fitted_box_size_[size_t(n.bound)] = box_size(b);

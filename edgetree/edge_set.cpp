@@ -4,6 +4,7 @@
 
 #include "qsil/edgetree/edge_set.h"
 
+#include "qsil/fnv1a.h"
 #include "sah_split.h"
 
 #include <tbb/parallel_for.h>
@@ -17,15 +18,9 @@ namespace qsil::edgetree {
 
 namespace {
 
-/// FNV-1a hash of a mesh's triangles (a refit's check that the topology is the one built).
+/// Hash of a mesh's triangles (a refit's check that the topology is the one built).
 std::uint64_t triangle_hash(const TriangleMesh& mesh) {
-  std::uint64_t h = 1469598103934665603ull;
-  for (const auto& t : mesh.triangles)
-    for (int k = 0; k < 3; ++k) {
-      h ^= std::uint64_t(std::uint32_t(t[k]));
-      h *= 1099511628211ull;
-    }
-  return h;
+  return fnv1a(mesh.triangles.data(), mesh.triangles.size() * sizeof(mesh.triangles[0]));
 }
 
 /// The crease rule of a shape: every non-flat edge of a flat-shaded one.
@@ -216,7 +211,6 @@ EdgeSet EdgeSet::build(std::span<const ForestShapeInput> shapes, const EdgeSetOp
     const size_t roots_before = f.roots_.size();
     ShapeTree tree;
     tree.levels = build_topology(f.edges_, ebase, eend, in.shape, /*always=*/false, opt, f.nodes_, f.roots_, depth);
-    tree.face_planes = std::move(set.face_planes);
     f.trees_.push_back(std::move(tree));
     st.roots = int(f.roots_.size() - roots_before);
     st.depth = depth;

@@ -7,6 +7,7 @@
 /// releases the GIL.
 
 #include "qsil/error.h"
+#include "qsil/fnv1a.h"
 #include "qsil/integrators/estimator.h"
 #include "qsil/integrators/reverse.h"
 #include "qsil/integrators/method.h"
@@ -297,19 +298,11 @@ py::dict reverse_dict(const ReverseResult& r, const std::vector<std::string>& sh
 /// ReverseEstimator.run checks against the set-up it has (a change without update() would render
 /// stale geometry or primary edges).
 uint64_t meshes_fingerprint(const Scene& scene) {
-  uint64_t h = 1469598103934665603ull;
-  auto mix = [&](const void* data, size_t bytes) {
-    const auto* b = static_cast<const unsigned char*>(data);
-    for (size_t i = 0; i < bytes; ++i) {
-      h ^= b[i];
-      h *= 1099511628211ull;
-    }
-  };
-  mix(&scene.camera.width, sizeof(scene.camera.width));
-  mix(&scene.camera.height, sizeof(scene.camera.height));
+  uint64_t h = fnv1a(&scene.camera.width, sizeof(scene.camera.width));
+  h = fnv1a(&scene.camera.height, sizeof(scene.camera.height), h);
   for (const Shape& s : scene.shapes) {
-    mix(s.mesh.positions.data(), s.mesh.positions.size() * sizeof(Vec3));
-    mix(s.mesh.triangles.data(), s.mesh.triangles.size() * sizeof(s.mesh.triangles[0]));
+    h = fnv1a(s.mesh.positions.data(), s.mesh.positions.size() * sizeof(Vec3), h);
+    h = fnv1a(s.mesh.triangles.data(), s.mesh.triangles.size() * sizeof(s.mesh.triangles[0]), h);
   }
   return h;
 }

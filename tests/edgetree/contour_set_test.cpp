@@ -158,6 +158,17 @@ TEST(ContourSet, HiddenOutlineBehindTheHitSurfaceIsLeftOut) {
   EXPECT_EQ(got_front, front) << "every front silhouette edge in the cone";
 }
 
+/// A random cone of half-angle 0.1 on `mesh`: from p 1.5-3 diagonals from the centre of its box,
+/// the axis toward a random vertex (with its probe; count 0 where the axis misses the mesh).
+std::pair<Vec3, ContourProbe> random_probe(const TriangleMesh& mesh, std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> u(0, 1);
+  const Box3 box = mesh.bounds();
+  const Vec3 dir = Vec3(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5).normalized();
+  const Vec3 p = box.center() + (1.5 + 1.5 * u(rng)) * box.diagonal() * dir;
+  const Vec3 target = mesh.positions[size_t(u(rng) * mesh.num_vertices()) % mesh.positions.size()];
+  return {p, probe_of(mesh, p, target - p, 0.1)};
+}
+
 TEST(ContourSet, SpotSetsHoldSilhouettesInTheConeButNoConcaveEdge) {
   // Spot smooth-shaded: its concave edges are creases (always-candidates), and where a valley's
   // faces face p differently the edge is a silhouette of no visible outline.
@@ -165,16 +176,10 @@ TEST(ContourSet, SpotSetsHoldSilhouettesInTheConeButNoConcaveEdge) {
   std::vector<ForestShapeInput> in{{&meshes[0], 0, false, CreaseSet::Concave}};
   const EdgeForest forest = EdgeForest::build(in);
   const ContourIndex index = ContourIndex::build(in, forest);
-  const Box3 box = meshes[0].bounds();
   std::mt19937_64 rng(3);
-  std::uniform_real_distribution<double> u(0, 1);
   int nonempty = 0, with_concave = 0;
   for (int i = 0; i < 200; ++i) {
-    // p 1.5-3 diagonals from the centre; the axis toward a random vertex.
-    const Vec3 dir = Vec3(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5).normalized();
-    const Vec3 p = box.center() + (1.5 + 1.5 * u(rng)) * box.diagonal() * dir;
-    const Vec3 target = meshes[0].positions[size_t(u(rng) * meshes[0].num_vertices()) % meshes[0].positions.size()];
-    const ContourProbe probe = probe_of(meshes[0], p, target - p, 0.1);
+    const auto [p, probe] = random_probe(meshes[0], rng);
     if (probe.count == 0) continue;
     const std::set<const Edge*> got = contour(index, p, probe), want = brute_force(forest, p, probe);
     for (const Edge* e : got) {
@@ -213,15 +218,10 @@ TEST(ContourSet, RefitIndexGivesTheSetsOfANewBuild) {
   ASSERT_TRUE(index.refit(in, forest));
   const EdgeForest new_forest = EdgeForest::build(in);
   const ContourIndex new_index = ContourIndex::build(in, new_forest);
-  const Box3 box = meshes[0].bounds();
   std::mt19937_64 rng(5);
-  std::uniform_real_distribution<double> u(0, 1);
   int nonempty = 0;
   for (int i = 0; i < 200; ++i) {
-    const Vec3 dir = Vec3(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5).normalized();
-    const Vec3 p = box.center() + (1.5 + 1.5 * u(rng)) * box.diagonal() * dir;
-    const Vec3 target = meshes[0].positions[size_t(u(rng) * meshes[0].num_vertices()) % meshes[0].positions.size()];
-    const ContourProbe probe = probe_of(meshes[0], p, target - p, 0.1);
+    const auto [p, probe] = random_probe(meshes[0], rng);
     if (probe.count == 0) continue;
     const auto got = keys(contour(index, p, probe)), want = keys(contour(new_index, p, probe));
     EXPECT_EQ(got, want) << "case " << i;

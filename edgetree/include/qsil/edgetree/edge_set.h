@@ -297,11 +297,10 @@ class EdgeSet {
   size_t memory_bytes() const;
 
  protected:
-  /// What fitting a shape's silhouette tree needs: its node levels, parents first (each a node
-  /// range [first, second)), and its face planes (indexed by face).
+  /// What fitting a shape's silhouette tree needs beyond its edges: its node levels, parents
+  /// first (each a node range [first, second)).
   struct ShapeTree {
     std::vector<std::pair<int, int>> levels;
-    std::vector<Vec4> face_planes;
   };
   std::vector<ForestNode> nodes_;
   std::vector<int> roots_;
