@@ -35,6 +35,22 @@ double thread_count(const RenderOptions& o) {
 
 }  // namespace
 
+void render_primal(const Scene& scene, const RenderSetup& setup, const FilmLayout& layout,
+                   const RenderOptions& options, int first, int count, RenderResult& r) {
+  const Camera& cam = scene.camera;
+  const Vec3 origin = cam.origin();
+  const PrimalView view{&scene};
+  PathStats total;
+  run_pixels(
+      cam, layout, options, first, count, "render",
+      [&](int x, int y, int, Sampler& sampler, PathStats& st, double* out) {
+        const CameraRay ray = trace_camera_ray(setup.ctx, x, y, sampler.next2(), st);
+        const Color L = trace_path(setup.ctx, view, {origin, ray.dir, ray.hit}, sampler, st);
+        for (int c = 0; c < 3; ++c) out[layout.primal(c)] = L[c];
+      },
+      r, total);
+}
+
 // ---- The interface of the three kinds
 
 class Estimator::Impl {
@@ -59,18 +75,7 @@ class PrimalEstimator final : public Estimator::Impl, private RenderSetup {
  public:
   PrimalEstimator(const Scene& s, EstimatorConfig c) : Impl(s, std::move(c)), RenderSetup(s) {}
   void run(const RenderOptions& options, int first, int count, RenderResult& r) const override {
-    const Camera& cam = scene.camera;
-    const Vec3 origin = cam.origin();
-    const PrimalView view{&scene};
-    PathStats total;
-    run_pixels(
-        cam, layout, options, first, count, "render",
-        [&](int x, int y, int, Sampler& sampler, PathStats& st, double* out) {
-          const CameraRay ray = trace_camera_ray(ctx, x, y, sampler.next2(), st);
-          const Color L = trace_path(ctx, view, {origin, ray.dir, ray.hit}, sampler, st);
-          for (int c = 0; c < 3; ++c) out[layout.primal(c)] = L[c];
-        },
-        r, total);
+    render_primal(scene, *this, layout, options, first, count, r);
   }
 };
 

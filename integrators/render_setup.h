@@ -31,4 +31,11 @@ struct RenderSetup {
   PrimaryEdges primary;
 };
 
+/// The primal image of samples [first, first + count) of every pixel over `setup`'s ray tracer and
+/// lights, as `qsil render`: film channels R, G, B of `layout` (FilmLayout(0)), the counters of
+/// run_pixels in `r`. The primal estimator and ReverseEstimator::render both render so, hence the
+/// same image for the same scene and seed.
+void render_primal(const Scene& scene, const RenderSetup& setup, const FilmLayout& layout,
+                   const RenderOptions& options, int first, int count, RenderResult& r);
+
 }  // namespace qsil

@@ -478,6 +478,16 @@ ReverseResult ReverseEstimator::run(const std::vector<double>& adjoint, const Re
   return r;
 }
 
+RenderResult ReverseEstimator::render(const RenderOptions& options) const {
+  const Impl& m = *impl_;
+  if (!m.valid) throw Error("reverse mode: the last update() failed; call update() again");
+  const int count = sample_range_count(options, m.scene.camera);
+  if (options.parts != 1) throw Error("reverse mode runs in one process (parts = 1)");
+  RenderResult r;
+  render_primal(m.scene, m, FilmLayout(0), options, options.first_sample, count, r);
+  return r;
+}
+
 std::vector<int> resolve_shapes(const Scene& scene, const std::vector<std::string>& ids) {
   std::vector<int> out;
   std::set<int> seen;

@@ -372,6 +372,25 @@ void bind_reverse(py::module_& m) {
           "As qsil.reverse on the scene as of the last update(): a dict with 'image', 'loss', 'gradient', "
           "'seconds', 'nonfinite'")
       .def(
+          "render",
+          [](PyReverseEstimator& self, int spp, uint64_t seed, int threads) {
+            if (meshes_fingerprint(*self.scene) != self.fingerprint)
+              throw Error(
+                  "ReverseEstimator.render: the scene's meshes or film size changed since it was set up; call "
+                  "update() first");
+            std::optional<RenderResult> r;
+            {
+              py::gil_scoped_release release;
+              const std::lock_guard<std::mutex> hold(self.lock);
+              r = self.estimator->render(options(spp, seed, threads));
+            }
+            const FilmLayout layout;
+            return film_image(r->film, [&](int c) { return layout.primal(c); });
+          },
+          py::arg("spp") = 0, py::arg("seed") = 0, py::arg("threads") = 0,
+          "The primal image (H, W, 3) of the scene as of the last update(), equal to qsil.render's for the same "
+          "spp and seed, without its set-up (an optimiser's primal render each step)")
+      .def(
           "update",
           [](PyReverseEstimator& self) {
             std::optional<ReverseUpdate> u;

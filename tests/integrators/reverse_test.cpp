@@ -362,6 +362,45 @@ TEST(ReverseMode, UpdateAfterMovedVerticesMatchesANewEstimator) {
   EXPECT_NEAR(updated.mean, anew.mean, 3.5 * se);
 }
 
+/// ReverseEstimator::render is the primal estimator's image, bit for bit, before and after an
+/// update() for moved vertices (oracle: Estimator(primal) set up on the scene as it is then); and
+/// it refuses after a failed update as run() does.
+TEST(ReverseMode, RenderIsThePrimalEstimatorsImage) {
+  Scene scene = load_scene(test::data_file("tests/data/gradient/spot-selfshadow.xml"), {{"res", "16"}, {"spp", "4"}});
+  const std::vector<int> shapes = resolve_shapes(scene, {"spot"});
+  ReverseEstimator e(scene, ReverseConfig{shapes, Method::Quadric, 1});
+  RenderOptions opt;
+  opt.seed = 7;
+  opt.spp = 4;
+  opt.progress = false;
+  const auto same_as_primal = [&](const char* when) {
+    const RenderResult a = e.render(opt);
+    const RenderResult b = Estimator(scene, EstimatorConfig::primal()).run(opt);
+    ASSERT_EQ(a.film.channels(), b.film.channels()) << when;
+    double sum = 0;
+    for (int y = 0; y < scene.camera.height; ++y)
+      for (int x = 0; x < scene.camera.width; ++x)
+        for (int c = 0; c < a.film.channels(); ++c) {
+          ASSERT_EQ(a.film.mean(c, x, y), b.film.mean(c, x, y)) << when << ": pixel " << x << ", " << y;
+          sum += a.film.mean(c, x, y);
+        }
+    EXPECT_GT(sum, 0) << when << ": an empty image proves nothing";
+  };
+  same_as_primal("as set up");
+  const RenderResult before = e.render(opt);
+  displace(scene, "spot", 0.05);
+  e.update();
+  same_as_primal("after update()");
+  // The moved mesh changes the image: render follows the update, not the set-up.
+  bool differs = false;
+  const RenderResult after = e.render(opt);
+  for (int y = 0; y < scene.camera.height && !differs; ++y)
+    for (int x = 0; x < scene.camera.width && !differs; ++x) differs = before.film.mean(0, x, y) != after.film.mean(0, x, y);
+  EXPECT_TRUE(differs);
+  opt.parts = 2;
+  EXPECT_THROW(e.render(opt), Error);
+}
+
 /// After a remeshing (other vertex and triangle counts) update sets up anew: the same result as a
 /// new estimator, bit for bit.
 TEST(ReverseMode, UpdateAfterARemeshingSetsUpAnew) {

@@ -238,6 +238,22 @@ def test_reverse_estimator_equals_reverse_and_follows_the_scene():
     assert est.run(np.ones((8, 8, 3)), spp=1)["image"].shape == (8, 8, 3)
 
 
+def test_reverse_estimator_render_is_qsil_render():
+    # The primal image from the estimator's own set-up equals qsil.render's bit for bit, as set up
+    # and after a step; a stale set-up is refused as run() refuses it.
+    s = load(res=12, spp=2)
+    est = qsil.ReverseEstimator(s, ["spot"])
+    assert np.array_equal(est.render(spp=2, seed=9), qsil.render(s, spp=2, seed=9))
+    v = s.vertices("spot")
+    s.set_vertices("spot", v + 0.02 * np.sin(5 * v[:, [1]]))
+    with pytest.raises(qsil.Error, match="call update"):
+        est.render(spp=1)
+    est.update()
+    moved = est.render(spp=2, seed=9)
+    assert np.array_equal(moved, qsil.render(s, spp=2, seed=9))
+    assert moved.shape == (12, 12, 3) and moved.sum() > 0
+
+
 def test_old_keyword_names_set_the_same_rates():
     # sppi / sppp, as Mitsuba 3 names them; boundary_spp / primary_samples, the names before them,
     # still set the same values: equal images, and unequal to the defaults'.

@@ -95,6 +95,13 @@ class ReverseEstimator {
   /// options.parts > 1 (not supported).
   ReverseResult run(const std::vector<double>& adjoint, const RenderOptions& options) const;
 
+  /// The primal image of samples [options.first_sample, options.first_sample + spp) over this
+  /// set-up as of the last update(): the film of Estimator(scene, EstimatorConfig::primal()).run
+  /// (options), bit for bit, without that estimator's set-up of a ray tracer and lights (an
+  /// optimiser's primal render each step). Throws qsil::Error as run() does for an empty range,
+  /// options.parts > 1, or after a failed update().
+  RenderResult render(const RenderOptions& options) const;
+
   /// Brings the set-up up to date after the scene's meshes changed, at a fraction of a new
   /// set-up's cost when only vertex positions did (e.g. Python's set_vertices: an optimiser's
   /// step): the ray tracer's meshes taken anew (RayTracer::update_meshes), the area lights
