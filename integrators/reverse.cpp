@@ -6,6 +6,7 @@
 #include "pixel_loop.h"
 #include "render_setup.h"
 #include "qsil/error.h"
+#include "qsil/fnv1a.h"
 #include "qsil/integrators/boundary_term.h"
 #include "qsil/integrators/path_tracer.h"
 #include "qsil/vertex_normals.h"
@@ -206,6 +207,18 @@ struct PixelSample {
   uint64_t seed;
 };
 
+/// A hash of what a set-up depends on and an optimiser changes: the film size and every shape's
+/// positions and triangles (FNV-1a over their bytes).
+uint64_t meshes_fingerprint(const Scene& scene) {
+  uint64_t h = fnv1a(&scene.camera.width, sizeof(scene.camera.width));
+  h = fnv1a(&scene.camera.height, sizeof(scene.camera.height), h);
+  for (const Shape& s : scene.shapes) {
+    h = fnv1a(s.mesh.positions.data(), s.mesh.positions.size() * sizeof(Vec3), h);
+    h = fnv1a(s.mesh.triangles.data(), s.mesh.triangles.size() * sizeof(s.mesh.triangles[0]), h);
+  }
+  return h;
+}
+
 /// Throws qsil::Error unless `adjoint` holds width x height x 3 finite weights (names the pixel).
 void check_adjoint(const std::vector<double>& adjoint, int width, int height) {
   const size_t expected = size_t(width) * size_t(height) * 3;
@@ -222,7 +235,8 @@ void check_adjoint(const std::vector<double>& adjoint, int width, int height) {
 
 class ReverseEstimator::Impl : public RenderSetup {
  public:
-  Impl(const Scene& s, ReverseConfig c) : RenderSetup(s), scene(s), config(std::move(c)) {
+  Impl(const Scene& s, ReverseConfig c)
+      : RenderSetup(s), scene(s), config(std::move(c)), fingerprint(meshes_fingerprint(s)) {
     check_sample_rates(s.camera, config.sppi, config.sppp);
     if (config.shapes.empty()) throw Error("reverse mode: no shape to differentiate");
     chosen.assign(s.shapes.size(), false);
@@ -365,6 +379,17 @@ class ReverseEstimator::Impl : public RenderSetup {
   /// False after an update() that threw: the structures may not match the scene (run refuses,
   /// the next update sets up anew).
   bool valid = true;
+  /// meshes_fingerprint of the scene as set up or last updated: run and render refuse another.
+  uint64_t fingerprint;
+
+  /// Throws qsil::Error unless the set-up is valid and the scene's meshes and film size are those
+  /// it was set up or last updated for.
+  void check_current() const {
+    if (!valid) throw Error("reverse mode: the last update() failed; call update() again");
+    if (meshes_fingerprint(scene) != fingerprint)
+      throw Error("reverse mode: the scene's meshes or film size changed since the set-up or the last update(); "
+                  "call update() first");
+  }
   std::vector<bool> chosen;
   std::vector<int> chosen_index;
   SetupReport setup;
@@ -384,11 +409,15 @@ ReverseUpdate ReverseEstimator::update() {
   ReverseUpdate out;
   const bool failed_before = !m.valid;
   m.valid = false;  // until this update has finished
-  if (failed_before || !m.tracer.update_meshes(m.scene)) {
-    // Another topology (a remeshing), or a failed update: set up anew.
+  // A fresh set-up would take another local origin: set up anew, so that the estimates stay those
+  // of a new estimator's (the local origin rounds Embree's float geometry).
+  const bool origin_moved = embree_local_origin(m.scene) != m.tracer.local_origin();
+  if (failed_before || origin_moved || !m.tracer.update_meshes(m.scene)) {
+    // Another topology (a remeshing), another local origin, or a failed update: set up anew.
     impl_ = std::make_unique<Impl>(m.scene, m.config);
-    out.reason =
-        failed_before ? "the last update failed: set up anew" : "vertex or triangle counts changed: set up anew";
+    out.reason = failed_before  ? "the last update failed: set up anew"
+                 : origin_moved ? "the scene's bounds moved Embree's local origin: set up anew"
+                                : "vertex or triangle counts changed: set up anew";
     out.seconds = out.edge_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     impl_->setup.seconds = out.seconds;
     return out;
@@ -415,6 +444,7 @@ ReverseUpdate ReverseEstimator::update() {
   }
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   m.setup.seconds = out.seconds;
+  m.fingerprint = meshes_fingerprint(m.scene);
   m.valid = true;
   return out;
 }
@@ -424,7 +454,7 @@ const SetupReport& ReverseEstimator::setup() const { return impl_->setup; }
 
 ReverseResult ReverseEstimator::run(const std::vector<double>& adjoint, const RenderOptions& options) const {
   const Impl& m = *impl_;
-  if (!m.valid) throw Error("reverse mode: the last update() failed; call update() again");
+  m.check_current();
   const Scene& scene = m.scene;
   const int W = scene.camera.width, H = scene.camera.height;
   check_adjoint(adjoint, W, H);
@@ -480,7 +510,7 @@ ReverseResult ReverseEstimator::run(const std::vector<double>& adjoint, const Re
 
 RenderResult ReverseEstimator::render(const RenderOptions& options) const {
   const Impl& m = *impl_;
-  if (!m.valid) throw Error("reverse mode: the last update() failed; call update() again");
+  m.check_current();
   const int count = sample_range_count(options, m.scene.camera);
   if (options.parts != 1) throw Error("reverse mode runs in one process (parts = 1)");
   RenderResult r;

@@ -7,7 +7,6 @@
 /// releases the GIL.
 
 #include "qsil/error.h"
-#include "qsil/fnv1a.h"
 #include "qsil/integrators/estimator.h"
 #include "qsil/integrators/reverse.h"
 #include "qsil/integrators/method.h"
@@ -297,23 +296,12 @@ py::dict reverse_dict(const ReverseResult& r, const std::vector<std::string>& sh
 /// FNV-1a hash of the film's size and every shape's vertex positions and triangles: what
 /// ReverseEstimator.run checks against the set-up it has (a change without update() would render
 /// stale geometry or primary edges).
-uint64_t meshes_fingerprint(const Scene& scene) {
-  uint64_t h = fnv1a(&scene.camera.width, sizeof(scene.camera.width));
-  h = fnv1a(&scene.camera.height, sizeof(scene.camera.height), h);
-  for (const Shape& s : scene.shapes) {
-    h = fnv1a(s.mesh.positions.data(), s.mesh.positions.size() * sizeof(Vec3), h);
-    h = fnv1a(s.mesh.triangles.data(), s.mesh.triangles.size() * sizeof(s.mesh.triangles[0]), h);
-  }
-  return h;
-}
-
 /// qsil.ReverseEstimator: reverse mode set up once and kept across an optimiser's steps.
 struct PyReverseEstimator {
   const Scene* scene;
   std::vector<std::string> shapes;
   std::unique_ptr<ReverseEstimator> estimator;
-  uint64_t fingerprint = 0;  ///< meshes_fingerprint of the scene as set up
-  std::mutex lock;           ///< run and update from several Python threads: one at a time
+  std::mutex lock;  ///< run, render and update from several Python threads: one at a time
 };
 
 /// Binds qsil.reverse (reverse mode) and qsil.ReverseEstimator.
@@ -343,7 +331,6 @@ void bind_reverse(py::module_& m) {
              auto p = std::make_unique<PyReverseEstimator>();
              p->scene = &scene;
              p->shapes = shapes;
-             p->fingerprint = meshes_fingerprint(scene);
              py::gil_scoped_release release;
              p->estimator = std::make_unique<ReverseEstimator>(
                  scene, ReverseConfig{indices, method, sppi, sppp, intersection_curves});
@@ -355,10 +342,6 @@ void bind_reverse(py::module_& m) {
       .def(
           "run",
           [](PyReverseEstimator& self, const Array& adjoint, int spp, uint64_t seed, int threads) {
-            if (meshes_fingerprint(*self.scene) != self.fingerprint)
-              throw Error(
-                  "ReverseEstimator.run: the scene's meshes or film size changed since it was set up; call update() "
-                  "first");
             const std::vector<double> w = adjoint_weights(*self.scene, adjoint);
             std::optional<ReverseResult> r;
             {
@@ -374,10 +357,6 @@ void bind_reverse(py::module_& m) {
       .def(
           "render",
           [](PyReverseEstimator& self, int spp, uint64_t seed, int threads) {
-            if (meshes_fingerprint(*self.scene) != self.fingerprint)
-              throw Error(
-                  "ReverseEstimator.render: the scene's meshes or film size changed since it was set up; call "
-                  "update() first");
             std::optional<RenderResult> r;
             {
               py::gil_scoped_release release;
@@ -399,7 +378,6 @@ void bind_reverse(py::module_& m) {
               const std::lock_guard<std::mutex> hold(self.lock);
               u = self.estimator->update();
             }
-            self.fingerprint = meshes_fingerprint(*self.scene);
             py::dict out;
             out["refitted"] = u->refitted;
             out["reason"] = u->reason;

@@ -362,9 +362,9 @@ TEST(ReverseMode, UpdateAfterMovedVerticesMatchesANewEstimator) {
   EXPECT_NEAR(updated.mean, anew.mean, 3.5 * se);
 }
 
-/// ReverseEstimator::render is the primal estimator's image, bit for bit, before and after an
-/// update() for moved vertices (oracle: Estimator(primal) set up on the scene as it is then); and
-/// it refuses after a failed update as run() does.
+/// ReverseEstimator::render is the primal estimator's image and counters, bit for bit, before and
+/// after an update() for moved vertices and from another first sample (oracle: Estimator(primal)
+/// set up on the scene as it is then); render and run refuse a scene changed without update().
 TEST(ReverseMode, RenderIsThePrimalEstimatorsImage) {
   Scene scene = load_scene(test::data_file("tests/data/gradient/spot-selfshadow.xml"), {{"res", "16"}, {"spp", "4"}});
   const std::vector<int> shapes = resolve_shapes(scene, {"spot"});
@@ -377,6 +377,10 @@ TEST(ReverseMode, RenderIsThePrimalEstimatorsImage) {
     const RenderResult a = e.render(opt);
     const RenderResult b = Estimator(scene, EstimatorConfig::primal()).run(opt);
     ASSERT_EQ(a.film.channels(), b.film.channels()) << when;
+    EXPECT_EQ(a.spp, b.spp) << when;
+    EXPECT_EQ(a.first_sample, b.first_sample) << when;
+    EXPECT_EQ(a.rays, b.rays) << when;
+    EXPECT_EQ(a.nonfinite, b.nonfinite) << when;
     double sum = 0;
     for (int y = 0; y < scene.camera.height; ++y)
       for (int x = 0; x < scene.camera.width; ++x)
@@ -387,8 +391,13 @@ TEST(ReverseMode, RenderIsThePrimalEstimatorsImage) {
     EXPECT_GT(sum, 0) << when << ": an empty image proves nothing";
   };
   same_as_primal("as set up");
+  opt.first_sample = 3;
+  same_as_primal("from sample 3");
+  opt.first_sample = 0;
   const RenderResult before = e.render(opt);
   displace(scene, "spot", 0.05);
+  EXPECT_THROW(e.render(opt), Error);  // stale: the scene changed without update()
+  EXPECT_THROW(e.run(std::vector<double>(size_t(3 * 16 * 16), 1.0), opt), Error);
   e.update();
   same_as_primal("after update()");
   // The moved mesh changes the image: render follows the update, not the set-up.

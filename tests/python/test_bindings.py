@@ -243,7 +243,8 @@ def test_reverse_estimator_render_is_qsil_render():
     # and after a step; a stale set-up is refused as run() refuses it.
     s = load(res=12, spp=2)
     est = qsil.ReverseEstimator(s, ["spot"])
-    assert np.array_equal(est.render(spp=2, seed=9), qsil.render(s, spp=2, seed=9))
+    first = est.render(spp=2, seed=9)
+    assert np.array_equal(first, qsil.render(s, spp=2, seed=9))
     v = s.vertices("spot")
     s.set_vertices("spot", v + 0.02 * np.sin(5 * v[:, [1]]))
     with pytest.raises(qsil.Error, match="call update"):
@@ -252,6 +253,7 @@ def test_reverse_estimator_render_is_qsil_render():
     moved = est.render(spp=2, seed=9)
     assert np.array_equal(moved, qsil.render(s, spp=2, seed=9))
     assert moved.shape == (12, 12, 3) and moved.sum() > 0
+    assert not np.array_equal(moved, first)  # the step changed the image: a comparison with power
 
 
 def test_old_keyword_names_set_the_same_rates():

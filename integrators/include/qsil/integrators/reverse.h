@@ -91,15 +91,17 @@ class ReverseEstimator {
   /// scene's sample count when <= 0) with adjoint image `adjoint` (row-major RGB, width x height x
   /// 3 values: adjoint[3 (y width + x) + c] = w_c(x)). Throws qsil::Error when the adjoint has the
   /// wrong size ("adjoint image: expected W x H x 3 = N values (got M)") or a non-finite value
-  /// ("adjoint image: non-finite weight at pixel (x, y)"), for an empty range, or for
-  /// options.parts > 1 (not supported).
+  /// ("adjoint image: non-finite weight at pixel (x, y)"), for an empty range, for
+  /// options.parts > 1 (not supported), after a failed update(), and when the scene's meshes or
+  /// film size changed since the set-up or the last update() (a hash of them: "call update()
+  /// first").
   ReverseResult run(const std::vector<double>& adjoint, const RenderOptions& options) const;
 
   /// The primal image of samples [options.first_sample, options.first_sample + spp) over this
   /// set-up as of the last update(): the film of Estimator(scene, EstimatorConfig::primal()).run
   /// (options), bit for bit, without that estimator's set-up of a ray tracer and lights (an
   /// optimiser's primal render each step). Throws qsil::Error as run() does for an empty range,
-  /// options.parts > 1, or after a failed update().
+  /// options.parts > 1, after a failed update(), or for a changed scene.
   RenderResult render(const RenderOptions& options) const;
 
   /// Brings the set-up up to date after the scene's meshes changed, at a fraction of a new
@@ -110,10 +112,11 @@ class ReverseEstimator {
   /// it) and the primary edges found anew. The estimates are as unbiased as a new estimator's;
   /// they differ from its estimates only in which edges the boundary term draws. When a shape's
   /// vertex or triangle count changed (a remeshing, Python's set_mesh) everything is set up anew,
-  /// as by the constructor; a shape whose triangles changed with the same counts gets its forest
-  /// built anew (the refit refuses it). If it throws (qsil::Error from Embree, out of memory),
-  /// run() refuses until an update() succeeds, which then sets up anew. Not to be called while
-  /// run() runs.
+  /// as by the constructor, and so when the scene's bounds moved the local origin a new ray tracer
+  /// would take (embree_local_origin: the float geometry would round otherwise); a shape whose
+  /// triangles changed with the same counts gets its forest built anew (the refit refuses it). If
+  /// it throws (qsil::Error from Embree, out of memory), run() and render() refuse until an
+  /// update() succeeds, which then sets up anew. Not to be called while run() or render() runs.
   ReverseUpdate update();
 
   /// The configuration given.
