@@ -7,7 +7,7 @@ environment map. One target image (the true bunny, high spp); the optimisation s
 sphere and moves every vertex:
 
     loss  = mean over pixel-channels of (I - T)^2
-    dL/dx = ReverseEstimator.run(adjoint = 2 (I - T) / n), I from a primal render with its own
+    dL/dx = ReverseEstimator.run(adjoint = 2 (I - T) / n), I = ReverseEstimator.render with its own
             seed (the product of two independent estimates is unbiased)
     step  = qsil_shape.LargeSteps: uniform Adam on u = (I + lam L) x (Nicolet et al. 2021)
     remesh: at equal shares of the time, qsil.remesh (CGAL isotropic remeshing) to half the mean
@@ -29,16 +29,17 @@ Usage: /usr/bin/python3 examples/two_mirrors.py [--build build] [--seconds 1200]
 Needs the Python module (built by CMake into BUILD/python), NumPy, SciPy and matplotlib (Debian).
 """
 import argparse
-import json
 import os
 import sys
 import tempfile
 import time
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(ROOT, "python"))  # qsil_shape: the source tree's, beside this script
+from qsil_shape import (LargeSteps, Progress, SurfaceDistance, add_page_arguments, icosphere,  # noqa: E402
+                        mean_edge, page_from_record, ratio, write_obj, write_record)
 SCENE = os.path.join(ROOT, "scenes", "two-mirrors.xml")
 # The second camera (display only): beside the bunny, looking at its bounding-box centre.
 SECOND_VIEW = '<lookat origin="1.7, 0.9, 3.3" target="0, 0, 1.4" up="0, 1, 0"/>'
@@ -57,29 +58,124 @@ def second_view_scene(tmp):
     return path
 
 
-def surface_samples(V, F, n, rng):
-    """n points uniform by area on the triangles F of V."""
-    a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
-    area = 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1)
-    tri = rng.choice(len(F), size=n, p=area / area.sum())
-    r1, r2 = rng.random(n), rng.random(n)
-    s = np.sqrt(r1)
-    return (1 - s)[:, None] * a[tri] + (s * (1 - r2))[:, None] * b[tri] + (s * r2)[:, None] * c[tri]
+RECORD = "images/two-mirrors/results.json"
+SCRIPT = "examples/two_mirrors.py"
 
 
-def distances(V, F, truth_points, truth_tree, diag, n=20000):
-    """Chamfer (mean of both directions' mean nearest distance) and Hausdorff distance between the
-    surfaces, from n area-uniform samples each, relative to diag (fixed seed)."""
-    pts = surface_samples(V, F, n, np.random.default_rng(7))
-    d_to_truth, _ = truth_tree.query(pts)
-    d_from_truth, _ = cKDTree(pts).query(truth_points)
-    chamfer = 0.5 * (d_to_truth.mean() + d_from_truth.mean())
-    return chamfer / diag, max(d_to_truth.max(), d_from_truth.max()) / diag
+def page_text(r):
+    """docs/inverse-rendering.md's generated section for the two-mirror experiment: the set-up, the
+    table and the comparisons, all from the record r (results.json)."""
+    floor = r["floor"]
+    pct = lambda x: "%.2f %%" % (100 * x)  # noqa: E731
+    def sci(x):
+        """x as 2.1·10⁻⁵ (nan and inf as themselves)."""
+        if not np.isfinite(x):
+            return str(x)
+        mantissa, exponent = ("%.1e" % x).split("e")
+        return "%s·10%s" % (mantissa, str(int(exponent)).translate(str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")))
+    res = r["res"]
+    schedule = " → ".join("%d²" % x for x in res) if len(set(res)) > 1 else "%d²" % res[0]
+    out = ["**Set-up** (from the record): film %s over %d phases of equal time between %d remeshings; %d spp "
+           "per step for the primal render and for the reverse run (independent seeds); targets at %d spp; "
+           "start: a sphere of %d vertices at the bunny's bounding-box centre; Large Steps λ %g, step %g on u, "
+           "×%g at each remeshing (`qsil.remesh` to half the mean edge, at least %g: %.1f %% of the diagonal). "
+           "Each method runs %g s on %d threads. At ten points the shape is scored outside the budget: the loss "
+           "of a fixed-seed 64-spp render at %d² (its noise floor, the true bunny's loss, is %.5f) and the Chamfer "
+           "and Hausdorff distances between the surfaces (20 000 area-uniform samples each), in %% of the bunny's "
+           "diagonal (%.2f); \"seen\": the same distances between the %.0f %% of the bunny's surface that the camera "
+           "sees in the mirrors (a ray test from each sample, `seen_in_mirrors`) and the shape's samples nearest to it."
+           % (schedule, len(res), r["remeshes"], r["spp"], r["target_spp"], r["start_vertices"],
+                                  r["lam"], r["lr"], r["lr_decay"], r["min_edge"], 100 * r["min_edge"] / r["diag"],
+                                  r["seconds"], r["threads"], r["score_res"], floor, r["diag"],
+                                  100 * r["seen_share"]),
+           "",
+           "| method | steps in %g s | steps/s | set-ups / refits | vertices | loss above floor | Chamfer | Hausdorff "
+           "| Chamfer, seen | Hausdorff, seen |" % r["seconds"],
+           "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |",
+           "| start (sphere) | | | | %d | %s | %s | %s | %s | %s |" % (
+               r["start_vertices"], sci(r["start"]["loss"] - floor), pct(r["start"]["chamfer"]),
+               pct(r["start"]["hausdorff"]), pct(r["start"]["seen_chamfer"]), pct(r["start"]["seen_hausdorff"]))]
+    names = {"none": "none (no boundary term)"}
+    for name, m in r["methods"].items():
+        label = names.get(name, name + (" (two targets)" if name.endswith(":2") else ""))
+        out.append("| %s | %d | %.1f | %d / %d | %d | %s | %s | %s | %s | %s |" % (
+            label, m["steps"], m["steps"] / max(r["seconds"], 1e-9), m["setups"], m["refits"], m["vertices"],
+            sci(m["loss"] - floor), pct(m["chamfer"]), pct(m["hausdorff"]), pct(m["seen_chamfer"]),
+            pct(m["seen_hausdorff"])))
+    ms = r["methods"]
+    out.append("")
+    if "quadric" in ms:
+        q = ms["quadric"]
+        met = q["chamfer"] <= 0.01 and q["hausdorff"] <= 0.05
+        out.append("- Targets (Chamfer ≤ 1 %%, Hausdorff ≤ 5 %%, within 20 minutes): **%s** by quadric in this "
+                   "record's %g s (%s, %s; on the seen part %s, %s)." % (
+                       "met" if met else "not met", r["seconds"], pct(q["chamfer"]), pct(q["hausdorff"]),
+                       pct(q["seen_chamfer"]), pct(q["seen_hausdorff"])))
+        if "vsphere" in ms:
+            v = ms["vsphere"]
+            out.append("- quadric against vsphere at equal time: loss above the floor %s against %s (%s), Chamfer "
+                       "%s against %s, Hausdorff %s against %s." % (
+                           sci(q["loss"] - floor), sci(v["loss"] - floor),
+                           ratio(v["loss"] - floor, q["loss"] - floor), pct(q["chamfer"]), pct(v["chamfer"]),
+                           pct(q["hausdorff"]), pct(v["hausdorff"])))
+        if "none" in ms:
+            n = ms["none"]
+            out.append("- Without the boundary term (none): Chamfer %s (%s quadric's; the start's is %s), "
+                       "Hausdorff %s, loss above the floor %s (%s quadric's)." % (
+                           pct(n["chamfer"]), ratio(n["chamfer"], q["chamfer"]), pct(r["start"]["chamfer"]),
+                           pct(n["hausdorff"]), sci(n["loss"] - floor),
+                           ratio(n["loss"] - floor, q["loss"] - floor)))
+    return "\n".join(out) + "\n"
 
 
-def mean_edge(V, F):
-    e = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
-    return float(np.linalg.norm(V[e[:, 0]] - V[e[:, 1]], axis=1).mean())
+def occluded(origins, targets, V, F, chunk=128):
+    """(k,) bool: whether the segment from each origin (k, 3) to its target (k, 3) crosses a
+    triangle of V, F (Moller-Trumbore over all triangles; the ends excluded by 1e-6 of the length)."""
+    a = V[F[:, 0]]
+    e1, e2 = V[F[:, 1]] - a, V[F[:, 2]] - a
+    hit = np.zeros(len(origins), dtype=bool)
+    for i in range(0, len(origins), chunk):
+        o, d = origins[i:i + chunk, None, :], (targets - origins)[i:i + chunk, None, :]
+        pvec = np.cross(d, e2)
+        det = np.einsum("ktj,tj->kt", pvec, e1)
+        inv = 1.0 / np.where(np.abs(det) > 1e-300, det, 1e-300)
+        tvec = o - a
+        u = np.einsum("ktj,ktj->kt", tvec, pvec) * inv
+        qvec = np.cross(tvec, e1)
+        v = np.einsum("ktj,ktj->kt", d, qvec) * inv
+        t = np.einsum("ktj,tj->kt", qvec, e2) * inv
+        inside = (u >= 0) & (v >= 0) & (u + v <= 1) & (t > 1e-6) & (t < 1 - 1e-6) & (np.abs(det) > 1e-300)
+        hit[i:i + chunk] = inside.any(axis=1)
+    return hit
+
+
+def seen_in_mirrors(points, V, F, scene, half_fov):
+    """(n,) bool: which points on the mesh V, F the camera (at the origin, looking along -z, square
+    film, half field of view half_fov) sees by one mirror reflection in scene's mirror-left or
+    mirror-right: the segment from the point to its reflected camera crosses the mirror's rectangle
+    at a point inside the camera's view, and the mesh does not block the way from the point to it."""
+    seen = np.zeros(len(points), dtype=bool)
+    for mirror in ("mirror-left", "mirror-right"):
+        M = scene.vertices(mirror)  # the rectangle's 4 corners
+        c = M.mean(axis=0)
+        n = np.cross(M[1] - M[0], M[2] - M[0])
+        n /= np.linalg.norm(n)
+        camera = -2 * np.dot(-c, n) * n  # the origin reflected across the mirror's plane
+        d = camera - points
+        s = np.dot(c - points, n) / np.dot(d, n)  # where the segment meets the plane
+        m = points + s[:, None] * d
+        # Inside the rectangle: coordinates along its edges from the first corner (a rectangle's
+        # corners come in order around it).
+        ex, ey = M[1] - M[0], M[3] - M[0]
+        lx = np.dot(m - M[0], ex) / np.dot(ex, ex)
+        ly = np.dot(m - M[0], ey) / np.dot(ey, ey)
+        on_mirror = (s > 0) & (s < 1) & (lx >= 0) & (lx <= 1) & (ly >= 0) & (ly <= 1)
+        in_view = (m[:, 2] < 0) & (np.abs(m[:, 0]) <= -m[:, 2] * np.tan(half_fov)) & \
+                  (np.abs(m[:, 1]) <= -m[:, 2] * np.tan(half_fov))
+        candidate = on_mirror & in_view & ~seen
+        idx = np.nonzero(candidate)[0]
+        seen[idx[~occluded(points[idx], m[idx], V, F)]] = True
+    return seen
 
 
 def main():
@@ -87,12 +183,14 @@ def main():
     ap.add_argument("--build", default=os.path.join(ROOT, "build"), help="CMake build directory with python/qsil*.so")
     ap.add_argument("--out", default=os.path.join(ROOT, "out", "two-mirrors"))
     ap.add_argument("--seconds", type=float, default=1200, help="optimisation wall time per method")
-    ap.add_argument("--res", type=int, default=64)
+    ap.add_argument("--res", default="64,64,128,128",
+                    help="film size per phase (coarse to fine): a comma list, one per phase between remeshings "
+                         "(the last repeats); the scoring and the pictures use the largest")
     ap.add_argument("--spp", type=int, default=4, help="samples per pixel of each primal render and gradient")
     ap.add_argument("--target-spp", type=int, default=1024)
     ap.add_argument("--subdiv", type=int, default=3, help="icosphere subdivisions of the start (3: 642 vertices)")
     ap.add_argument("--radius", type=float, default=0.6, help="radius of the start sphere (scene units)")
-    ap.add_argument("--lr", type=float, default=1e-2, help="Large Steps' step on u")
+    ap.add_argument("--lr", type=float, default=0.04, help="Large Steps' step on u")
     ap.add_argument("--lam", type=float, default=19.0, help="lambda of (I + lambda L)")
     ap.add_argument("--remeshes", type=int, default=3, help="remeshings, at equal shares of the time")
     ap.add_argument("--lr-decay", type=float, default=0.7, help="step size factor at each remeshing")
@@ -100,28 +198,47 @@ def main():
     ap.add_argument("--methods", default="quadric,vsphere,none,quadric:2",
                     help="boundary methods to compare; METHOD:2 also fits the second camera's image (two targets)")
     ap.add_argument("--threads", type=int, default=0)
+    add_page_arguments(ap)
     args = ap.parse_args()
     sys.path.insert(0, os.path.join(args.build, "python"))
+    if page_from_record(ap, args, RECORD, SCRIPT, page_text):
+        return
     import qsil  # noqa: E402  (built module)
-    from qsil_shape import LargeSteps, icosphere  # noqa: E402  (python/, copied beside it)
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    try:
+        phase_res = [int(r) for r in args.res.split(",")]
+    except ValueError:
+        ap.error("--res %r: expected a comma list of film sizes" % args.res)
+    if min(phase_res) < 1:
+        ap.error("--res %r: film sizes must be >= 1" % args.res)
+    if len(phase_res) > args.remeshes + 1:
+        ap.error("--res %r: %d film sizes for %d phases (--remeshes %d)" % (args.res, len(phase_res),
+                                                                           args.remeshes + 1, args.remeshes))
+    phases = args.remeshes + 1
+    res_of_phase = [phase_res[min(i, len(phase_res) - 1)] for i in range(phases)]
+    score_res = max(res_of_phase)
     os.makedirs(args.out, exist_ok=True)
     tmp = tempfile.mkdtemp(prefix="qsil-two-mirrors-")
-    defines = {"res": str(args.res), "max_depth": "3"}
+    defines = {"res": str(score_res), "max_depth": "3"}
 
-    # ---- The truth and the target image (fixed seed).
+    # ---- The truth and the target images, one per film size of the schedule (fixed seeds).
     truth_scene = qsil.Scene(SCENE, defines)
     TV, TF = truth_scene.vertices("bunny"), truth_scene.triangles("bunny").astype(np.int64)
-    target = qsil.render(truth_scene, spp=args.target_spp, seed=1, threads=args.threads)
-    diag = float(np.linalg.norm(TV.max(axis=0) - TV.min(axis=0)))
-    truth_points = surface_samples(TV, TF, 20000, np.random.default_rng(3))
-    truth_tree = cKDTree(truth_points)
+    distances = SurfaceDistance(TV, TF)
     second_xml = second_view_scene(tmp)
     second = qsil.Scene(second_xml, defines)
-    second_target = qsil.render(second, spp=args.target_spp, seed=2, threads=args.threads)
+    targets_at = {}  # film size -> (camera's target, second camera's target)
+    for r in sorted(set(res_of_phase)):
+        truth_scene.set_resolution(r, r)
+        second.set_resolution(r, r)
+        targets_at[r] = (qsil.render(truth_scene, spp=args.target_spp, seed=1, threads=args.threads),
+                         qsil.render(second, spp=args.target_spp, seed=2, threads=args.threads))
+    truth_scene.set_resolution(score_res, score_res)
+    second.set_resolution(score_res, score_res)
+    target = targets_at[score_res][0]
 
     def pictures(V, F):
         """The mesh from the camera and from the second camera (64 spp, fixed seeds)."""
@@ -138,39 +255,63 @@ def main():
     centre = 0.5 * (TV.min(axis=0) + TV.max(axis=0))
     V0, F0 = icosphere(args.subdiv, centre, args.radius)
     F0 = F0.astype(np.int64)
-    start_chamfer, start_hausdorff = distances(V0, F0, truth_points, truth_tree, diag)
-    results = {"res": args.res, "spp": args.spp, "target_spp": args.target_spp, "seconds": args.seconds,
+    # The part of the truth the camera sees in the mirrors (the scene's camera: at the origin,
+    # looking along -z, fov 50 degrees on a square film); the rest only the shape prior constrains.
+    seen = seen_in_mirrors(distances.points, TV, TF, truth_scene, np.radians(25.0))
+
+    def score_shape(V, F):
+        """Chamfer and Hausdorff distances, of the whole surface and of the part seen in the mirrors."""
+        return distances(V, F) + distances(V, F, part=seen)
+
+    start_chamfer, start_hausdorff, start_seen_chamfer, start_seen_hausdorff = score_shape(V0, F0)
+    results = {"res": res_of_phase, "spp": args.spp, "target_spp": args.target_spp, "seconds": args.seconds,
                "lr": args.lr, "lam": args.lam, "remeshes": args.remeshes, "lr_decay": args.lr_decay,
-               "start_vertices": int(len(V0)), "truth_vertices": int(len(TV)), "diag": diag, "floor": floor,
-               "methods": {}}
+               "start_vertices": int(len(V0)), "truth_vertices": int(len(TV)), "diag": distances.diag, "floor": floor,
+               "min_edge": args.min_edge, "score_res": score_res, "threads": args.threads or os.cpu_count(),
+               "seen_share": float(seen.mean()),
+               "start": {"chamfer": start_chamfer, "hausdorff": start_hausdorff, "seen_chamfer": start_seen_chamfer,
+                         "seen_hausdorff": start_seen_hausdorff}, "methods": {}}
     evolution = {}
     for name in args.methods.split(","):
         method, _, views = name.partition(":")
         # The camera's scene, and with METHOD:2 the second camera's: one target and estimator each.
         scenes = [qsil.Scene(SCENE, defines)] + ([qsil.Scene(second_xml, defines)] if views == "2" else [])
-        targets = [target, second_target][:len(scenes)]
-        for sc in scenes:
-            sc.set_mesh("bunny", V0, F0)
-        scene = scenes[0]
-        V, F = V0.copy(), F0.copy()
-        opt = LargeSteps(V, F, lam=args.lam, lr=args.lr)
-        estimators = [qsil.ReverseEstimator(sc, ["bunny"], boundary=method) for sc in scenes]
 
-        def score():
-            """The loss of the scene's current mesh, rendered at a fixed seed (64 spp)."""
-            img = qsil.render(scene, spp=64, seed=5, threads=args.threads)
+        def start_phase(phase, V, F):
+            """The phase's film size and mesh in every scene; its targets and new estimators."""
+            r = res_of_phase[phase]
+            for sc in scenes:
+                sc.set_resolution(r, r)
+                sc.set_mesh("bunny", V, F)
+            return (list(targets_at[r][:len(scenes)]),
+                    [qsil.ReverseEstimator(sc, ["bunny"], boundary=method) for sc in scenes])
+
+        V, F = V0.copy(), F0.copy()
+        phase = 0
+        targets, estimators = start_phase(phase, V, F)
+        opt = LargeSteps(V, F, lam=args.lam, lr=args.lr)
+
+        def score(V, F):
+            """The loss of the mesh V, F at the largest film size, rendered at a fixed seed (64 spp)."""
+            truth_scene.set_mesh("bunny", V, F)
+            img = qsil.render(truth_scene, spp=64, seed=5, threads=args.threads)
             return float(((img - target) ** 2).mean())
 
-        loss0 = score()
-        curve = [(0.0, 0, loss0, start_chamfer, start_hausdorff, int(len(V)))]
+        loss0 = score(V, F)
+        results["start"]["loss"] = loss0
+        curve = [(0.0, 0, loss0, start_chamfer, start_hausdorff, int(len(V)), start_seen_chamfer,
+                  start_seen_hausdorff)]
         snapshots = [(0.0, pictures(V, F))]
-        elapsed, step, seed, refits, setups = 0.0, 0, 100, 0, 0
+        elapsed, step, seed, refits, setups = 0.0, 0, 100, 0, len(scenes)
+        progress = Progress(name, args.seconds)
         next_eval, next_remesh, next_picture = 0.1 * args.seconds, args.seconds / (args.remeshes + 1), 0.25
         while elapsed < args.seconds:
             t0 = time.perf_counter()
             grad = np.zeros_like(V)
+            step_loss = 0.0
             for sc, est, tgt in zip(scenes, estimators, targets):
-                image = qsil.render(sc, spp=args.spp, seed=seed, threads=args.threads)
+                image = est.render(spp=args.spp, seed=seed, threads=args.threads)
+                step_loss += float(((image - tgt) ** 2).mean()) / len(scenes)
                 w = 2 * (image - tgt) / (image.size * len(scenes))
                 grad += est.run(w, spp=args.spp, seed=seed + 1, threads=args.threads)["gradient"]["bunny"]
                 seed += 2
@@ -181,35 +322,39 @@ def main():
                 V, F = qsil.remesh(V, F, length)
                 F = F.astype(np.int64)
                 opt = opt.remeshed(V, F, lr_scale=args.lr_decay)
-                for sc in scenes:
-                    sc.set_mesh("bunny", V, F)
+                phase += 1
+                targets, estimators = start_phase(phase, V, F)
+                setups += len(scenes)
                 next_remesh += args.seconds / (args.remeshes + 1)
             else:
                 for sc in scenes:
                     sc.set_vertices("bunny", V)
-            for est in estimators:
-                u = est.update()
-                refits += bool(u["refitted"])
-                setups += not u["refitted"] and u["reason"] != "no boundary term"
+                for est in estimators:
+                    u = est.update()
+                    refits += bool(u["refitted"])
+                    setups += not u["refitted"] and u["reason"] != "no boundary term"
             elapsed += time.perf_counter() - t0
+            progress.show(elapsed, step, step_loss, "%d^2" % res_of_phase[phase])
             if elapsed >= next_eval or elapsed >= args.seconds:
-                loss = score()
-                chamfer, hausdorff = distances(V, F, truth_points, truth_tree, diag)
-                curve.append((elapsed, step, loss, chamfer, hausdorff, int(len(V))))
+                loss = score(V, F)
+                chamfer, hausdorff, seen_chamfer, seen_hausdorff = score_shape(V, F)
+                curve.append((elapsed, step, loss, chamfer, hausdorff, int(len(V)), seen_chamfer, seen_hausdorff))
+                progress.clear()
                 print("%-8s %7.1f s  step %5d (%.2f/s)  loss %.5f (floor %.5f)  chamfer %.2f %%  hausdorff %.2f %%  "
-                      "%d vertices" % (name, elapsed, step, step / elapsed, loss, floor, 100 * chamfer,
-                                       100 * hausdorff, len(V)), flush=True)
+                      "seen part %.2f %% / %.2f %%  %d vertices"
+                      % (name, elapsed, step, step / elapsed, loss, floor, 100 * chamfer, 100 * hausdorff,
+                         100 * seen_chamfer, 100 * seen_hausdorff, len(V)), flush=True)
                 next_eval += 0.1 * args.seconds
             if elapsed >= next_picture * args.seconds or elapsed >= args.seconds:
                 snapshots.append((elapsed, pictures(V, F)))
                 next_picture += 0.25
-        t, s, loss, chamfer, hausdorff, nv = curve[-1]
+        progress.clear()
+        t, s, loss, chamfer, hausdorff, nv, seen_chamfer, seen_hausdorff = curve[-1]
         results["methods"][name] = {"steps": step, "loss": loss, "chamfer": chamfer, "hausdorff": hausdorff,
-                                      "vertices": nv, "refits": refits, "setups": setups, "curve": curve}
+                                      "vertices": nv, "refits": refits, "setups": setups, "curve": curve,
+                                      "seen_chamfer": seen_chamfer, "seen_hausdorff": seen_hausdorff}
         evolution[name] = snapshots
-        with open(os.path.join(args.out, "result-%s.obj" % name.replace(":", "-")), "w") as out:
-            out.writelines("v %.9g %.9g %.9g\n" % tuple(p) for p in V)
-            out.writelines("f %d %d %d\n" % tuple(f + 1) for f in F)
+        write_obj(os.path.join(args.out, "result-%s.obj" % name.replace(":", "-")), V, F)
 
     # ---- Charts: loss above the floor, Chamfer and Hausdorff against time.
     fig, axes = plt.subplots(1, 3, figsize=(15, 4))
@@ -217,8 +362,10 @@ def main():
         c = np.array(r["curve"])
         label = "%s (%d steps)" % (method, r["steps"])
         axes[0].plot(c[:, 0], np.maximum(c[:, 2] - floor, 1e-9), marker="o", label=label)
-        axes[1].plot(c[:, 0], 100 * c[:, 3], marker="o", label=label)
+        line, = axes[1].plot(c[:, 0], 100 * c[:, 3], marker="o", label=label)
+        axes[1].plot(c[:, 0], 100 * c[:, 6], ls=":", color=line.get_color(), label=method + ": seen part")
         axes[2].plot(c[:, 0], 100 * c[:, 4], marker="o", label=label)
+        axes[2].plot(c[:, 0], 100 * c[:, 7], ls=":", color=line.get_color(), label=method + ": seen part")
     axes[0].set_yscale("log")
     axes[0].set_ylabel("image loss above the noise floor (%.2g)" % floor)
     axes[1].axhline(1.0, color="k", ls="--", lw=0.8)
@@ -228,7 +375,8 @@ def main():
     for a in axes:
         a.set_xlabel("optimisation time (s, 2 threads)")
         a.legend()
-    fig.suptitle("Two mirrors: %d^2, %d spp per step, %d remeshings" % (args.res, args.spp, args.remeshes))
+    fig.suptitle("Two mirrors: film %s per phase, %d spp per step, %d remeshings"
+                 % (" -> ".join("%d^2" % r for r in res_of_phase), args.spp, args.remeshes))
     fig.tight_layout()
     fig.savefig(os.path.join(args.out, "progress.png"), dpi=110)
     plt.close(fig)
@@ -247,21 +395,7 @@ def main():
         fig.tight_layout()
         fig.savefig(os.path.join(args.out, "evolution-%s.png" % method.replace(":", "-")), dpi=100)
         plt.close(fig)
-    with open(os.path.join(args.out, "results.json"), "w") as f:
-        json.dump(results, f, indent=1)
-    lines = ["| method | steps | set-ups / refits | vertices | loss | Chamfer | Hausdorff |",
-             "| --- | ---: | ---: | ---: | ---: | ---: | ---: |",
-             "| start | | | %d | %.5f | %.2f %% | %.2f %% |" % (len(V0), results["methods"][next(iter(results["methods"]))]
-                                                               ["curve"][0][2], 100 * start_chamfer,
-                                                               100 * start_hausdorff)]
-    for method, r in results["methods"].items():
-        lines.append("| %s | %d | %d / %d | %d | %.5f | %.2f %% | %.2f %% |" % (
-            method, r["steps"], r["setups"], r["refits"], r["vertices"], r["loss"], 100 * r["chamfer"],
-            100 * r["hausdorff"]))
-    with open(os.path.join(args.out, "report.md"), "w") as f:
-        f.write("\n".join(lines) + "\n")
-    print("\n".join(lines))
-    print("noise floor %.5f -> %s" % (floor, args.out))
+    write_record(args, results, RECORD, SCRIPT, page_text)
 
 
 if __name__ == "__main__":

@@ -123,3 +123,168 @@ class LargeSteps:
         """An optimiser for a new mesh (after qsil.remesh): same lam and betas, lr times lr_scale,
         moments reset (they belonged to the old vertices)."""
         return LargeSteps(V, F, lam=self.lam, lr=self.lr * lr_scale, betas=self.betas, eps=self.eps)
+
+
+# ---- Scoring and reporting, shared by the optimisation demos (examples/).
+
+def mean_edge(V, F):
+    """The mean length of the triangles' edges (each interior edge counted twice)."""
+    e = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
+    return float(np.linalg.norm(V[e[:, 0]] - V[e[:, 1]], axis=1).mean())
+
+
+def write_obj(path, V, F):
+    """Writes positions V (V, 3) and triangles F (T, 3, 0-based) as a Wavefront OBJ."""
+    with open(path, "w") as out:
+        out.writelines("v %.9g %.9g %.9g\n" % tuple(p) for p in V)
+        out.writelines("f %d %d %d\n" % tuple(f + 1) for f in F)
+
+
+def surface_samples(V, F, n, rng):
+    """n points (n, 3) uniform by area on the triangles F (T, 3) of positions V (V, 3); rng: a
+    numpy.random.Generator."""
+    a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
+    area = 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1)
+    tri = rng.choice(len(F), size=n, p=area / area.sum())
+    r1, r2 = rng.random(n), rng.random(n)
+    s = np.sqrt(r1)
+    return (1 - s)[:, None] * a[tri] + (s * (1 - r2))[:, None] * b[tri] + (s * r2)[:, None] * c[tri]
+
+
+class SurfaceDistance:
+    """Chamfer and Hausdorff distances from meshes to one true mesh, relative to the true mesh's
+    bounding-box diagonal: between n area-uniform samples of each surface (fixed seeds, so that a
+    shape's score does not change between calls). Chamfer is the mean of both directions' mean
+    nearest-sample distance, Hausdorff the largest nearest-sample distance either way; both are
+    estimates whose resolution is about the samples' spacing (sqrt(area / n))."""
+
+    def __init__(self, V, F, n=20000):
+        from scipy.spatial import cKDTree
+        V, F = np.asarray(V, dtype=np.float64), np.asarray(F, dtype=np.int64)
+        self.n = n
+        self.diag = float(np.linalg.norm(V.max(axis=0) - V.min(axis=0)))
+        self.points = surface_samples(V, F, n, np.random.default_rng(3))
+        self.tree = cKDTree(self.points)
+
+    def __call__(self, V, F, part=None):
+        """(chamfer, hausdorff) of the mesh V (V, 3), F (T, 3), as fractions of the diagonal.
+        part: None, or a bool mask (n,) over the truth's samples (self.points): then both are of
+        that part of the truth and the mesh samples nearest to it (e.g. the part a camera sees)."""
+        from scipy.spatial import cKDTree
+        if part is not None:
+            part = np.asarray(part)
+            if part.dtype != bool or part.shape != (self.n,) or not part.any():
+                raise ValueError("SurfaceDistance: part must be a non-empty bool mask of shape (%d,)" % self.n)
+        pts = surface_samples(np.asarray(V, dtype=np.float64), np.asarray(F, dtype=np.int64), self.n,
+                              np.random.default_rng(7))
+        d_to_truth, nearest = self.tree.query(pts)
+        d_from_truth, _ = cKDTree(pts).query(self.points)
+        if part is not None:
+            d_to_truth, d_from_truth = d_to_truth[part[nearest]], d_from_truth[part]
+            if len(d_to_truth) == 0:  # no sample of the mesh is nearest to the part: only one way
+                return d_from_truth.mean() / self.diag, d_from_truth.max() / self.diag
+        chamfer = 0.5 * (d_to_truth.mean() + d_from_truth.mean())
+        return chamfer / self.diag, max(d_to_truth.max(), d_from_truth.max()) / self.diag
+
+
+class Progress:
+    """One status line on a terminal: a bar of the time budget, the step rate and the loss of the
+    steps' own renders (an exponential mean over about 20 steps: noisy, since a low-spp render's
+    Monte Carlo noise is in it). Silent when the stream is not a terminal (logs, ctest)."""
+
+    def __init__(self, name, seconds, stream=None, width=24):
+        import sys
+        self.name, self.seconds, self.width = name, float(seconds), width
+        self.stream = sys.stderr if stream is None else stream
+        self.tty = self.stream.isatty()
+        self.loss, self.shown, self.drawn = None, 0.0, False
+
+    def show(self, elapsed, step, loss, note=""):
+        """After each step: elapsed seconds, steps taken, that step's loss; note: e.g. the film size."""
+        import time
+        self.loss = loss if self.loss is None else 0.95 * self.loss + 0.05 * loss
+        now = time.perf_counter()
+        if not self.tty or now - self.shown < 0.2:
+            return
+        self.shown = now
+        filled = int(self.width * min(1.0, elapsed / self.seconds))
+        self.stream.write("\r%-10s [%s%s] %5.0f/%.0f s  step %5d  %5.1f steps/s  %s loss %.5f "
+                          % (self.name, "#" * filled, "." * (self.width - filled), elapsed, self.seconds, step,
+                             step / max(elapsed, 1e-9), note, self.loss))
+        self.stream.flush()
+        self.drawn = True
+
+    def clear(self):
+        """Ends the status line before other output."""
+        if self.drawn:
+            self.stream.write("\r" + " " * 110 + "\r")
+            self.stream.flush()
+            self.drawn = False
+
+
+GENERATED_BEGIN = "<!-- generated from %s by %s: edit the script, not this text -->"
+GENERATED_END = "<!-- end of generated text -->"
+
+
+def replace_generated(page, record, script, text):
+    """Replaces, in the Markdown file `page`, the text between the markers GENERATED_BEGIN (naming
+    `record` and `script`) and GENERATED_END with `text`. Raises ValueError, naming the page, when
+    the markers are missing; the page is written whole (a temporary file renamed) or left as it was."""
+    import os
+    begin = GENERATED_BEGIN % (record, script)
+    with open(page) as f:
+        content = f.read()
+    i = content.find(begin)
+    j = content.find(GENERATED_END, i + 1) if i >= 0 else -1
+    if i < 0 or j < 0:
+        raise ValueError("%s: no '%s' ... '%s' section to replace" % (page, begin, GENERATED_END))
+    content = content[:i + len(begin)] + "\n" + text.rstrip("\n") + "\n" + content[j:]
+    tmp = page + ".tmp"
+    with open(tmp, "w") as f:
+        f.write(content)
+    os.replace(tmp, page)
+
+
+def add_page_arguments(ap):
+    """A demo's --page and --page-from options (argparse.ArgumentParser ap)."""
+    ap.add_argument("--page", help="Markdown page whose generated section (markers: replace_generated) is rewritten "
+                                   "from the record after the run, e.g. docs/inverse-rendering.md")
+    ap.add_argument("--page-from", metavar="RECORD",
+                    help="no optimisation: rewrite --page's generated section from this results.json")
+
+
+def page_from_record(ap, args, record, script, page_text):
+    """With --page-from: rewrites --page's section for `record` from that file through
+    page_text(record dict) and returns True (the demo then stops); False otherwise."""
+    import json
+    if not args.page_from:
+        return False
+    if not args.page:
+        ap.error("--page-from needs --page")
+    with open(args.page_from) as f:
+        replace_generated(args.page, record, script, page_text(json.load(f)))
+    print("rewrote the generated section of %s from %s" % (args.page, args.page_from))
+    return True
+
+
+def write_record(args, results, record, script, page_text):
+    """After a demo's run: results.json (the record) and report.md (page_text of it) in args.out,
+    the text printed, and with --page the page's section for `record` rewritten."""
+    import json
+    import os
+    with open(os.path.join(args.out, "results.json"), "w") as f:
+        json.dump(results, f, indent=1)
+    text = page_text(results)
+    with open(os.path.join(args.out, "report.md"), "w") as f:
+        f.write(text)
+    print(text)
+    if args.page:
+        replace_generated(args.page, record, script, text)
+        print("rewrote the generated section of", args.page)
+
+
+def ratio(a, b):
+    """'a/b×' for a report, or 'no ratio' when either is not positive and finite (a loss at or
+    below its noise floor, a zero distance)."""
+    ok = np.isfinite(a) and np.isfinite(b) and a > 0 and b > 0
+    return "%.1f×" % (a / b) if ok else "no ratio: a value at or below zero"

@@ -76,3 +76,53 @@ def test_bad_input_raises():
         with pytest.raises(ValueError) as e:
             call()
         assert needle in str(e.value)
+
+
+def test_surface_distance_of_concentric_spheres():
+    """Oracle: between spheres of radii 1 and 1.1 every nearest distance is about 0.1 (the
+    tessellation's sagitta aside), so Chamfer and Hausdorff are both 0.1 / the diagonal (2, the
+    truth's box); a mesh against itself scores below the samples' spacing."""
+    v, f = icosphere(4, radius=1.0, centre=(0.0, 0.0, 0.0))
+    d = qsil_shape.SurfaceDistance(v, f, n=20000)
+    assert np.isclose(d.diag, 2 * np.sqrt(3) * np.abs(v).max(axis=0).mean(), rtol=1e-3)
+    chamfer, hausdorff = d(1.1 * v, f)
+    assert abs(chamfer - 0.1 / d.diag) < 0.1 * 0.1 / d.diag
+    assert 0.1 / d.diag <= hausdorff < 1.3 * 0.1 / d.diag
+    self_chamfer, self_hausdorff = d(v, f)
+    spacing = np.sqrt(4 * np.pi / 20000)
+    assert self_chamfer < spacing / d.diag and self_hausdorff < 3 * spacing / d.diag
+    # A shape missing half the truth: Hausdorff sees the missing half (up to sqrt 2, pole to rim).
+    half = f[(v[f].mean(axis=1)[:, 2] > 0)]
+    assert d(v, half)[1] > 0.8 / d.diag
+
+
+def test_replace_generated_rewrites_only_its_section(tmp_path):
+    page = tmp_path / "page.md"
+    begin = qsil_shape.GENERATED_BEGIN % ("rec.json", "script.py")
+    page.write_text("# Title\n\nkept\n\n%s\nold\n%s\n\nkept too\n" % (begin, qsil_shape.GENERATED_END))
+    qsil_shape.replace_generated(str(page), "rec.json", "script.py", "new | table\n")
+    assert page.read_text() == "# Title\n\nkept\n\n%s\nnew | table\n%s\n\nkept too\n" % (
+        begin, qsil_shape.GENERATED_END)
+    # Another record's markers: an error naming the page, and the page as it was.
+    before = page.read_text()
+    with pytest.raises(ValueError, match="page.md"):
+        qsil_shape.replace_generated(str(page), "other.json", "script.py", "x")
+    assert page.read_text() == before
+
+
+def test_ratio_only_of_positive_values():
+    assert qsil_shape.ratio(3e-5, 1e-5) == "3.0×"
+    assert all("no ratio" in qsil_shape.ratio(a, b) for a, b in [(-1e-6, 1e-5), (1e-5, 0.0), (float("nan"), 1.0)])
+
+
+def test_surface_distance_of_a_part():
+    """A shape right on one half of the truth and 0.2 off on the other: the part's distances see
+    only the half it names."""
+    v, f = icosphere(4, radius=1.0, centre=(0.0, 0.0, 0.0))
+    d = qsil_shape.SurfaceDistance(v, f, n=20000)
+    moved = np.where(v[:, 2:3] > 0, 1.2 * v, v)  # the upper half pushed out by up to 0.2
+    lower = d.points[:, 2] < -0.3
+    chamfer, hausdorff = d(moved, f, part=lower)
+    assert chamfer < 0.01 and hausdorff < 0.03
+    whole_chamfer, whole_hausdorff = d(moved, f)
+    assert whole_chamfer > 3 * chamfer and whole_hausdorff > 0.15 / d.diag
