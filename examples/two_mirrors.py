@@ -3,8 +3,9 @@
 
 The scene is scenes/two-mirrors.xml: the camera sees the bunny, which stands behind it, only in two
 GGX mirrors (alpha 0.01) set in a shallow V, each showing it from its own side, under an
-environment map. One target image (the true bunny, high spp); the optimisation starts from a
-sphere and moves every vertex:
+environment map. One target image (the true bunny, high spp; one per film size of --res, which
+grows at each remeshing: coarse to fine); the optimisation starts from a sphere and moves every
+vertex:
 
     loss  = mean over pixel-channels of (I - T)^2
     dL/dx = ReverseEstimator.run(adjoint = 2 (I - T) / n), I = ReverseEstimator.render with its own
@@ -18,12 +19,14 @@ each step, sets up anew after a remeshing). Each boundary method (quadric: the e
 vsphere: Li 2019's tree; none: no boundary term) runs for the same wall time; METHOD:2 also fits
 the image of a second camera that sees the object directly (a multi-view target, for
 comparison). At ten points the shape is scored outside the budget: the loss of a fixed-seed
-render from the camera, and the Chamfer and
-Hausdorff distances to the true mesh (area-uniform surface samples, relative to the true mesh's
-bounding-box diagonal). Output (--out): results.json (the record), progress.png (loss and
-distances against time), evolution-METHOD.png (the shape at five times, from the camera and from
-a second camera that sees the object directly), report.md (the table docs/inverse-rendering.md
-quotes).
+render from the camera at the largest film size, and the Chamfer and Hausdorff distances to the
+true mesh (qsil_shape.SurfaceDistance: area-uniform surface samples, relative to the true mesh's
+bounding-box diagonal), of the whole surface and of the part the camera sees in the mirrors
+(seen_in_mirrors). On a terminal a status line shows the time budget, steps/s and the loss.
+Output (--out): results.json (the record), progress.png (loss and distances against time),
+evolution-METHOD.png (the shape at five times, from the camera and from a second camera that sees
+the object directly), report.md (the text that --page writes into docs/inverse-rendering.md;
+--page-from rewrites it from a record alone).
 
 Usage: /usr/bin/python3 examples/two_mirrors.py [--build build] [--seconds 1200] [--methods quadric,vsphere,none]
 Needs the Python module (built by CMake into BUILD/python), NumPy, SciPy and matplotlib (Debian).
