@@ -40,7 +40,7 @@ import numpy as np
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "python"))  # qsil_shape: the source tree's, beside this script
 from qsil_shape import (LargeSteps, Progress, SurfaceDistance, add_page_arguments, icosphere,  # noqa: E402
-                        mean_edge, page_from_record, ratio, write_obj, write_record)
+                        mean_edge, page_from_record, progress_chart, ratio, write_obj, write_record)
 SCENE = os.path.join(ROOT, "scenes", "spot-mirror.xml")
 RECORD = "images/inverse-rendering/results.json"
 SCRIPT = "examples/inverse_rendering.py"
@@ -216,24 +216,8 @@ def main():
         write_obj(os.path.join(args.out, "result-%s.obj" % method), V, F)
 
     # ---- Charts: loss above the floor and distances against time; the views.
-    fig, axes = plt.subplots(1, 3, figsize=(15, 4))
-    for method, r in results["methods"].items():
-        c = np.array(r["curve"])
-        label = "%s (%d steps)" % (method, r["steps"])
-        axes[0].plot(c[:, 0], np.maximum(c[:, 2] - floor, 1e-9), marker="o", label=label)
-        axes[1].plot(c[:, 0], 100 * c[:, 3], marker="o", label=label)
-        axes[2].plot(c[:, 0], 100 * c[:, 4], marker="o", label=label)
-    axes[0].set_yscale("log")
-    axes[0].set_ylabel("image loss above the noise floor (%.4f)" % floor)
-    axes[1].set_ylabel("Chamfer distance (% of the diagonal)")
-    axes[2].set_ylabel("Hausdorff distance (% of the diagonal)")
-    for a in axes:
-        a.set_xlabel("optimisation time (s, 2 threads)")
-        a.legend()
-    fig.suptitle("Shape from mirror reflections: %d views, %d^2, %d spp per step" % (args.views, args.res, args.spp))
-    fig.tight_layout()
-    fig.savefig(os.path.join(args.out, "loss.png"), dpi=110)
-    plt.close(fig)
+    progress_chart(os.path.join(args.out, "loss.png"), results["methods"], floor,
+                   "Shape from mirror reflections: %d views, %d^2, %d spp per step" % (args.views, args.res, args.spp))
     rows = [("target", targets), ("start", start_images)] + [(m, finals[m]) for m in finals]
     fig, axes = plt.subplots(len(rows), len(rotations), figsize=(2 * len(rotations), 2 * len(rows)), squeeze=False)
     for r, (name, imgs) in enumerate(rows):

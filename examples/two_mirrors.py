@@ -42,7 +42,7 @@ import numpy as np
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "python"))  # qsil_shape: the source tree's, beside this script
 from qsil_shape import (LargeSteps, Progress, SurfaceDistance, add_page_arguments, icosphere,  # noqa: E402
-                        mean_edge, page_from_record, ratio, write_obj, write_record)
+                        mean_edge, page_from_record, progress_chart, ratio, write_obj, write_record)
 SCENE = os.path.join(ROOT, "scenes", "two-mirrors.xml")
 # The second camera (display only): beside the bunny, looking at its bounding-box centre.
 SECOND_VIEW = '<lookat origin="1.7, 0.9, 3.3" target="0, 0, 1.4" up="0, 1, 0"/>'
@@ -360,29 +360,10 @@ def main():
         write_obj(os.path.join(args.out, "result-%s.obj" % name.replace(":", "-")), V, F)
 
     # ---- Charts: loss above the floor, Chamfer and Hausdorff against time.
-    fig, axes = plt.subplots(1, 3, figsize=(15, 4))
-    for method, r in results["methods"].items():
-        c = np.array(r["curve"])
-        label = "%s (%d steps)" % (method, r["steps"])
-        axes[0].plot(c[:, 0], np.maximum(c[:, 2] - floor, 1e-9), marker="o", label=label)
-        line, = axes[1].plot(c[:, 0], 100 * c[:, 3], marker="o", label=label)
-        axes[1].plot(c[:, 0], 100 * c[:, 6], ls=":", color=line.get_color(), label=method + ": seen part")
-        axes[2].plot(c[:, 0], 100 * c[:, 4], marker="o", label=label)
-        axes[2].plot(c[:, 0], 100 * c[:, 7], ls=":", color=line.get_color(), label=method + ": seen part")
-    axes[0].set_yscale("log")
-    axes[0].set_ylabel("image loss above the noise floor (%.2g)" % floor)
-    axes[1].axhline(1.0, color="k", ls="--", lw=0.8)
-    axes[1].set_ylabel("Chamfer distance (% of the diagonal)")
-    axes[2].axhline(5.0, color="k", ls="--", lw=0.8)
-    axes[2].set_ylabel("Hausdorff distance (% of the diagonal)")
-    for a in axes:
-        a.set_xlabel("optimisation time (s, 2 threads)")
-        a.legend()
-    fig.suptitle("Two mirrors: film %s per phase, %d spp per step, %d remeshings"
-                 % (" -> ".join("%d^2" % r for r in res_of_phase), args.spp, args.remeshes))
-    fig.tight_layout()
-    fig.savefig(os.path.join(args.out, "progress.png"), dpi=110)
-    plt.close(fig)
+    progress_chart(os.path.join(args.out, "progress.png"), results["methods"], floor,
+                   "Two mirrors: film %s per phase, %d spp per step, %d remeshings"
+                   % (" -> ".join("%d^2" % r for r in res_of_phase), args.spp, args.remeshes),
+                   seen=True, targets=(0.01, 0.05))
     for method, snapshots in evolution.items():
         cols = [("truth", truth_pictures)] + [("%.0f s" % t, p) for t, p in snapshots]
         fig, axes = plt.subplots(2, len(cols), figsize=(2.2 * len(cols), 4.6))

@@ -293,9 +293,6 @@ py::dict reverse_dict(const ReverseResult& r, const std::vector<std::string>& sh
   return out;
 }
 
-/// FNV-1a hash of the film's size and every shape's vertex positions and triangles: what
-/// ReverseEstimator.run checks against the set-up it has (a change without update() would render
-/// stale geometry or primary edges).
 /// qsil.ReverseEstimator: reverse mode set up once and kept across an optimiser's steps.
 struct PyReverseEstimator {
   const Scene* scene;

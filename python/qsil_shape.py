@@ -245,6 +245,40 @@ def replace_generated(page, record, script, text):
     os.replace(tmp, page)
 
 
+def progress_chart(path, methods, floor, title, seen=False, targets=None):
+    """Writes the chart of a demo's record: for each method (name -> {"steps", "curve"}, a curve's
+    rows being (seconds, step, loss, chamfer, hausdorff, vertices[, seen chamfer, seen hausdorff]))
+    the loss above the noise floor `floor`, and the Chamfer and Hausdorff distances (fractions,
+    shown in %), against time. seen: also the seen part's distances (dotted); targets: (chamfer,
+    hausdorff) fractions drawn as dashed lines."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, axes = plt.subplots(1, 3, figsize=(15, 4))
+    for method, r in methods.items():
+        c = np.array(r["curve"])
+        label = "%s (%d steps)" % (method, r["steps"])
+        axes[0].plot(c[:, 0], np.maximum(c[:, 2] - floor, 1e-9), marker="o", label=label)
+        for k, ax in ((3, axes[1]), (4, axes[2])):
+            line, = ax.plot(c[:, 0], 100 * c[:, k], marker="o", label=label)
+            if seen:
+                ax.plot(c[:, 0], 100 * c[:, k + 3], ls=":", color=line.get_color(), label=method + ": seen part")
+    axes[0].set_yscale("log")
+    axes[0].set_ylabel("image loss above the noise floor (%.4g)" % floor)
+    axes[1].set_ylabel("Chamfer distance (% of the diagonal)")
+    axes[2].set_ylabel("Hausdorff distance (% of the diagonal)")
+    if targets is not None:
+        for ax, t in zip(axes[1:], targets):
+            ax.axhline(100 * t, color="k", ls="--", lw=0.8)
+    for a in axes:
+        a.set_xlabel("optimisation time (s, 2 threads)")
+        a.legend()
+    fig.suptitle(title)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
 def add_page_arguments(ap):
     """A demo's --page and --page-from options (argparse.ArgumentParser ap)."""
     ap.add_argument("--page", help="Markdown page whose generated section (markers: replace_generated) is rewritten "
