@@ -132,6 +132,31 @@ ShadingPoint<T> make_shading_point(const PathContext& ctx, const SurfaceInteract
   return ShadingPoint<T>{bsdf, FrameT<T>(ns), Frame(value(ns))};
 }
 
+/// A path vertex's BSDF as the tracers use it: its shading point, the viewer direction wo in its
+/// frame (over T, and detached), and f_s cos toward a world direction.
+template <class T>
+struct VertexBSDF {
+  ShadingPoint<T> sp;
+  Vec3T<T> wo;
+  Vec3 wo_value;
+  bool constant = false;  ///< the interaction is constant: evaluate in doubles and lift
+  /// f_s cos toward world direction w (over T; in doubles, lifted, at a constant interaction).
+  ColorT<T> toward(const Vec3& w) const {
+    if constexpr (!std::is_same_v<T, double>)
+      if (constant) return lift<T>(bsdf_eval<double>(*sp.bsdf, sp.frame_value.to_local(w), wo_value));
+    return bsdf_eval<T>(*sp.bsdf, sp.frame.to_local(lift<T>(w)), wo);
+  }
+};
+
+/// The VertexBSDF of interaction `si` seen from world direction `wo_world` (toward the viewer):
+/// make_shading_point, and wo in its frame (in doubles, lifted, at a constant interaction).
+template <class T>
+VertexBSDF<T> vertex_bsdf(const PathContext& ctx, const SurfaceInteraction<T>& si, const Vec3& wo_world) {
+  const ShadingPoint<T> sp = make_shading_point(ctx, si, wo_world);
+  const Vec3T<T> wo = si.constant ? lift<T>(sp.frame_value.to_local(wo_world)) : sp.frame.to_local(lift<T>(wo_world));
+  return VertexBSDF<T>{sp, wo, value(wo), si.constant};
+}
+
 /// True when direction `w` leaves the surface of `si` on the side opposite to the viewer
 /// direction `wo_world` (a "sliver" direction, reachable only through a shading normal tilted
 /// past the geometric one). Such rays pass through back faces (IgnoreSet::through_back_faces:
@@ -309,16 +334,10 @@ ColorT<typename View::Real> trace_path(const PathContext& ctx, const View& view,
     }
     if (seg >= ctx.max_depth) break;
 
-    const ShadingPoint<T> sp = make_shading_point(ctx, si, wo_world);
-    // wo in the shading frame (in doubles, lifted, at a constant interaction).
-    const Vec3T<T> wo = si.constant ? lift<T>(sp.frame_value.to_local(wo_world)) : sp.frame.to_local(lift<T>(wo_world));
-    const Vec3 wo_value = value(wo);
-    // f_s cos toward world direction w (over T; in doubles, lifted, at a constant interaction).
-    const auto bsdf_toward = [&](const Vec3& w) -> ColorT<T> {
-      if constexpr (!std::is_same_v<T, double>)
-        if (si.constant) return lift<T>(bsdf_eval<double>(*sp.bsdf, sp.frame_value.to_local(w), wo_value));
-      return bsdf_eval<T>(*sp.bsdf, sp.frame.to_local(lift<T>(w)), wo);
-    };
+    const VertexBSDF<T> vertex = vertex_bsdf(ctx, si, wo_world);
+    const ShadingPoint<T>& sp = vertex.sp;
+    const Vec3& wo_value = vertex.wo_value;
+    const auto bsdf_toward = [&](const Vec3& w) { return vertex.toward(w); };
     hook(si, sp, wo_value, beta, seg, sampler, stats, L);
 
     // ---- Next-event estimation: keep only the sampled direction; re-evaluate along it.
