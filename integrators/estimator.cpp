@@ -12,6 +12,7 @@
 #include "qsil/integrators/boundary_hook.h"
 #include "qsil/integrators/geometry_view.h"
 #include "qsil/integrators/path_tracer.h"
+#include "qsil/integrators/regularized_tracer.h"
 
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/task_arena.h>
@@ -20,6 +21,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 
 namespace qsil {
 
@@ -51,6 +53,45 @@ void render_primal(const Scene& scene, const RenderSetup& setup, const FilmLayou
       r, total);
 }
 
+namespace {
+
+/// The radiance of one camera sample under regularised visibility (regularized_tracer.h): the
+/// sample's first two numbers place it in the pixel, as trace_camera_ray does.
+template <class View>
+ColorT<typename View::Real> regularized_camera_sample(const RegularizedContext& rc, const View& view, int x, int y,
+                                                      const Vec2& u, Sampler& sampler, PathStats& st) {
+  using T = typename View::Real;
+  const Camera& cam = rc.path->scene->camera;
+  return trace_regularized_path(rc, view, lift<T>(cam.origin()), cam.direction(x + u.x(), y + u.y()), sampler, st);
+}
+
+/// The regularised primal image (film channels R, G, B).
+void render_regularized(const Scene& scene, const RegularizedContext& rc, const FilmLayout& layout,
+                        const RenderOptions& options, int first, int count, RenderResult& r) {
+  const PrimalView view{&scene};
+  PathStats total;
+  run_pixels(
+      scene.camera, layout, options, first, count, "render",
+      [&](int x, int y, int, Sampler& sampler, PathStats& st, double* out) {
+        const Vec2 u = sampler.next2();
+        const Color L = regularized_camera_sample(rc, view, x, y, u, sampler, st);
+        for (int c = 0; c < 3; ++c) out[layout.primal(c)] = L[c];
+      },
+      r, total);
+}
+
+/// The regularisation of `config` when it is enabled (for Method::Regularized it must be).
+std::optional<Regularization> regularization_of(const EstimatorConfig& config) {
+  if (config.method == Method::Regularized && !config.params.empty() && !config.regularization.enabled())
+    throw Error("regularized: the blur width must be positive (Regularization::for_scene)");
+  if (!config.regularization.enabled()) return std::nullopt;
+  const Regularization& r = config.regularization;
+  if (!std::isfinite(r.width)) throw Error("regularized: the blur width must be finite");
+  return r;
+}
+
+}  // namespace
+
 // ---- The interface of the three kinds
 
 class Estimator::Impl {
@@ -73,10 +114,18 @@ namespace {
 /// The primal image (`qsil render`): film channels R, G, B.
 class PrimalEstimator final : public Estimator::Impl, private RenderSetup {
  public:
-  PrimalEstimator(const Scene& s, EstimatorConfig c) : Impl(s, std::move(c)), RenderSetup(s) {}
-  void run(const RenderOptions& options, int first, int count, RenderResult& r) const override {
-    render_primal(scene, *this, layout, options, first, count, r);
+  PrimalEstimator(const Scene& s, EstimatorConfig c) : Impl(s, std::move(c)), RenderSetup(s) {
+    if (const auto reg = regularization_of(config)) near.emplace(s, *reg);
   }
+  void run(const RenderOptions& options, int first, int count, RenderResult& r) const override {
+    if (near)
+      render_regularized(scene, {&ctx, &*near}, layout, options, first, count, r);
+    else
+      render_primal(scene, *this, layout, options, first, count, r);
+  }
+
+ private:
+  std::optional<SoftScene> near;  ///< regularised visibility only
 };
 
 /// Primal + interior term in forward mode (duals of size N) + the boundary term of the method
@@ -91,6 +140,10 @@ class GradientEstimator final : public Estimator::Impl, private RenderSetup {
       set_up_boundary_term(s, tracer, config.method, &vel, vel.moving, config.sppi, lights.environment,
                            boundary, boundary_ctx, primary, setup, config.intersection_curves);
     }
+    if (config.method == Method::Regularized) {
+      near.emplace(s, *regularization_of(config));
+      setup.structure = "near-triangle BVH (regularized, reach " + std::to_string(near->query().reach()) + ")";
+    }
   }
 
   void run(const RenderOptions& options, int first, int count, RenderResult& r) const override {
@@ -104,16 +157,22 @@ class GradientEstimator final : public Estimator::Impl, private RenderSetup {
     const double fraction = with_boundary ? boundary_ctx.sppi - std::floor(boundary_ctx.sppi) : 0.0;
     tbb::enumerable_thread_specific<edgetree::EdgeChoiceScratch> scratch;  // one per worker thread
     tbb::enumerable_thread_specific<TopSamples> largest{TopSamples(options.largest_samples)};
+    if (near && options.largest_samples > 0)
+      throw Error("regularized: the largest samples' paths are not traced for this method");
+    const RegularizedContext rc{&ctx, near ? &*near : nullptr};
     PathStats total;
     run_pixels(
         cam, layout, options, first, count, "grad",
         [&](int x, int y, int s, Sampler& sampler, PathStats& st, double* out) {
-          const CameraRay ray = trace_camera_ray(ctx, x, y, sampler.next2(), st);
+          const Vec2 u = sampler.next2();
           ColorT<Dual<N>> L;
           const uint64_t pixel = uint64_t(y) * cam.width + x;
           const int traversals =
               with_boundary ? boundary_traversals(boundary_ctx.sppi, options.seed, pixel, uint64_t(s)) : 0;
-          if (traversals > 0) {
+          const CameraRay ray = near ? CameraRay{} : trace_camera_ray(ctx, x, y, u, st);
+          if (near) {
+            L = regularized_camera_sample(rc, view, x, y, u, sampler, st);
+          } else if (traversals > 0) {
             // The boundary term draws from a stream of its own, so it leaves the path's decisions unchanged.
             Sampler bsampler(options.seed, pixel, uint64_t(s), 1);
             const BoundaryHook<N> hook{{&ctx, &boundary_ctx, &bsampler, traversals, &scratch.local()}};
@@ -179,6 +238,7 @@ class GradientEstimator final : public Estimator::Impl, private RenderSetup {
   }
 
   SceneVelocities vel;
+  std::optional<SoftScene> near;  ///< Method::Regularized only
 };
 
 /// Central finite differences with common random numbers (`qsil fd`): the primal scene and, per
@@ -196,10 +256,13 @@ class FiniteDifferenceEstimator final : public Estimator::Impl {
     // Every side's ray tracer uses the primal scene's local origin: static geometry is then
     // rounded to float alike on every side (no spurious motion of ulp size between them).
     const Vec3 local_origin = embree_local_origin(s);
-    sides.push_back(std::make_unique<Side>(s, local_origin));
+    const std::optional<Regularization> reg = regularization_of(config);
+    sides.push_back(std::make_unique<Side>(s, local_origin, reg));
     for (int k = 0; k < K; ++k) {
-      sides.push_back(std::make_unique<Side>(displaced_scene(s, config.params, k, +steps[size_t(k)]), local_origin));
-      sides.push_back(std::make_unique<Side>(displaced_scene(s, config.params, k, -steps[size_t(k)]), local_origin));
+      sides.push_back(
+          std::make_unique<Side>(displaced_scene(s, config.params, k, +steps[size_t(k)]), local_origin, reg));
+      sides.push_back(
+          std::make_unique<Side>(displaced_scene(s, config.params, k, -steps[size_t(k)]), local_origin, reg));
     }
     setup.structure = std::to_string(sides.size()) + " scenes (primal and displaced), each with a ray tracer";
   }
@@ -209,6 +272,9 @@ class FiniteDifferenceEstimator final : public Estimator::Impl {
     const Camera& cam = scene.camera;
     const Vec3 origin = cam.origin();
     auto radiance = [&](const Side& side, Sampler sampler, PathStats& st, const Vec2& u, int x, int y) {
+      if (side.near)
+        return regularized_camera_sample({&side.ctx, &*side.near}, PrimalView{&side.scene},
+                                         x, y, u, sampler, st);
       const CameraRay ray = trace_camera_ray(side.ctx, x, y, u, st);
       return trace_path(side.ctx, PrimalView{&side.scene}, {origin, ray.dir, ray.hit}, sampler, st);
     };
@@ -232,14 +298,18 @@ class FiniteDifferenceEstimator final : public Estimator::Impl {
   }
 
  private:
-  /// One side of a difference: a scene, its tracer and lights.
+  /// One side of a difference: a scene, its tracer and lights, and with regularised visibility
+  /// its SoftScene.
   struct Side {
-    Side(Scene s, const Vec3& local_origin)
-        : scene(std::move(s)), tracer(scene, local_origin), lights(scene), ctx(lights.context(scene, tracer)) {}
+    Side(Scene s, const Vec3& local_origin, const std::optional<Regularization>& reg)
+        : scene(std::move(s)), tracer(scene, local_origin), lights(scene), ctx(lights.context(scene, tracer)) {
+      if (reg) near.emplace(scene, *reg);
+    }
     Scene scene;
     RayTracer tracer;
     LightSetup lights;
     PathContext ctx;
+    std::optional<SoftScene> near;
   };
   std::vector<std::unique_ptr<Side>> sides;
 };
@@ -313,7 +383,7 @@ std::string SetupReport::describe() const {
 
 Estimator::Estimator(const Scene& scene, EstimatorConfig config) {
   if (!config.params.empty() && config.method != Method::FiniteDifferences && config.method != Method::None &&
-      !samples_edges(config.method))
+      config.method != Method::Regularized && !samples_edges(config.method))
     throw Error("method " + std::string(method_name(config.method)) + " cannot estimate derivatives");
   check_sample_rates(scene.camera, config.sppi, config.sppp);
   const auto t0 = Clock::now();

@@ -20,6 +20,7 @@ std::string_view method_name(Method method) {
     case Method::VSphereSolid: return "vsphere-solid";
     case Method::Uniform: return "uniform";
     case Method::None: return "none";
+    case Method::Regularized: return "regularized";
     case Method::FiniteDifferences: return "fd";
   }
   return "?";

@@ -208,21 +208,25 @@ void bind_scene(py::module_& m) {
 void bind_forward(py::module_& m) {
   m.def(
       "render",
-      [](const Scene& scene, int spp, uint64_t seed, int threads) {
+      [](const Scene& scene, int spp, uint64_t seed, int threads, double reg_width) {
         std::optional<RenderResult> r;
         {
           py::gil_scoped_release release;
-          r = Estimator(scene, EstimatorConfig::primal()).run(options(spp, seed, threads));
+          EstimatorConfig config = EstimatorConfig::primal();
+          if (reg_width != 0) config.regularization = Regularization::for_scene(scene, reg_width);
+          r = Estimator(scene, config).run(options(spp, seed, threads));
         }
         const FilmLayout layout;
         return film_image(r->film, [&](int c) { return layout.primal(c); });
       },
-      py::arg("scene"), py::arg("spp") = 0, py::arg("seed") = 0, py::arg("threads") = 0,
-      "The primal image (H, W, 3); spp 0: the scene's sample count");
+      py::arg("scene"), py::arg("spp") = 0, py::arg("seed") = 0, py::arg("threads") = 0, py::arg("reg_width") = 0.0,
+      "The primal image (H, W, 3); spp 0: the scene's sample count; reg_width != 0: the image under "
+      "boundary='regularized''s blurred visibility of that width (a fraction of the scene's bounding-box "
+      "diagonal; `qsil grad --help`)");
 
   const auto grad =
       [](const Scene& scene, const std::vector<std::string>& params, int spp, uint64_t seed, int threads,
-         const std::string& boundary, double sppi, double sppp, bool intersection_curves) {
+         const std::string& boundary, double sppi, double sppp, bool intersection_curves, double reg_width) {
         const Method method = parse_method(boundary, "boundary", kBoundaryMethods);
         const std::vector<ParameterSpec> specs = parse_parameters(params, scene);
         std::optional<Estimator> e;
@@ -231,6 +235,8 @@ void bind_forward(py::module_& m) {
           py::gil_scoped_release release;
           EstimatorConfig config = EstimatorConfig::gradient(specs, method, sppi, sppp);
           config.intersection_curves = intersection_curves;
+          if (method == Method::Regularized)
+            config.regularization = Regularization::for_scene(scene, reg_width);
           e.emplace(scene, std::move(config));
           r = e->run(options(spp, seed, threads));
         }
@@ -247,16 +253,18 @@ void bind_forward(py::module_& m) {
   m.def("grad", grad,
       py::arg("scene"), py::arg("params"), py::arg("spp") = 0, py::arg("seed") = 0, py::arg("threads") = 0,
       py::arg("boundary") = "quadric", py::arg("sppi") = 0, py::arg("sppp") = kDefaultSppp,
-      py::arg("intersection_curves") = true,
+      py::arg("intersection_curves") = true, py::arg("reg_width") = 1e-3,
       "Forward mode: (image (H, W, 3), derivatives (K, H, W, 3)) for 1-8 parameter specs "
       "('ID:translate:X,Y,Z', 'ID:rotate:X,Y,Z', 'ID:scale', 'ID:vertex:I:X,Y,Z'). sppi: secondary "
       "boundary-term samples per shading point on average over a pixel's samples (0: the method's default, 0.5 for "
       "quadric); sppp: primary edge samples per pixel sample (`qsil grad --help`); intersection_curves=False: do not "
-      "sample the curves where surfaces cross (to measure what they add; biased where surfaces cross)");
+      "sample the curves where surfaces cross (to measure what they add; biased where surfaces cross); reg_width: "
+      "boundary='regularized''s blur width as a fraction of the scene's bounding-box diagonal (`qsil grad --help`)");
   // The keyword names before 2026-11-25 (boundary_spp, primary_samples): the same function.
   m.def("grad", grad, py::arg("scene"), py::arg("params"), py::arg("spp") = 0, py::arg("seed") = 0,
         py::arg("threads") = 0, py::arg("boundary") = "quadric", py::arg("boundary_spp") = 0,
         py::arg("primary_samples") = kDefaultSppp, py::arg("intersection_curves") = true,
+        py::arg("reg_width") = 1e-3,
         "The same, with the old keyword names boundary_spp (= sppi) and primary_samples (= sppp)");
 
 }

@@ -354,3 +354,152 @@ std::vector<TrianglePair> overlapping_triangle_pairs(std::span<const TriangleMes
 }
 
 }  // namespace qsil
+
+namespace qsil {
+
+namespace {
+
+/// One shape's grown triangle boxes, relative to the query's local origin (double), and the pad
+/// of Embree's float boxes around them.
+struct NearShape {
+  std::vector<Box3> boxes;
+  double pad = 0;
+};
+
+void near_bounds(const RTCBoundsFunctionArguments* args) {
+  const auto* m = static_cast<const NearShape*>(args->geometryUserPtr);
+  const Box3& b = m->boxes[args->primID];
+  RTCBounds* out = args->bounds_o;
+  auto lo = [](double x) { return std::nextafter(float(x), -std::numeric_limits<float>::infinity()); };
+  auto hi = [](double x) { return std::nextafter(float(x), std::numeric_limits<float>::infinity()); };
+  const bool finite = b.lo.allFinite() && b.hi.allFinite() && !b.empty();
+  const double p = m->pad;
+  out->lower_x = finite ? lo(b.lo.x() - p) : 0.0f;
+  out->lower_y = finite ? lo(b.lo.y() - p) : 0.0f;
+  out->lower_z = finite ? lo(b.lo.z() - p) : 0.0f;
+  out->upper_x = finite ? hi(b.hi.x() + p) : -1.0f;  // an empty box for a non-finite triangle
+  out->upper_y = finite ? hi(b.hi.y() + p) : -1.0f;
+  out->upper_z = finite ? hi(b.hi.z() + p) : -1.0f;
+}
+
+/// The query's ray in double and its visitor, behind Embree's context.
+struct NearContext {
+  RTCIntersectContext context;
+  Vec3 origin, dir;
+  double tmax;
+  void (*visit)(void*, int, int);
+  void* user;
+};
+
+/// Whether origin + t dir, t in [0, tmax], meets box b (slab test in double).
+bool segment_meets_box(const Vec3& o, const Vec3& d, double tmax, const Box3& b) {
+  if (b.empty()) return false;
+  double t0 = 0, t1 = tmax;
+  for (int k = 0; k < 3; ++k) {
+    if (d[k] == 0) {
+      if (o[k] < b.lo[k] || o[k] > b.hi[k]) return false;
+      continue;
+    }
+    double ta = (b.lo[k] - o[k]) / d[k], tb = (b.hi[k] - o[k]) / d[k];
+    if (ta > tb) std::swap(ta, tb);
+    t0 = std::max(t0, ta);
+    t1 = std::min(t1, tb);
+    if (t0 > t1) return false;
+  }
+  return true;
+}
+
+/// Embree's callback for a primitive of a leaf the ray reaches: the exact box test, then the
+/// visitor. It never reports a hit, so Embree goes on along the whole ray.
+void near_intersect(const RTCIntersectFunctionNArguments* args) {
+  if (args->N != 1 || args->valid[0] != -1) return;
+  const auto* m = static_cast<const NearShape*>(args->geometryUserPtr);
+  const auto* ctx = reinterpret_cast<const NearContext*>(args->context);
+  if (segment_meets_box(ctx->origin, ctx->dir, ctx->tmax, m->boxes[args->primID]))
+    ctx->visit(ctx->user, int(args->geomID), int(args->primID));
+}
+
+}  // namespace
+
+struct NearTriangleQuery::Impl {
+  RTCDevice device = nullptr;
+  RTCScene scene = nullptr;
+  std::vector<NearShape> shapes;
+  Vec3 local_origin = Vec3::Zero();
+  double reach = 0;
+};
+
+NearTriangleQuery::NearTriangleQuery(const Scene& scene, double reach) : impl_(std::make_unique<Impl>()) {
+  if (!(reach >= 0) || !std::isfinite(reach))
+    throw Error("near-triangle query: reach must be >= 0 and finite (got " + std::to_string(reach) + ")");
+  Impl& impl = *impl_;
+  impl.reach = reach;
+  impl.local_origin = embree_local_origin(scene);
+  impl.device = rtcNewDevice(nullptr);
+  if (!impl.device) throw Error("Embree: cannot create device");
+  rtcSetDeviceErrorFunction(impl.device, embree_error, nullptr);
+  impl.scene = rtcNewScene(impl.device);
+  rtcSetSceneFlags(impl.scene, RTC_SCENE_FLAG_ROBUST);
+  impl.shapes.resize(scene.shapes.size());
+  for (size_t s = 0; s < scene.shapes.size(); ++s) {
+    const TriangleMesh& mesh = scene.shapes[s].mesh;
+    NearShape& ns = impl.shapes[s];
+    ns.boxes.resize(mesh.triangles.size());
+    for (size_t f = 0; f < mesh.triangles.size(); ++f) {
+      Box3& b = ns.boxes[f];
+      for (int k = 0; k < 3; ++k) b.expand(Vec3(mesh.positions[size_t(mesh.triangles[f][k])] - impl.local_origin));
+      b.lo.array() -= reach;
+      b.hi.array() += reach;
+    }
+  }
+  // Embree traverses a float ray through float boxes; the exact test is on the double ray. The
+  // float boxes are padded by 2^-12 of the scene's largest grown coordinate, which covers the
+  // rounding of rays from up to ~1000 scene sizes away (a pad costs time, never a candidate).
+  Box3 all;
+  for (const NearShape& ns : impl.shapes)
+    for (const Box3& b : ns.boxes)
+      if (b.lo.allFinite() && b.hi.allFinite()) all.expand(b);
+  const double pad = std::ldexp(all.max_abs(), -12);
+  for (size_t s = 0; s < scene.shapes.size(); ++s) {
+    NearShape& ns = impl.shapes[s];
+    ns.pad = pad;
+    RTCGeometry geom = rtcNewGeometry(impl.device, RTC_GEOMETRY_TYPE_USER);
+    rtcSetGeometryUserPrimitiveCount(geom, unsigned(ns.boxes.size()));
+    rtcSetGeometryUserData(geom, &ns);
+    rtcSetGeometryBoundsFunction(geom, near_bounds, nullptr);
+    rtcSetGeometryIntersectFunction(geom, near_intersect);
+    rtcCommitGeometry(geom);
+    rtcAttachGeometryByID(impl.scene, geom, unsigned(s));
+    rtcReleaseGeometry(geom);
+  }
+  rtcCommitScene(impl.scene);
+  if (rtcGetDeviceError(impl.device) != RTC_ERROR_NONE) throw Error("Embree: near-triangle BVH build failed");
+}
+
+NearTriangleQuery::~NearTriangleQuery() {
+  if (impl_->scene) rtcReleaseScene(impl_->scene);
+  if (impl_->device) rtcReleaseDevice(impl_->device);
+}
+
+double NearTriangleQuery::reach() const { return impl_->reach; }
+
+void NearTriangleQuery::for_each(const Vec3& world_origin, const Vec3& dir, double tmax,
+                                 void (*visit)(void*, int, int), void* user) const {
+  const Vec3 origin = world_origin - impl_->local_origin;
+  if (!ray_is_valid(origin, dir, tmax) || tmax < 0) return;
+  NearContext ctx;
+  rtcInitIntersectContext(&ctx.context);
+  ctx.origin = origin;
+  ctx.dir = dir;
+  ctx.tmax = tmax;
+  ctx.visit = visit;
+  ctx.user = user;
+  RTCRayHit rh;
+  embree_ray(origin, dir, tmax, rh.ray);
+  rh.ray.tfar = std::nextafter(rh.ray.tfar, std::numeric_limits<float>::infinity());  // never short of tmax
+  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  rtcIntersect1(impl_->scene, &ctx.context, &rh);
+}
+
+}  // namespace qsil

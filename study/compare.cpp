@@ -78,10 +78,12 @@ ProgressiveOptions progressive_options(const CompareOptions& o, double target, u
 }
 
 /// The estimator configuration of a method.
-EstimatorConfig method_config(Method m, const std::vector<ParameterSpec>& params, const std::vector<double>& steps,
-                              double sppi, double sppp) {
+EstimatorConfig method_config(const Scene& scene, Method m, const std::vector<ParameterSpec>& params,
+                              const std::vector<double>& steps, const CompareOptions& o) {
   if (m == Method::FiniteDifferences) return EstimatorConfig::finite_differences(params, steps);
-  return EstimatorConfig::gradient(params, m, sppi, sppp);
+  EstimatorConfig c = EstimatorConfig::gradient(params, m, o.sppi, o.sppp);
+  if (m == Method::Regularized) c.regularization = Regularization::for_scene(scene, o.reg_width);
+  return c;
 }
 
 /// The reference: read from options.reference, or rendered with `quadric` (set up by the caller
@@ -183,7 +185,7 @@ CompareReport run_compare(const Scene& scene, const std::vector<ParameterSpec>& 
   auto estimator = [&](Method m) -> const Estimator& {
     auto& e = estimators[m];
     if (!e) {
-      e = std::make_unique<Estimator>(scene, method_config(m, params, rep.fd_steps, o.sppi, o.sppp));
+      e = std::make_unique<Estimator>(scene, method_config(scene, m, params, rep.fd_steps, o));
       if (log) *log << "compare: set up " << method_name(m) << " once: " << e->setup().describe() << "\n";
     }
     return *e;

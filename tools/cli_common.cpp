@@ -90,6 +90,7 @@ void add_boundary_flags(CLI::App& app, BoundaryFlags& flags, const std::string& 
                         const std::string& method_help, bool curves_flag) {
   app.add_option(method_option, flags.method, method_help)->capture_default_str();
   add_sample_rate_options(app, flags.sppi, flags.sppp);
+  add_regularization_options(app, flags.reg_width, "for --boundary regularized");
   if (!curves_flag) return;
   bool& intersection_curves = flags.intersection_curves;
   app.add_flag_callback(
@@ -98,9 +99,21 @@ void add_boundary_flags(CLI::App& app, BoundaryFlags& flags, const std::string& 
       "cross, the derivative is then biased)");
 }
 
-EstimatorConfig gradient_config(std::vector<ParameterSpec> params, Method method, const BoundaryFlags& flags) {
+void add_regularization_options(CLI::App& app, double& width, const std::string& what) {
+  app.add_option("--reg-width", width,
+                 "Regularised visibility " + what +
+                     ": blur width w of a triangle's opacity exp(-d^2 / w^2) at distance d beyond its edges "
+                     "(after Quinn 2021), as a fraction of the scene's bounding-box diagonal")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+}
+
+EstimatorConfig gradient_config(const Scene& scene, std::vector<ParameterSpec> params, Method method,
+                                const BoundaryFlags& flags) {
   EstimatorConfig config = EstimatorConfig::gradient(std::move(params), method, flags.sppi, flags.sppp);
   config.intersection_curves = flags.intersection_curves;
+  if (method == Method::Regularized)
+    config.regularization = Regularization::for_scene(scene, flags.reg_width);
   return config;
 }
 

@@ -69,15 +69,24 @@ struct BoundaryFlags {
   double sppi = 0;
   double sppp = kDefaultSppp;
   bool intersection_curves = true;  ///< false: --no-intersection-curves
+  /// --reg-width: regularized's blur width, as a fraction of the scene's bounding-box diagonal
+  /// (Regularization::for_scene).
+  double reg_width = 1e-3;
 };
+
+/// Adds --reg-width W (Regularization::for_scene) to `app`, into `width`; `what` says what it
+/// regularises (for the help text).
+void add_regularization_options(CLI::App& app, double& width, const std::string& what);
 
 /// Adds the method option `method_option` (e.g. "--boundary") with `method_help`, --sppi and
 /// --sppp, and with `curves_flag` --no-intersection-curves (EstimatorConfig::intersection_curves).
 void add_boundary_flags(CLI::App& app, BoundaryFlags& flags, const std::string& method_option,
                         const std::string& method_help, bool curves_flag);
 
-/// The gradient configuration of `params` with `method` and the rates and switches of `flags`.
-EstimatorConfig gradient_config(std::vector<ParameterSpec> params, Method method, const BoundaryFlags& flags);
+/// The gradient configuration of `params` over `scene` with `method` and the rates, switches and
+/// (for regularized) the blur of `flags`.
+EstimatorConfig gradient_config(const Scene& scene, std::vector<ParameterSpec> params, Method method,
+                                const BoundaryFlags& flags);
 
 /// A scene and an estimator over it (set_up_estimator). The estimator refers to the scene: the
 /// struct is neither copied nor moved.

@@ -27,6 +27,7 @@ struct Flags {
   std::vector<double> h;
   double sppi = 0;
   double sppp = kDefaultSppp;
+  double reg_width = 1e-3;
   std::string out;
   double reference_factor = 8;
   uint64_t seed = 0;
@@ -62,6 +63,7 @@ void add_options(CLI::App& app, Flags& f) {
       ->check(qsil::cli::positive_number());
   add_fd_step_option(app, f.h);
   add_sample_rate_options(app, f.sppi, f.sppp);
+  add_regularization_options(app, f.reg_width, "for --methods regularized");
   app.add_option("--out", f.out, "Output directory")->required();
   app.add_flag("--no-plot", f.no_plot, "Do not call plot_compare.py (the charts)");
   add_scripts_dir_option(app, f.scripts_dir);
@@ -80,6 +82,7 @@ CompareOptions compare_options(const Flags& f) {
   o.h = f.h;
   o.sppi = f.sppi;
   o.sppp = f.sppp;
+  o.reg_width = f.reg_width;
   o.out = f.out;
   o.seed = f.seed;
   o.threads = f.threads;

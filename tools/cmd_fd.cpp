@@ -18,17 +18,24 @@ const CommandRegistrar registrar{
          std::vector<std::string> params;
          std::vector<double> h;
          std::string preview_dir;
+         double reg_width = 0;
        };
        auto flags = std::make_shared<Flags>();
        add_common_flags(app, *flags, "fd.exr");
        add_param_option(app, flags->params);
        add_fd_step_option(app, flags->h);
        app.add_option("--preview-dir", flags->preview_dir, "Write primal.png and one diverging PNG per parameter here");
+       add_regularization_options(app, flags->reg_width,
+                                  "(given: the differences of the regularised image, the oracle of grad --boundary "
+                                  "regularized; default: none)");
        return [flags]() {
          const ProcessGroup& group = process_group();
          SceneEstimator set_up;
          set_up_estimator(*flags, flags->params, [&](const Scene& scene, const std::vector<ParameterSpec>& params) {
-           return EstimatorConfig::finite_differences(params, fd_steps(scene, params, flags->h));
+           EstimatorConfig config = EstimatorConfig::finite_differences(params, fd_steps(scene, params, flags->h));
+           if (flags->reg_width > 0)
+             config.regularization = Regularization::for_scene(scene, flags->reg_width);
+           return config;
          }, set_up);
          const std::vector<ParameterSpec>& params = set_up.params;
          const std::optional<Estimator>& estimator = set_up.estimator;

@@ -30,7 +30,8 @@ const CommandRegistrar registrar{
                           "Boundary-term estimator: quadric (edge forest, dual box + bounding quadrics [QSS]), "
                           "quadric-box (dual box only), vsphere (Li 2019's Hough-space tree, hollow v-sphere test), "
                           "vsphere-solid (redner's original solid v-sphere test), uniform (no rejection, length x "
-                          "dihedral angle), none (interior term only: misses silhouettes, shadows, outlines)",
+                          "dihedral angle), none (interior term only: misses silhouettes, shadows, outlines), "
+                          "regularized (Quinn 2021's blurred visibility, interior term only; biased: --reg-width)",
                           true);
        app.add_option("--preview-dir", flags->preview_dir, "Write primal.png and one diverging PNG per parameter here");
        app.add_option("--largest-samples", flags->render.largest_samples,
@@ -46,8 +47,8 @@ const CommandRegistrar registrar{
          if (!flags->largest_csv.empty() && flags->render.largest_samples == 0)
            throw Error("--largest-samples-csv needs --largest-samples K with K > 0");
          SceneEstimator set_up;
-         set_up_estimator(*flags, flags->params, [&](const Scene&, const std::vector<ParameterSpec>& params) {
-           return gradient_config(params, parse_method(flags->boundary.method, "--boundary", kBoundaryMethods),
+         set_up_estimator(*flags, flags->params, [&](const Scene& scene, const std::vector<ParameterSpec>& params) {
+           return gradient_config(scene, params, parse_method(flags->boundary.method, "--boundary", kBoundaryMethods),
                                   flags->boundary);
          }, set_up);
          const std::optional<Estimator>& estimator = set_up.estimator;

@@ -67,7 +67,7 @@ const CommandRegistrar registrar{
            const Method method = parse_method(flags->boundary.method, "--method", kReferenceMethods);
            return method == Method::FiniteDifferences
                       ? EstimatorConfig::finite_differences(params, fd_steps(scene, params, flags->h))
-                      : gradient_config(params, method, flags->boundary);
+                      : gradient_config(scene, params, method, flags->boundary);
          }, set_up);
          // One run with the progress bar (a reference is one long run, not passes).
          const RenderResult r = group.run(*set_up.estimator, flags->render);

@@ -13,6 +13,7 @@
 #include <functional>
 #include <memory>
 #include <span>
+#include <type_traits>
 #include <vector>
 
 namespace qsil {
@@ -122,6 +123,40 @@ void for_each_overlapping_triangle_pair(std::span<const TriangleMesh* const> mes
 
 /// for_each_overlapping_triangle_pair's pairs, sorted (for tests and small meshes).
 std::vector<TrianglePair> overlapping_triangle_pairs(std::span<const TriangleMesh* const> meshes);
+
+/// The triangles near a ray: a BVH (Embree user geometry) over every triangle's axis-aligned
+/// box grown by `reach` on every side, for estimators whose rays see triangles they do not hit
+/// (regularised visibility, qsil/integrators/regularized_visibility.h: a triangle's blurred
+/// opacity reaches `reach` beyond its edges). Boxes are taken in double, relative to the scene's
+/// Embree local origin (embree_local_origin), rounded outward to float and padded by 2^-12 of the
+/// largest grown coordinate, which covers the float rounding of rays whose origin lies within
+/// ~1000 scene sizes of the local origin: for those the query misses no triangle whose grown box
+/// the ray crosses. Thread-safe for queries after construction.
+class NearTriangleQuery {
+ public:
+  /// Builds the BVH over `scene.shapes`. Throws qsil::Error when reach is negative or not finite,
+  /// or Embree cannot be initialised.
+  NearTriangleQuery(const Scene& scene, double reach);
+  ~NearTriangleQuery();
+  NearTriangleQuery(const NearTriangleQuery&) = delete;
+  NearTriangleQuery& operator=(const NearTriangleQuery&) = delete;
+
+  /// Calls visit(user, shape, triangle) once for every triangle whose grown box the segment
+  /// origin + t dir, t in [0, tmax], crosses (dir non-zero; the box test is exact in double), in no
+  /// particular order. A ray that is not ray_is_valid visits nothing.
+  void for_each(const Vec3& origin, const Vec3& dir, double tmax, void (*visit)(void*, int, int), void* user) const;
+  /// The same with a callable f(shape, triangle).
+  template <class F>
+  void for_each(const Vec3& origin, const Vec3& dir, double tmax, F&& f) const {
+    for_each(origin, dir, tmax, [](void* u, int s, int t) { (*static_cast<std::remove_reference_t<F>*>(u))(s, t); },
+             static_cast<void*>(&f));
+  }
+  double reach() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 /// Largest magnitude Embree 3 accepts in a ray's origin and direction components (its FLT_LARGE,
 /// 1.844e18): a larger one fails Embree's `ray.valid()` assertion, which aborts the process.

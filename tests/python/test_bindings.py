@@ -270,6 +270,22 @@ def test_old_keyword_names_set_the_same_rates():
     assert np.array_equal(a["gradient"]["spot"], b["gradient"]["spot"])
 
 
+def test_regularized_render_and_grad_reach_the_blur_width():
+    s = load(os.path.join(ROOT, "tests", "data", "gradient", "penumbra-sign.xml"), res=8, spp=1)
+    hard = qsil.render(s, spp=16, seed=3)
+    wide = qsil.render(s, spp=16, seed=3, reg_width=3e-2)
+    narrow = qsil.render(s, spp=16, seed=3, reg_width=1e-4)
+    assert np.isfinite(wide).all() and wide.shape == hard.shape
+    # A wide blur changes the image more than a narrow one does.
+    assert np.abs(wide - hard).sum() > 2 * np.abs(narrow - hard).sum()
+    img, d = qsil.grad(s, ["occluder:translate:0,1,0"], spp=16, seed=3, boundary="regularized", reg_width=3e-2)
+    assert img.shape == (8, 8, 3) and np.isfinite(img).all()
+    assert d.shape == (1, 8, 8, 3) and np.isfinite(d).all() and np.abs(d).sum() > 0
+    with pytest.raises(qsil.Error) as e:
+        qsil.render(s, reg_width=-1.0)
+    assert "width must be positive" in str(e.value)
+
+
 def test_bad_input_raises_qsil_error_with_one_line():
     s = load(res=8, spp=1)
     cases = [

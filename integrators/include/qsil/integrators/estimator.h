@@ -21,6 +21,7 @@
 
 #include "qsil/film.h"
 #include "qsil/integrators/method.h"
+#include "qsil/integrators/regularized_visibility.h"
 #include "qsil/integrators/sample_trace.h"
 #include "qsil/parameters.h"
 #include "qsil/scene.h"
@@ -58,6 +59,12 @@ struct EstimatorConfig {
   /// (qsil/edgetree/intersection_curves.h) as discontinuities. Off only to measure what they add
   /// (`--no-intersection-curves`): where surfaces cross, the derivative is then biased.
   bool intersection_curves = true;
+  /// Regularised visibility (qsil/integrators/regularized_visibility.h; absolute, from
+  /// Regularization::for_scene of the scene as loaded). Method::Regularized requires it enabled;
+  /// enabled with Method::FiniteDifferences or without parameters, the differences and the image
+  /// are those of the regularised image (the oracle of the regularised derivative); other methods
+  /// ignore it.
+  Regularization regularization;
 
   /// The primal image.
   static EstimatorConfig primal();

@@ -30,29 +30,33 @@ enum class Method {
   VSphereSolid,       ///< `vsphere-solid`: redner's original solid v-sphere test
   Uniform,            ///< `uniform`: no rejection, edges by length x dihedral angle (a floor)
   None,               ///< `none`: the interior term only (misses silhouettes, shadows, outlines)
+  /// `regularized`: Quinn 2021's blurred visibility, differentiated by the interior term alone
+  /// (qsil/integrators/regularized_visibility.h); biased, its bias set by the blur width
+  Regularized,
   FiniteDifferences,  ///< `fd`: central finite differences with common random numbers
 };
 
 /// Every method, in the order above.
-inline constexpr std::array<Method, 7> kAllMethods = {Method::Quadric,          Method::QuadricBox, Method::VSphere,
-                                                      Method::VSphereSolid,     Method::Uniform,    Method::None,
-                                                      Method::FiniteDifferences};
+inline constexpr std::array<Method, 8> kAllMethods = {Method::Quadric,      Method::QuadricBox, Method::VSphere,
+                                                      Method::VSphereSolid, Method::Uniform,    Method::None,
+                                                      Method::Regularized,  Method::FiniteDifferences};
 /// The methods that sample edges (`qsil candidates`).
 inline constexpr std::array<Method, 5> kEdgeSamplingMethods = {Method::Quadric, Method::QuadricBox, Method::VSphere,
                                                                Method::VSphereSolid, Method::Uniform};
 /// The methods with a rejection test ([QSS] Fig. 7, `qsil slices`), in display order.
 inline constexpr std::array<Method, 4> kRejectionMethods = {Method::Quadric, Method::QuadricBox, Method::VSphere,
                                                             Method::VSphereSolid};
-/// The values of `qsil grad --boundary`: every edge sampler, and none.
-inline constexpr std::array<Method, 6> kBoundaryMethods = {Method::Quadric,      Method::QuadricBox, Method::VSphere,
-                                                           Method::VSphereSolid, Method::Uniform,    Method::None};
+/// The values of `qsil grad --boundary`: every edge sampler, none, and regularized.
+inline constexpr std::array<Method, 7> kBoundaryMethods = {Method::Quadric,      Method::QuadricBox, Method::VSphere,
+                                                           Method::VSphereSolid, Method::Uniform,    Method::None,
+                                                           Method::Regularized};
 /// Unbiased gradient methods (`qsil reference --method`): every edge sampler, and fd.
 inline constexpr std::array<Method, 6> kReferenceMethods = {Method::Quadric, Method::QuadricBox,
                                                             Method::VSphere, Method::VSphereSolid,
                                                             Method::Uniform, Method::FiniteDifferences};
 
 /// The method's name on the command line and in outputs: "quadric", "quadric-box", "vsphere",
-/// "vsphere-solid", "uniform", "none", "fd".
+/// "vsphere-solid", "uniform", "none", "regularized", "fd".
 std::string_view method_name(Method method);
 
 /// The method named `name` among `allowed`. Throws qsil::Error

@@ -39,6 +39,9 @@ struct CompareOptions {
   /// method's default rate).
   double sppi = 0;
   double sppp = kDefaultSppp;
+  /// `regularized`: its blur width as a fraction of the scene's bounding-box diagonal
+  /// (Regularization::for_scene).
+  double reg_width = 1e-3;
   std::filesystem::path out;  ///< output directory (created)
   uint64_t seed = 0;          ///< base seed: every method, target and the reference derive theirs
   int threads = 0;
