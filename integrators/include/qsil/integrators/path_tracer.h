@@ -193,6 +193,47 @@ struct DirectLight {
   Color weighted_radiance;
 };
 
+/// A direction toward a light, drawn by next-event estimation from a point: the environment (with
+/// probability p_environment) or a point on the area lights. Invalid (valid false) when the light
+/// sample is (zero pdf, or the area-light point is the point itself).
+struct LightDirection {
+  bool valid = false;
+  bool environment = false;
+  Vec3 wi = Vec3::Zero();          ///< unit, world, toward the light
+  Color radiance = Color::Zero();  ///< environment: its radiance along wi
+  double pdf = 0;                  ///< environment: p_environment times its solid-angle pdf
+  AreaLights::Sample area;         ///< area lights: the sampled point
+  double dist = 0;                 ///< area lights: |point - p|
+};
+
+/// Draws a LightDirection from point p (world) with four numbers: environment or area lights, the
+/// point (two), the triangle. Every next-event estimator draws its light so.
+inline LightDirection sample_light_direction(const PathContext& ctx, const Vec3& p, Sampler& sampler) {
+  const bool use_env = ctx.p_environment > 0 && sampler.next() < ctx.p_environment;
+  const Vec2 u = sampler.next2();
+  const double u_tri = sampler.next();
+  LightDirection ld;
+  ld.environment = use_env;
+  if (use_env) {
+    const auto s = ctx.environment->sample(u);
+    if (s.pdf > 0) {
+      ld.valid = true;
+      ld.wi = s.dir;
+      ld.radiance = s.radiance;
+      ld.pdf = ctx.p_environment * s.pdf;
+    }
+  } else if (ctx.area_lights && !ctx.area_lights->empty()) {
+    ld.area = ctx.area_lights->sample(u, u_tri);
+    const Vec3 to = ld.area.point - p;
+    ld.dist = to.norm();
+    if (ld.area.pdf_area > 0 && ld.dist > 0) {
+      ld.valid = true;
+      ld.wi = to / ld.dist;
+    }
+  }
+  return ld;
+}
+
 /// Next-event estimation at a path vertex: draws four numbers (environment or area lights, the
 /// point, the triangle), traces the shadow ray and returns the sample, or nothing when the light
 /// sample is invalid, the BSDF is zero toward it or it is occluded. `wo_local` is the viewer
@@ -204,32 +245,19 @@ std::optional<DirectLight<T>> sample_direct_light(const PathContext& ctx, const 
                                                   const ShadingPoint<T>& sp, const Vec3& wo_world, const Vec3& wo_local,
                                                   const BsdfToward& bsdf_toward, Sampler& sampler, PathStats& stats) {
   constexpr double uniform_share = std::is_same_v<T, double> ? 0.0 : kDerivativeDiffuseUniformShare;
-  const Vec3 p = value(si.p);
-  const bool use_env = ctx.p_environment > 0 && sampler.next() < ctx.p_environment;
-  const Vec2 u = sampler.next2();
-  const double u_tri = sampler.next();
-  Vec3 wi;
+  const LightDirection ld = sample_light_direction(ctx, value(si.p), sampler);
+  const Vec3& wi = ld.wi;
   Color Le = Color::Zero();
   double pdf_light = 0;
   Vec3 light_point = Vec3::Constant(kInf);  // finite for area lights: where the shadow ray ends
-  if (use_env) {
-    const auto s = ctx.environment->sample(u);
-    if (s.pdf > 0) {
-      wi = s.dir;
-      Le = s.radiance;
-      pdf_light = ctx.p_environment * s.pdf;
-    }
-  } else if (ctx.area_lights && !ctx.area_lights->empty()) {
-    const auto s = ctx.area_lights->sample(u, u_tri);
-    const Vec3 to = s.point - p;
-    const double dist = to.norm();
-    if (s.pdf_area > 0 && dist > 0) {
-      wi = to / dist;
-      pdf_light = nee_area_pdf(ctx, dist, wi, s.normal);
-      if (pdf_light > 0) {
-        Le = ctx.area_lights->radiance(s.shape, s.normal, -wi);
-        light_point = s.point;
-      }
+  if (ld.valid && ld.environment) {
+    Le = ld.radiance;
+    pdf_light = ld.pdf;
+  } else if (ld.valid) {
+    pdf_light = nee_area_pdf(ctx, ld.dist, wi, ld.area.normal);
+    if (pdf_light > 0) {
+      Le = ctx.area_lights->radiance(ld.area.shape, ld.area.normal, -wi);
+      light_point = ld.area.point;
     }
   }
   if (!(pdf_light > 0 && (Le > 0).any())) return std::nullopt;

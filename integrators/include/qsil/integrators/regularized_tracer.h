@@ -104,33 +104,12 @@ ColorT<typename View::Real> trace_regularized_path(const RegularizedContext& rc,
     const Vec3 p = value(si.p);
     const double next_tmin = soft_ray_tmin(si.scale, p, local_origin);
 
-    // ---- Next-event estimation: four numbers, as sample_direct_light draws them.
+    // ---- Next-event estimation: the light drawn as sample_direct_light draws it.
     {
-      const bool use_env = ctx.p_environment > 0 && sampler.next() < ctx.p_environment;
-      const Vec2 u = sampler.next2();
-      const double u_tri = sampler.next();
-      Vec3 wi = Vec3::Zero();
-      double pdf_light = 0;
-      Color Le = Color::Zero();
-      int light_shape = -1, light_triangle = -1;
-      if (use_env) {
-        const auto s = ctx.environment->sample(u);
-        if (s.pdf > 0) {
-          wi = s.dir;
-          Le = s.radiance;
-          pdf_light = ctx.p_environment * s.pdf;
-        }
-      } else if (ctx.area_lights && !ctx.area_lights->empty()) {
-        const auto s = ctx.area_lights->sample(u, u_tri);
-        const Vec3 to = s.point - p;
-        const double dist = to.norm();
-        if (s.pdf_area > 0 && dist > 0) {
-          wi = to / dist;
-          light_shape = s.shape;
-          light_triangle = s.triangle;
-        }
-      }
-      if (wi != Vec3::Zero()) {
+      const LightDirection ld = sample_light_direction(ctx, p, sampler);
+      const Vec3& wi = ld.wi;
+      double pdf_light = ld.environment ? ld.pdf : 0.0;
+      if (ld.valid) {
         const ColorT<T> f = bsdf_toward(wi);
         if ((value(f) != 0).any()) {
           ++stats.rays;
@@ -138,17 +117,17 @@ ColorT<typename View::Real> trace_regularized_path(const RegularizedContext& rc,
           // A light point is kept only on the first triangle its ray crosses inside (the last
           // candidate): a point behind it is a sample of that triangle's direction too, which
           // soft_nee_pdf does not count (nothing behind it is a candidate).
-          if (!use_env)
+          if (!ld.environment)
             pdf_light = !shadow.candidates.empty() && shadow.candidates.back().inside &&
-                                shadow.candidates.back().shape == light_shape &&
-                                shadow.candidates.back().triangle == light_triangle
+                                shadow.candidates.back().shape == ld.area.shape &&
+                                shadow.candidates.back().triangle == ld.area.triangle
                             ? soft_nee_pdf(ctx, shadow)
                             : 0.0;
           if (pdf_light > 0) {
             soft_weights(view, rc.soft->regularization(), shadow, si.p, wi, shadow_w);
             const double mis =
                 power_heuristic(pdf_light, bsdf_pdf(*sp.bsdf, sp.frame_value.to_local(wi), wo_value, uniform_share));
-            const ColorT<T> seen = use_env ? ColorT<T>(lift<T>(Le) * shadow_w.background)
+            const ColorT<T> seen = ld.environment ? ColorT<T>(lift<T>(ld.radiance) * shadow_w.background)
                                            : soft_emission(ctx, shadow, shadow_w);
             L += beta * f * seen * T(mis / pdf_light);
           }
