@@ -27,7 +27,7 @@ std::uint64_t triangle_hash(const TriangleMesh& mesh) {
 CreaseSet crease_rule(const ForestShapeInput& in) { return in.face_normals ? CreaseSet::All : in.creases; }
 
 /// Whether an interior edge of class `cls` is a crease under rule `creases` (as
-/// shape_always_edges decides).
+/// append_shape_always_edges decides).
 bool is_crease_class(EdgeClass cls, CreaseSet creases) {
   return (cls == EdgeClass::Concave && creases != CreaseSet::None) ||
          (cls == EdgeClass::Convex && creases == CreaseSet::All);
@@ -50,14 +50,14 @@ void node_extent(ForestNode& n, const std::vector<Edge>& edges) {
   }
 }
 
-// Splits [b, e) into 2..4 groups: one binary SAH split, then each half again if it is larger
-// than a leaf [QSS 4.1: three binary splits per level].
-std::vector<std::pair<int, int>> split4(std::vector<Edge>& edges, int b, int e, const EdgeSetOptions& opt) {
+// Splits refs [b, e) into 2..4 groups: one binary SAH split, then each half again if it is
+// larger than a leaf [QSS 4.1: three binary splits per level].
+std::vector<std::pair<int, int>> split4(std::vector<EdgeBoxRef>& refs, int b, int e, const EdgeSetOptions& opt) {
   std::vector<std::pair<int, int>> out;
-  const int m = b + sah_split(std::span(edges.data() + b, size_t(e - b)), opt.sah_buckets);
+  const int m = b + sah_split(std::span(refs.data() + b, size_t(e - b)), opt.sah_buckets);
   for (auto [lo, hi] : {std::pair{b, m}, std::pair{m, e}}) {
     if (hi - lo > opt.leaf_size) {
-      const int mm = lo + sah_split(std::span(edges.data() + lo, size_t(hi - lo)), opt.sah_buckets);
+      const int mm = lo + sah_split(std::span(refs.data() + lo, size_t(hi - lo)), opt.sah_buckets);
       out.push_back({lo, mm});
       out.push_back({mm, hi});
     } else {
@@ -65,6 +65,27 @@ std::vector<std::pair<int, int>> split4(std::vector<Edge>& edges, int b, int e, 
     }
   }
   return out;
+}
+
+/// Reorders edges [ebase, ebase + order.size()) of `edges` in place so that position ebase + k
+/// holds the edge that was at ebase + order[k].index (a permutation), following its cycles: no
+/// copy of the range is made.
+void permute_edges(std::vector<Edge>& edges, int ebase, const std::vector<EdgeBoxRef>& order) {
+  const size_t n = order.size();
+  std::vector<char> done(n, 0);
+  for (size_t start = 0; start < n; ++start) {
+    if (done[start]) continue;
+    Edge held = std::move(edges[size_t(ebase) + start]);
+    size_t j = start;
+    while (true) {
+      done[j] = 1;
+      const size_t from = size_t(order[j].index);
+      if (from == start) break;
+      edges[size_t(ebase) + j] = std::move(edges[size_t(ebase) + from]);
+      j = from;
+    }
+    edges[size_t(ebase) + j] = std::move(held);
+  }
 }
 
 /// Top-down 4-wide topology over edges [ebase, eend) of `edges` (reordered in place), appended
@@ -78,22 +99,26 @@ std::vector<std::pair<int, int>> build_topology(std::vector<Edge>& edges, int eb
   depth = 0;
   if (eend <= ebase) return levels;
   const int nbase = int(nodes.size());
+  // The splits order small records (EdgeBoxRef, positions relative to ebase), not the edges;
+  // the nodes of one level cover disjoint ranges, so a level's splits run in parallel.
+  std::vector<EdgeBoxRef> refs(size_t(eend - ebase));
+  tbb::parallel_for(0, eend - ebase, [&](int k) { refs[size_t(k)] = edge_box_ref(edges[size_t(ebase + k)], k); });
   std::vector<std::pair<int, int>> top;
   if (eend - ebase <= opt.leaf_size)
-    top.push_back({ebase, eend});
+    top.push_back({0, eend - ebase});
   else
-    top = split4(edges, ebase, eend, opt);
+    top = split4(refs, 0, eend - ebase, opt);
   auto add_node = [&](int b, int e, int parent, int d) {
     ForestNode n;
-    n.edge_begin = b;
-    n.edge_end = e;
+    n.edge_begin = ebase + b;
+    n.edge_end = ebase + e;
     n.parent = parent;
     n.shape = shape;
     n.depth = std::uint16_t(d);
     if (always) n.flags |= kNodeAlways;
     if (e - b <= opt.leaf_size) {
       n.flags |= kNodeLeaf;
-      n.first = b;
+      n.first = ebase + b;
       n.count = e - b;
     }
     nodes.push_back(n);
@@ -103,19 +128,26 @@ std::vector<std::pair<int, int>> build_topology(std::vector<Edge>& edges, int eb
     add_node(b, e, -1, 0);
   }
   int level_begin = nbase;
+  std::vector<std::vector<std::pair<int, int>>> groups;
   while (level_begin < int(nodes.size())) {
     const int level_end = int(nodes.size());
     levels.push_back({level_begin, level_end});
+    groups.assign(size_t(level_end - level_begin), {});
+    tbb::parallel_for(level_begin, level_end, [&](int i) {
+      const ForestNode& n = nodes[size_t(i)];
+      if (!n.is_leaf()) groups[size_t(i - level_begin)] = split4(refs, n.edge_begin - ebase, n.edge_end - ebase, opt);
+    });
     for (int i = level_begin; i < level_end; ++i) {
-      if (nodes[i].is_leaf()) continue;
-      const auto groups = split4(edges, nodes[i].edge_begin, nodes[i].edge_end, opt);
-      nodes[i].first = int(nodes.size());
-      nodes[i].count = int(groups.size());
-      for (auto [b, e] : groups) add_node(b, e, i, depth + 1);
+      if (nodes[size_t(i)].is_leaf()) continue;
+      const auto& g = groups[size_t(i - level_begin)];
+      nodes[size_t(i)].first = int(nodes.size());
+      nodes[size_t(i)].count = int(g.size());
+      for (auto [b, e] : g) add_node(b, e, i, depth + 1);
     }
     level_begin = level_end;
     ++depth;
   }
+  permute_edges(edges, ebase, refs);
   // ---- B_p and L_w of every node (edges are in their final order now), in parallel
   tbb::parallel_for(nbase, int(nodes.size()), [&](int i) { node_extent(nodes[size_t(i)], edges); });
   return levels;
@@ -130,14 +162,14 @@ Edge forest_edge(const MeshEdgeSet& set, const TriangleMesh& mesh, int idx) {
   return fe;
 }
 
-/// A shape's always-candidate edges: set.always (boundary, non-manifold, inconsistent), then the
-/// creases of `in` (all of them for a flat-shaded shape), marked in is_crease (one entry per edge
-/// of `set`) and counted in st.creases.
-std::vector<Edge> shape_always_edges(const ForestShapeInput& in, const MeshEdgeSet& set,
-                                           std::vector<char>& is_crease, ForestShapeStats& st) {
+/// Appends a shape's always-candidate edges to `always`: set.always (boundary, non-manifold,
+/// inconsistent), then the creases of `in` (all of them for a flat-shaded shape), marked in
+/// is_crease (one entry per edge of `set`) and counted in st.creases. Returns how many it appended.
+int append_shape_always_edges(const ForestShapeInput& in, const MeshEdgeSet& set, std::vector<char>& is_crease,
+                              ForestShapeStats& st, std::vector<Edge>& always) {
   const TriangleMesh& mesh = *in.mesh;
   const CreaseSet creases = crease_rule(in);
-  std::vector<Edge> always;
+  const size_t before = always.size();
   for (int idx : set.always) always.push_back(forest_edge(set, mesh, idx));
   for (size_t idx = 0; idx < set.edges.size(); ++idx) {
     if (is_crease_class(set.edges[idx].cls, creases)) {
@@ -148,7 +180,7 @@ std::vector<Edge> shape_always_edges(const ForestShapeInput& in, const MeshEdgeS
       ++st.creases;
     }
   }
-  return always;
+  return int(always.size() - before);
 }
 
 /// Counts nodes[nbase, end) into st.nodes, st.leaves and st.inner_nodes.
@@ -168,24 +200,38 @@ EdgeSet EdgeSet::build(std::span<const ForestShapeInput> shapes, const EdgeSetOp
   EdgeSet f;
   EdgeSetOptions opt = options;
   opt.leaf_size = std::clamp(opt.leaf_size, 1, 4);
-  for (const ForestShapeInput& in : shapes) {
+  // ---- every shape's edges first, so that the shared arrays are sized once: appending a large
+  // shape's edges and then a small one's would copy the large one's
+  std::vector<MeshEdgeSet> sets(shapes.size());
+  std::vector<double> edge_seconds(shapes.size());
+  size_t always_total = 0, kept_total = 0;
+  for (size_t i = 0; i < shapes.size(); ++i) {
+    const auto t0 = std::chrono::steady_clock::now();
+    sets[i] = build_mesh_edges(*shapes[i].mesh, shapes[i].shape, opt.edges);
+    edge_seconds[i] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const CreaseSet creases = crease_rule(shapes[i]);
+    always_total += sets[i].always.size();
+    for (const MeshEdge& e : sets[i].edges) always_total += is_crease_class(e.cls, creases) ? 1 : 0;
+    if (!shapes[i].face_normals)
+      for (int idx : sets[i].kept) kept_total += is_crease_class(sets[i].edges[size_t(idx)].cls, creases) ? 0 : 1;
+  }
+  f.always_.reserve(always_total);
+  f.edges_.reserve(kept_total);
+  for (size_t i = 0; i < shapes.size(); ++i) {
+    const ForestShapeInput& in = shapes[i];
     const auto t0 = std::chrono::steady_clock::now();
     ForestShapeStats st;
     st.shape = in.shape;
     const TriangleMesh& mesh = *in.mesh;
-
-    // ---- edges
-    MeshEdgeSet set = build_mesh_edges(mesh, in.shape, opt.edges);
+    const MeshEdgeSet set = std::move(sets[i]);
     st.edge_counts = set.counts;
     st.edges_total = int(set.edges.size());
     st.edges_kept = int(set.kept.size());
     st.edges_always = int(set.always.size());
     // ---- always-candidate edges: boundary, non-manifold, inconsistent, and the creases
     std::vector<char> is_crease(set.edges.size(), 0);
-    const std::vector<Edge> always = shape_always_edges(in, set, is_crease, st);
-    st.edges_always = int(always.size());
     const int abase = int(f.always_.size());
-    f.always_.insert(f.always_.end(), always.begin(), always.end());
+    st.edges_always = append_shape_always_edges(in, set, is_crease, st, f.always_);
     const int aend = int(f.always_.size());
     if (aend - abase > opt.always_tree_min_edges) {
       const int n0 = int(f.nodes_.size());
@@ -215,7 +261,7 @@ EdgeSet EdgeSet::build(std::span<const ForestShapeInput> shapes, const EdgeSetOp
     st.roots = int(f.roots_.size() - roots_before);
     st.depth = depth;
     count_nodes(f.nodes_, nbase, st);
-    st.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    st.build_seconds = edge_seconds[i] + std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     f.stats_.push_back(st);
     // ---- what a refit needs: the topology's fingerprint and the edges in no array
     f.shape_records_.push_back(

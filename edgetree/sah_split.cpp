@@ -16,25 +16,25 @@ double box_area(const Box3& b) {
 }
 }  // namespace
 
-int sah_split(std::span<Edge> edges, int buckets) {
+int sah_split(std::span<EdgeBoxRef> edges, int buckets) {
   const int n = int(edges.size());
   Box3 cb;
-  for (const auto& e : edges) cb.expand(0.5 * (e.p0 + e.p1));
+  for (const auto& e : edges) cb.expand(0.5 * (e.lo + e.hi));
   int axis = 0;
   cb.extent().maxCoeff(&axis);
   const double lo = cb.lo[axis], ext = cb.hi[axis] - cb.lo[axis];
   auto median = [&]() {
     const int mid = n / 2;
-    std::stable_sort(edges.begin(), edges.end(), [axis](const Edge& a, const Edge& b) {
-      return a.p0[axis] + a.p1[axis] < b.p0[axis] + b.p1[axis];
+    std::stable_sort(edges.begin(), edges.end(), [axis](const EdgeBoxRef& a, const EdgeBoxRef& b) {
+      return a.lo[axis] + a.hi[axis] < b.lo[axis] + b.hi[axis];
     });
     return mid;
   };
   if (!(ext > 0.0)) return median();
 
   const int B = std::max(2, buckets);
-  auto bucket_of = [&](const Edge& e) {
-    const double c = 0.5 * (e.p0[axis] + e.p1[axis]);
+  auto bucket_of = [&](const EdgeBoxRef& e) {
+    const double c = 0.5 * (e.lo[axis] + e.hi[axis]);
     return std::clamp(int(B * ((c - lo) / ext)), 0, B - 1);
   };
   std::vector<int> cnt(B, 0);
@@ -42,8 +42,8 @@ int sah_split(std::span<Edge> edges, int buckets) {
   for (const auto& e : edges) {
     const int k = bucket_of(e);
     cnt[k]++;
-    box[k].expand(e.p0);
-    box[k].expand(e.p1);
+    box[k].expand(e.lo);
+    box[k].expand(e.hi);
   }
   // Sweep: prefix from the left, suffix from the right.
   std::vector<double> left_cost(B, 0.0);
@@ -72,7 +72,7 @@ int sah_split(std::span<Edge> edges, int buckets) {
     }
   }
   if (best_k < 0) return median();
-  auto it = std::partition(edges.begin(), edges.end(), [&](const Edge& e) { return bucket_of(e) < best_k; });
+  auto it = std::partition(edges.begin(), edges.end(), [&](const EdgeBoxRef& e) { return bucket_of(e) < best_k; });
   return int(it - edges.begin());
 }
 

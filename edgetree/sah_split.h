@@ -8,12 +8,26 @@
 
 namespace qsil::edgetree {
 
+/// An edge as the hierarchy build sees it: the box of its two endpoints (per axis the smaller and
+/// the larger coordinate of p0 and p1; world frame, scene units) and the edge's index in the array
+/// being ordered. The build sorts these 56-byte records, not the edges (Edge is about three times
+/// larger), and reorders the edges once at the end. lo + hi equals p0 + p1 exactly (the same two
+/// numbers added), so every centroid and every comparison is the one the edges would give.
+struct EdgeBoxRef {
+  Vec3 lo = Vec3::Zero();
+  Vec3 hi = Vec3::Zero();
+  int index = 0;
+};
+
+/// The EdgeBoxRef of edge `e` with index `index`.
+inline EdgeBoxRef edge_box_ref(const Edge& e, int index) { return {e.p0.cwiseMin(e.p1), e.p0.cwiseMax(e.p1), index}; }
+
 /// Partitions `edges` in place into two non-empty parts and returns the size of the first part
 /// (0 < result < edges.size(); requires edges.size() >= 2). The split is the minimum over
 /// `buckets` equal buckets of the largest axis of the box of edge centroids of
 /// area(box of part A) * |A| + area(box of part B) * |B|, with boxes of the edges' endpoints.
 /// If every centroid falls in one bucket (or the centroids coincide), splits at the median along
 /// that axis (ties broken by the original order). Deterministic.
-int sah_split(std::span<Edge> edges, int buckets = 10);
+int sah_split(std::span<EdgeBoxRef> edges, int buckets = 10);
 
 }  // namespace qsil::edgetree
