@@ -20,6 +20,7 @@ struct OffsetLpResult {
   Status status = Status::Failed;
   double rho = 0.0;           ///< max over points of min_q q.[point,1] (units of the planes)
   Vec3 point = Vec3::Zero();  ///< maximiser (same frame as the planes)
+  int solves = 0;             ///< LP solves made (diagnostics: constraint generation's rounds)
 };
 
 /// Solves [QSS Eq. 6]: variables rho, D = [Dx, Dy, Dz, 1]; maximise rho subject to

@@ -3,7 +3,8 @@
 /// the exact smallest sphere's direction maximises min d.n (checked against a brute-force search
 /// over 200k directions refined locally: ours must be >= brute force - 1e-9), the approximate
 /// sphere is within 2e-2 of it; the LP's rho matches a brute-force search over points; closed
-/// normal sets are detected as unrejectable. Fixed seeds.
+/// normal sets are detected as unrejectable, also when thousands of planes make the LP solve
+/// subsets and only a few planes close the set (the subsets' unbounded rays find them). Fixed seeds.
 
 #include "edgetree/offset_direction.h"
 #include "edgetree/enclosing_sphere.h"
@@ -141,6 +142,90 @@ TEST(ForestOffsetDirection, ClosedSetIsUnrejectable) {
   // Two opposite parallel planes facing away from each other (a thin slab seen from outside).
   const std::vector<Vec4> slab = {Vec4(0, 0, 1, -0.1), Vec4(0, 0, -1, -0.1)};
   EXPECT_EQ(choose_offset_direction(slab).kind, OffsetDirection::Kind::Unrejectable);
+}
+
+// Outward tangent planes of a bumpy unit sphere (normals jittered by `bump`, radii in [1, 1.01)) over
+// the cap of normals with z > zmin, before jitter.
+std::vector<Vec4> bumpy_cap(int m, double zmin, double bump, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> g;
+  std::uniform_real_distribution<double> u(0, 1);
+  std::vector<Vec4> planes;
+  while (int(planes.size()) < m) {
+    const Vec3 s = Vec3(g(rng), g(rng), g(rng)).normalized();
+    if (!(s.z() > zmin)) continue;
+    const Vec3 n = (s + bump * Vec3(g(rng), g(rng), g(rng))).normalized();
+    const Vec3 x0 = s * (1.0 + 0.01 * u(rng));
+    planes.push_back(Vec4(n.x(), n.y(), n.z(), -n.dot(x0)));
+  }
+  return planes;
+}
+
+TEST(ForestOffsetDirection, ConstraintGenerationFollowsUnboundedRays) {
+  // Caps of a bumpy sphere's patch, as a large node of a scanned or perturbed mesh has: planes
+  // enough (thousands) that the LP solves subsets. A cap whose normals stay in an open
+  // hemisphere (zmin > 0) is unbounded: a direction exists, and the first subset's ray breaks a
+  // few planes (seeds 2 and 3), which are added until a subset's ray breaks none. One a little
+  // more than a hemisphere (zmin < 0) has no point in front of every plane (rho <= 0), which a
+  // brute-force search of directions confirms.
+  for (unsigned seed = 1; seed <= 3; ++seed) {
+    const std::vector<Vec4> open = bumpy_cap(5000, 0.3, 0.02, seed);
+    const OffsetLpResult a = solve_offset_lp(open);
+    EXPECT_EQ(a.status, OffsetLpResult::Status::Unbounded) << "seed " << seed;
+    const OffsetDirection od = choose_offset_direction(open);
+    EXPECT_EQ(od.kind, OffsetDirection::Kind::Direction) << "seed " << seed;
+
+    const std::vector<Vec4> wide = bumpy_cap(20000, -0.05, 0.02, seed);
+    const OffsetLpResult b = solve_offset_lp(wide);
+    ASSERT_EQ(b.status, OffsetLpResult::Status::Optimal) << "seed " << seed;
+    EXPECT_LE(b.rho, 0.0) << "seed " << seed;
+    EXPECT_EQ(choose_offset_direction(wide).kind, OffsetDirection::Kind::Unrejectable) << "seed " << seed;
+    // No direction has every normal strictly in front: over 2000 random directions, some plane's
+    // normal is behind each.
+    std::mt19937_64 rng(seed + 100);
+    std::normal_distribution<double> g;
+    for (int i = 0; i < 2000; ++i) {
+      const Vec3 d = Vec3(g(rng), g(rng), g(rng)).normalized();
+      double m = kInf;
+      for (const Vec4& q : wide) m = std::min(m, q.head<3>().dot(d));
+      ASSERT_LE(m, 0.0) << "seed " << seed << ": a direction in front of every plane";
+    }
+  }
+}
+
+TEST(ForestOffsetDirection, ClosingPlanesExtremeInNoSearchDirectionAreFoundFromTheRay) {
+  // Outward tangent planes [n, -1] of the unit sphere at 8000 normals on the circle 89 degrees
+  // from an axis (rotated by a fixed orthonormal Q, so that no search direction is special):
+  // all in an open hemisphere, unbounded. Three more normals 92 degrees from the axis close
+  // the set (each one's opposite is 88 degrees from the axis, inside the circle's cone). At the
+  // azimuths 8, 65 and 220 degrees none of them is extreme along any of constraint generation's
+  // 13 seed directions (checked with a copy of that seeding when the test was written), so the
+  // subsets stay unbounded until they hold one, and they sit where a stride through the planes
+  // (every 125th from an offset that grows by one a round) reaches them only after 50 rounds:
+  // a bumpy mesh's large nodes are like this (a few steep faces close an otherwise open patch).
+  // Following each unbounded subset's ray finds them at once (2 solves; 51 without). The open
+  // circle alone still takes all 50 rounds (its rays leave a cone 1 degree wide), but an open
+  // set reaches the LP only when the enclosing sphere's direction failed.
+  Mat3 Q;
+  Q << -0.75597169, -0.1834404, -0.62837603, 0.39634897, -0.89224206, -0.21635988, -0.52097438, -0.41261813,
+      0.74721615;
+  auto plane = [&](double polar_deg, double azimuth_deg) {
+    const double t = polar_deg * kPi / 180.0, p = azimuth_deg * kPi / 180.0;
+    const Vec3 n = Q * Vec3(std::sin(t) * std::cos(p), std::sin(t) * std::sin(p), std::cos(t));
+    return Vec4(n.x(), n.y(), n.z(), -1.0);
+  };
+  std::vector<Vec4> planes;
+  for (int i = 0; i < 8000; ++i) planes.push_back(plane(89.0, 360.0 * i / 8000));
+  const OffsetLpResult open = solve_offset_lp(planes);
+  EXPECT_EQ(open.status, OffsetLpResult::Status::Unbounded);
+  EXPECT_EQ(choose_offset_direction(planes).kind, OffsetDirection::Kind::Direction);
+  int k = 0;
+  for (const double azimuth : {8.0, 65.0, 220.0}) planes.insert(planes.begin() + 1100 + 1000 * k++, plane(92.0, azimuth));
+  const OffsetLpResult closed = solve_offset_lp(planes);
+  ASSERT_EQ(closed.status, OffsetLpResult::Status::Optimal);
+  EXPECT_LE(closed.rho, 0.0);
+  EXPECT_LE(closed.solves, 10) << "constraint generation did not follow the subsets' rays (51: 50 rounds, then the whole LP)";
+  EXPECT_EQ(choose_offset_direction(planes).kind, OffsetDirection::Kind::Unrejectable);
 }
 
 TEST(ForestOffsetDirection, BasisIsOrthonormalWithZLast) {
