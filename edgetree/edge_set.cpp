@@ -8,6 +8,7 @@
 #include "sah_split.h"
 
 #include <tbb/parallel_for.h>
+#include <tbb/task_group.h>
 
 #include <algorithm>
 #include <chrono>
@@ -200,6 +201,11 @@ EdgeSet EdgeSet::build(std::span<const ForestShapeInput> shapes, const EdgeSetOp
   EdgeSet f;
   EdgeSetOptions opt = options;
   opt.leaf_size = std::clamp(opt.leaf_size, 1, 4);
+  // ---- the intersection curves, beside the shapes' trees (they read the meshes only; the trees'
+  // serial steps leave a core idle), appended after them
+  std::vector<CrossingSegment> crossings;
+  tbb::task_group crossings_task;
+  if (opt.intersection_curves) crossings_task.run([&] { crossings = find_crossings(shapes, f.crossing_stats_); });
   // ---- every shape's edges first, so that the shared arrays are sized once: appending a large
   // shape's edges and then a small one's would copy the large one's
   std::vector<MeshEdgeSet> sets(shapes.size());
@@ -277,7 +283,8 @@ EdgeSet EdgeSet::build(std::span<const ForestShapeInput> shapes, const EdgeSetOp
   f.shapes_always_end_ = f.always_.size();
   f.shapes_always_roots_end_ = f.always_roots_.size();
   f.shapes_loose_end_ = f.loose_always_edges_.size();
-  if (opt.intersection_curves) add_crossings(f, shapes, opt);
+  crossings_task.wait();
+  if (opt.intersection_curves) add_crossings(f, shapes, std::move(crossings), opt);
   return f;
 }
 
@@ -411,20 +418,25 @@ bool EdgeSet::refit_edges(std::span<const ForestShapeInput> shapes, RefitReport&
   // ---- the intersection curves of the moved surfaces
   if (options_.intersection_curves) {
     const auto t0 = std::chrono::steady_clock::now();
-    add_crossings(*this, shapes, options_);
+    add_crossings(*this, shapes, find_crossings(shapes, crossing_stats_), options_);
     report.crossing_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
   return true;
 }
 
-void EdgeSet::add_crossings(EdgeSet& f, std::span<const ForestShapeInput> shapes, const EdgeSetOptions& opt) {
+std::vector<CrossingSegment> EdgeSet::find_crossings(std::span<const ForestShapeInput> shapes,
+                                                     IntersectionCurveStats& stats) {
   std::vector<CurveMesh> meshes;
+  for (const ForestShapeInput& in : shapes) meshes.push_back({in.mesh, in.shape});
+  return find_intersection_curves(meshes, &stats);
+}
+
+void EdgeSet::add_crossings(EdgeSet& f, std::span<const ForestShapeInput> shapes, std::vector<CrossingSegment> found,
+                            const EdgeSetOptions& opt) {
   int next_id = 0;
-  for (const ForestShapeInput& in : shapes) {
-    meshes.push_back({in.mesh, in.shape});
-    next_id = std::max(next_id, in.shape + 1);
-  }
-  auto segments = std::make_shared<std::vector<CrossingSegment>>(find_intersection_curves(meshes, &f.crossing_stats_));
+  for (const ForestShapeInput& in : shapes) next_id = std::max(next_id, in.shape + 1);
+  auto segments = std::make_shared<std::vector<CrossingSegment>>(std::move(found));
+  f.always_.reserve(f.always_.size() + segments->size());
   // A segment's group: its two shapes, in order. Segments are sorted by group (stable: the
   // deterministic order of find_intersection_curves within each).
   auto key = [](const CrossingSegment& c) {

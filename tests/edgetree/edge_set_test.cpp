@@ -45,24 +45,34 @@ TriangleMesh shuffled_vertices(const TriangleMesh& m, unsigned seed) {
 }
 
 TEST(EdgeSetHierarchy, DoesNotDependOnTheThreadCount) {
+  // Spot, and two spheres that cross (its intersection curves are found beside the trees).
   const TriangleMesh spot = load_obj(test::mesh_file("spot.obj"));
-  ForestShapeInput in{&spot, 0};
-  in.creases = CreaseSet::Concave;
-  const EdgeSet one = build_with_threads(std::span(&in, 1), 1);
-  const EdgeSet two = build_with_threads(std::span(&in, 1), 2);
-  ASSERT_EQ(one.nodes().size(), two.nodes().size());
-  for (size_t i = 0; i < one.nodes().size(); ++i) {
-    const ForestNode &a = one.nodes()[i], &b = two.nodes()[i];
-    EXPECT_EQ(std::tie(a.first, a.count, a.edge_begin, a.edge_end, a.parent, a.flags),
-              std::tie(b.first, b.count, b.edge_begin, b.edge_end, b.parent, b.flags))
-        << "node " << i;
+  const TriangleMesh spheres = load_obj(test::data_file("tests/data/meshes/two-spheres.obj"));
+  for (const TriangleMesh* mesh : {&spot, &spheres}) {
+    ForestShapeInput in{mesh, 0};
+    in.creases = CreaseSet::Concave;
+    const EdgeSet one = build_with_threads(std::span(&in, 1), 1);
+    const EdgeSet two = build_with_threads(std::span(&in, 1), 2);
+    EXPECT_EQ(one.crossings().size(), two.crossings().size());
+    if (mesh == &spheres) {
+      EXPECT_GT(one.crossings().size(), 10u);
+    }
+    ASSERT_EQ(one.nodes().size(), two.nodes().size());
+    for (size_t i = 0; i < one.nodes().size(); ++i) {
+      const ForestNode &a = one.nodes()[i], &b = two.nodes()[i];
+      EXPECT_EQ(std::tie(a.first, a.count, a.edge_begin, a.edge_end, a.parent, a.flags),
+                std::tie(b.first, b.count, b.edge_begin, b.edge_end, b.parent, b.flags))
+          << "node " << i;
+    }
+    ASSERT_EQ(one.edges().size(), two.edges().size());
+    for (size_t k = 0; k < one.edges().size(); ++k)
+      EXPECT_EQ(std::tie(one.edges()[k].v0, one.edges()[k].v1), std::tie(two.edges()[k].v0, two.edges()[k].v1));
+    ASSERT_EQ(one.always_edges().size(), two.always_edges().size());
+    for (size_t k = 0; k < one.always_edges().size(); ++k) {
+      EXPECT_EQ(one.always_edges()[k].v0, two.always_edges()[k].v0);
+      EXPECT_EQ(one.always_edges()[k].p0, two.always_edges()[k].p0);
+    }
   }
-  ASSERT_EQ(one.edges().size(), two.edges().size());
-  for (size_t k = 0; k < one.edges().size(); ++k)
-    EXPECT_EQ(std::tie(one.edges()[k].v0, one.edges()[k].v1), std::tie(two.edges()[k].v0, two.edges()[k].v1));
-  ASSERT_EQ(one.always_edges().size(), two.always_edges().size());
-  for (size_t k = 0; k < one.always_edges().size(); ++k)
-    EXPECT_EQ(one.always_edges()[k].v0, two.always_edges()[k].v0);
 }
 
 TEST(EdgeSetHierarchy, LeavesHoldEdgesThatLieTogether) {
@@ -137,7 +147,8 @@ TEST(EdgeSetHierarchy, RangesNestAndBelongToTheirShape) {
   // Every edge of every tree sits in exactly one leaf.
   for (int s = 0; s < 3; ++s) {
     EXPECT_EQ(tree_edges[size_t(s)], set.stats()[size_t(s)].edges_kept) << "shape " << s;
-    EXPECT_EQ(always_edges[size_t(s)], set.stats()[size_t(s)].always_nodes > 0 ? set.stats()[size_t(s)].edges_always : 0)
+    EXPECT_EQ(always_edges[size_t(s)],
+              set.stats()[size_t(s)].always_nodes > 0 ? set.stats()[size_t(s)].edges_always : 0)
         << "shape " << s;
   }
   EXPECT_EQ(tree_edges[1], 0);  // flat-shaded: no silhouette tree

@@ -238,6 +238,9 @@ class EdgeSet {
   /// SAH topology of its silhouette-tree edges and of its always-candidate edges (three binary
   /// splits per level, `sah_buckets` buckets along the largest axis of the edge centroids' box,
   /// cost = area * count), B_p and L_w of every node (in parallel with oneTBB). Fits nothing.
+  /// The intersection curves (EdgeSetOptions::intersection_curves) are found beside the trees,
+  /// in a task of their own, and appended after them; the result does not depend on the thread
+  /// count or on which finished first.
   static EdgeSet build(std::span<const ForestShapeInput> shapes, const EdgeSetOptions& options = {});
 
   /// Every node, flat (a node's children are contiguous), silhouette and always-candidate trees.
@@ -291,7 +294,8 @@ class EdgeSet {
   std::span<const CrossingSegment> crossings() const {
     return crossings_ ? std::span<const CrossingSegment>(*crossings_) : std::span<const CrossingSegment>();
   }
-  /// What finding the intersection curves did (zeros when off).
+  /// What finding the intersection curves did (zeros when off). Its seconds are wall time while
+  /// the trees were built beside it (build()), so they overlap the shapes' build_seconds.
   const IntersectionCurveStats& crossing_stats() const { return crossing_stats_; }
   /// Bytes of the arrays (nodes, edges, roots, intersection-curve segments).
   size_t memory_bytes() const;
@@ -308,10 +312,14 @@ class EdgeSet {
   std::vector<int> loose_always_edges_;
   std::vector<Edge> edges_;
   std::vector<Edge> always_;
-  /// Finds the intersection curves of `shapes` and appends their segments to `f` as
-  /// always-candidates, one crossing group per pair of shapes (a tree per group when it has more
-  /// than opt.always_tree_min_edges segments).
-  static void add_crossings(EdgeSet& f, std::span<const ForestShapeInput> shapes, const EdgeSetOptions& opt);
+  /// The intersection curves of `shapes` (find_intersection_curves over their meshes), its
+  /// statistics into `stats`. Reads the meshes only: build() runs it beside the shapes' trees.
+  static std::vector<CrossingSegment> find_crossings(std::span<const ForestShapeInput> shapes,
+                                                     IntersectionCurveStats& stats);
+  /// Appends `segments` (find_crossings') to `f` as always-candidates, one crossing group per
+  /// pair of shapes (a tree per group when it has more than opt.always_tree_min_edges segments).
+  static void add_crossings(EdgeSet& f, std::span<const ForestShapeInput> shapes, std::vector<CrossingSegment> segments,
+                            const EdgeSetOptions& opt);
   std::vector<ForestShapeStats> stats_;
   std::vector<ShapeTree> trees_;  ///< per input shape
   /// A shape as built, what a refit checks its input against: vertex and triangle counts, a hash
