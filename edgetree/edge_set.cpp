@@ -203,11 +203,15 @@ EdgeSet EdgeSet::build(std::span<const ForestShapeInput> shapes, const EdgeSetOp
   opt.leaf_size = std::clamp(opt.leaf_size, 1, 4);
   // ---- the intersection curves, beside the shapes' trees (they read the meshes only; the trees'
   // serial steps leave a core idle), appended after them
+  // (Declared after `f` and `crossings`, which it writes: if the shapes' loop throws, its
+  // destructor cancels and waits for the task before they are destroyed. The task may run on
+  // this thread inside the loop's parallel waits, so a shape's build_seconds can include it.)
   std::vector<CrossingSegment> crossings;
   tbb::task_group crossings_task;
   if (opt.intersection_curves) crossings_task.run([&] { crossings = find_crossings(shapes, f.crossing_stats_); });
   // ---- every shape's edges first, so that the shared arrays are sized once: appending a large
-  // shape's edges and then a small one's would copy the large one's
+  // shape's edges and then a small one's would copy the large one's. The price: in a scene of
+  // several shapes, the later shapes' edge sets are held while the earlier ones' trees are built.
   std::vector<MeshEdgeSet> sets(shapes.size());
   std::vector<double> edge_seconds(shapes.size());
   size_t always_total = 0, kept_total = 0;
@@ -233,7 +237,6 @@ EdgeSet EdgeSet::build(std::span<const ForestShapeInput> shapes, const EdgeSetOp
     st.edge_counts = set.counts;
     st.edges_total = int(set.edges.size());
     st.edges_kept = int(set.kept.size());
-    st.edges_always = int(set.always.size());
     // ---- always-candidate edges: boundary, non-manifold, inconsistent, and the creases
     std::vector<char> is_crease(set.edges.size(), 0);
     const int abase = int(f.always_.size());

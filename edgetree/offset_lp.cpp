@@ -8,13 +8,15 @@
 #include <coin/ClpSimplex.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <vector>
 
 namespace qsil::edgetree {
 
 namespace {
-/// solve_direct's result, with, when the LP is unbounded and CLP gives it, its ray: a direction
-/// (rho, D) along which every constraint stays satisfied and rho grows (`has_ray`).
+/// solve_direct's result, with, when the LP is unbounded and CLP gives it, its ray: a unit
+/// direction (rho, D) along which every constraint stays satisfied and rho grows (`has_ray`,
+/// checked against the rows).
 struct DirectResult : OffsetLpResult {
   bool has_ray = false;
   double ray_rho = 0.0;
@@ -68,10 +70,22 @@ DirectResult solve_direct(std::span<const Vec4> planes) {
   } else if (model.isProvenDualInfeasible()) {
     out.status = OffsetLpResult::Status::Unbounded;
     if (double* ray = model.unboundedRay()) {
-      out.has_ray = true;
-      out.ray_rho = ray[0];
-      out.ray_d = Vec3(ray[1], ray[2], ray[3]);
+      // Kept only if it is one (normalised): rho grows along it and every row holds, up to a
+      // relative 1e-9; otherwise the caller falls back to adding planes by stride.
+      const Vec4 r(ray[0], ray[1], ray[2], ray[3]);
       delete[] ray;
+      const double len = r.norm();
+      if (len > 0.0 && std::isfinite(len)) {
+        const Vec4 u = r / len;
+        bool holds = u[0] > 1e-9;
+        for (size_t i = 0; holds && i < planes.size(); ++i)
+          holds = planes[i].head<3>().dot(u.tail<3>()) - u[0] >= -1e-9;
+        if (holds) {
+          out.has_ray = true;
+          out.ray_rho = u[0];
+          out.ray_d = u.tail<3>();
+        }
+      }
     }
   } else if (model.isProvenPrimalInfeasible()) {
     out.status = OffsetLpResult::Status::Infeasible;

@@ -19,6 +19,8 @@ struct EdgeBoxRef {
   int index = 0;
 };
 
+static_assert(sizeof(EdgeBoxRef) == 56, "EdgeBoxRef: the 56-byte record the build sorts");
+
 /// The EdgeBoxRef of edge `e` with index `index`.
 inline EdgeBoxRef edge_box_ref(const Edge& e, int index) { return {e.p0.cwiseMin(e.p1), e.p0.cwiseMax(e.p1), index}; }
 

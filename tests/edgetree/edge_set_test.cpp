@@ -60,9 +60,10 @@ TEST(EdgeSetHierarchy, DoesNotDependOnTheThreadCount) {
     ASSERT_EQ(one.nodes().size(), two.nodes().size());
     for (size_t i = 0; i < one.nodes().size(); ++i) {
       const ForestNode &a = one.nodes()[i], &b = two.nodes()[i];
-      EXPECT_EQ(std::tie(a.first, a.count, a.edge_begin, a.edge_end, a.parent, a.flags),
-                std::tie(b.first, b.count, b.edge_begin, b.edge_end, b.parent, b.flags))
+      EXPECT_EQ(std::tie(a.first, a.count, a.edge_begin, a.edge_end, a.parent, a.flags, a.lw),
+                std::tie(b.first, b.count, b.edge_begin, b.edge_end, b.parent, b.flags, b.lw))
           << "node " << i;
+      EXPECT_TRUE(a.bp.lo == b.bp.lo && a.bp.hi == b.bp.hi) << "node " << i;
     }
     ASSERT_EQ(one.edges().size(), two.edges().size());
     for (size_t k = 0; k < one.edges().size(); ++k)
@@ -71,6 +72,7 @@ TEST(EdgeSetHierarchy, DoesNotDependOnTheThreadCount) {
     for (size_t k = 0; k < one.always_edges().size(); ++k) {
       EXPECT_EQ(one.always_edges()[k].v0, two.always_edges()[k].v0);
       EXPECT_EQ(one.always_edges()[k].p0, two.always_edges()[k].p0);
+      EXPECT_EQ(one.always_edges()[k].p1, two.always_edges()[k].p1);
     }
   }
 }

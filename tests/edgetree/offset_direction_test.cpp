@@ -164,14 +164,15 @@ std::vector<Vec4> bumpy_cap(int m, double zmin, double bump, unsigned seed) {
 TEST(ForestOffsetDirection, ConstraintGenerationFollowsUnboundedRays) {
   // Caps of a bumpy sphere's patch, as a large node of a scanned or perturbed mesh has: planes
   // enough (thousands) that the LP solves subsets. A cap whose normals stay in an open
-  // hemisphere (zmin > 0) is unbounded: a direction exists, and the first subset's ray breaks a
-  // few planes (seeds 2 and 3), which are added until a subset's ray breaks none. One a little
-  // more than a hemisphere (zmin < 0) has no point in front of every plane (rho <= 0), which a
-  // brute-force search of directions confirms.
+  // hemisphere (zmin > 0) is unbounded: a direction exists, and constraint generation proves it
+  // when a subset's ray breaks no plane (1-2 solves; 51 when unbounded subsets only added planes
+  // by stride). One a little more than a hemisphere (zmin < 0) has no point in front of every
+  // plane (rho <= 0), which a brute-force search of directions confirms.
   for (unsigned seed = 1; seed <= 3; ++seed) {
     const std::vector<Vec4> open = bumpy_cap(5000, 0.3, 0.02, seed);
     const OffsetLpResult a = solve_offset_lp(open);
     EXPECT_EQ(a.status, OffsetLpResult::Status::Unbounded) << "seed " << seed;
+    EXPECT_LE(a.solves, 5) << "seed " << seed << ": the subsets' rays were not followed (51: 50 rounds, then the whole LP)";
     const OffsetDirection od = choose_offset_direction(open);
     EXPECT_EQ(od.kind, OffsetDirection::Kind::Direction) << "seed " << seed;
 
