@@ -4,6 +4,7 @@
 #include "qsil/edgetree/edge_forest.h"
 
 #include <tbb/parallel_for.h>
+#include <tbb/task_group.h>
 
 #include <algorithm>
 #include <chrono>
@@ -106,7 +107,15 @@ RefitReport EdgeForest::refit(std::span<const ForestShapeInput> shapes) {
     report.reason = "the forest was not fitted";
     return report;
   }
-  if (!refit_edges(shapes, report)) return report;
+  if (!refit_input_matches(shapes, report)) return report;
+  // The intersection curves of the moved surfaces, found beside the edges' and nodes' refit (they
+  // read the meshes only) and appended after it.
+  std::vector<CrossingSegment> crossings;
+  IntersectionCurveStats crossing_stats;
+  tbb::task_group crossings_task;
+  if (options_.intersection_curves)
+    crossings_task.run([&] { crossings = find_crossings(shapes, crossing_stats); });
+  refit_edges(shapes, report);
   const NodeFitOptions& options = fit_options_.front();
   constexpr std::uint16_t kFitFlags = kNodeUnrejectable | kNodeBoxOnly | kNodeInherited | kNodeUsedLp;
   // Per node: 0 untouched, 1 refitted, 2 fitted anew (D failed), 3 fitted anew (the offsets failed);
@@ -148,6 +157,12 @@ RefitReport EdgeForest::refit(std::span<const ForestShapeInput> shapes) {
     }
   }
   report.box_growth = growth_nodes ? std::exp(sum_log / growth_nodes) : 1.0;
+  crossings_task.wait();
+  if (options_.intersection_curves) {
+    add_crossings(*this, shapes, std::move(crossings), options_);
+    crossing_stats_ = crossing_stats;
+    report.crossing_seconds = crossing_stats.seconds;
+  }
   report.refitted = true;
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return report;

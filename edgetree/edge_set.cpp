@@ -291,13 +291,12 @@ EdgeSet EdgeSet::build(std::span<const ForestShapeInput> shapes, const EdgeSetOp
   return f;
 }
 
-bool EdgeSet::refit_edges(std::span<const ForestShapeInput> shapes, RefitReport& report) {
+bool EdgeSet::refit_input_matches(std::span<const ForestShapeInput> shapes, RefitReport& report) const {
   // ---- the input must be the shapes built, with the same topology and crease rules
   if (shapes.size() != shape_records_.size()) {
     report.reason = std::to_string(shapes.size()) + " shapes given, " + std::to_string(shape_records_.size()) + " built";
     return false;
   }
-  int max_shape = 0;
   for (size_t i = 0; i < shapes.size(); ++i) {
     const ShapeRecord& r = shape_records_[i];
     const ForestShapeInput& in = shapes[i];
@@ -315,8 +314,13 @@ bool EdgeSet::refit_edges(std::span<const ForestShapeInput> shapes, RefitReport&
       report.reason = name + "its crease rule changed";
       return false;
     }
-    max_shape = std::max(max_shape, r.shape);
   }
+  return true;
+}
+
+void EdgeSet::refit_edges(std::span<const ForestShapeInput> shapes, RefitReport& report) {
+  int max_shape = 0;
+  for (const ForestShapeInput& in : shapes) max_shape = std::max(max_shape, in.shape);
   std::vector<const ForestShapeInput*> input(size_t(max_shape) + 1, nullptr);
   std::vector<size_t> place(size_t(max_shape) + 1, 0);
   for (size_t i = 0; i < shapes.size(); ++i) {
@@ -418,13 +422,6 @@ bool EdgeSet::refit_edges(std::span<const ForestShapeInput> shapes, RefitReport&
       n.lw_smooth += child.lw_smooth;
     }
   }
-  // ---- the intersection curves of the moved surfaces
-  if (options_.intersection_curves) {
-    const auto t0 = std::chrono::steady_clock::now();
-    add_crossings(*this, shapes, find_crossings(shapes, crossing_stats_), options_);
-    report.crossing_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  }
-  return true;
 }
 
 std::vector<CrossingSegment> EdgeSet::find_crossings(std::span<const ForestShapeInput> shapes,

@@ -220,7 +220,9 @@ struct RefitReport {
   /// the size the sum of the box's extents: how much looser the refit bounds are.
   double box_growth = 1.0;
   double seconds = 0.0;   ///< wall time, intersection curves included
-  double crossing_seconds = 0.0;  ///< ...of which finding the intersection curves anew
+  /// Wall time of finding the intersection curves anew, beside the rest of the refit (so it
+  /// overlaps the other work in `seconds`).
+  double crossing_seconds = 0.0;
   /// Whether the refit forest is loose enough that a build anew pays (kRefitMaxBoxGrowth,
   /// kRefitMaxPromotedShare), or the refit did not happen.
   bool rebuild_advised() const {
@@ -342,12 +344,16 @@ class EdgeSet {
   /// Array sizes after the shapes' own edges and trees: a refit truncates to them, then adds its
   /// promoted creases and the intersection curves anew.
   size_t shapes_nodes_end_ = 0, shapes_always_end_ = 0, shapes_always_roots_end_ = 0, shapes_loose_end_ = 0;
-  /// The edge half of EdgeForest::refit: checks `shapes` against shape_records_ (nothing changes
-  /// and report.reason is set when they differ), moves every edge to the new positions and
-  /// reclassifies it, retires tree edges now concave creases and promotes them and the edges that
-  /// stopped being flat to always-candidate creases, recomputes B_p and L_w of the shapes' nodes,
-  /// and finds the intersection curves anew. Returns false when it changed nothing.
-  bool refit_edges(std::span<const ForestShapeInput> shapes, RefitReport& report);
+  /// Whether `shapes` are the shapes built (shape_records_: the same places, vertex and triangle
+  /// counts, triangles and crease rules), the condition of a refit; else false with
+  /// report.reason set.
+  bool refit_input_matches(std::span<const ForestShapeInput> shapes, RefitReport& report) const;
+  /// The edge half of EdgeForest::refit, for input refit_input_matches accepted: moves every edge
+  /// to the new positions and reclassifies it, retires tree edges now concave creases and
+  /// promotes them and the edges that stopped being flat to always-candidate creases, and
+  /// recomputes B_p and L_w of the shapes' nodes. Drops the intersection curves: the caller finds
+  /// them anew (find_crossings, add_crossings).
+  void refit_edges(std::span<const ForestShapeInput> shapes, RefitReport& report);
   std::vector<CrossingGroup> crossing_groups_;
   std::shared_ptr<const std::vector<CrossingSegment>> crossings_;  ///< shared by copies: edges point into it
   IntersectionCurveStats crossing_stats_;
