@@ -254,22 +254,26 @@ struct CollideMesh {
   Vec3 centre = Vec3::Zero();
 };
 
-void collide_bounds(const RTCBoundsFunctionArguments* args) {
-  const auto* m = static_cast<const CollideMesh*>(args->geometryUserPtr);
-  const Box3& b = m->boxes[args->primID];
-  RTCBounds* out = args->bounds_o;
-  // Outward rounding keeps the float box around the double one (conservative).
+/// Writes into `out` a float box that contains the double box [l, h]: each bound rounded outward
+/// by one float step beyond its float conversion (conservative for a user geometry's bounds).
+void store_outward_bounds(const Vec3& l, const Vec3& h, RTCBounds* out) {
   auto lo = [](double x) { return std::nextafter(float(x), -std::numeric_limits<float>::infinity()); };
   auto hi = [](double x) { return std::nextafter(float(x), std::numeric_limits<float>::infinity()); };
-  const bool finite = b.lo.allFinite() && b.hi.allFinite() && !b.empty();
-  const Vec3 l = finite ? Vec3(b.lo - m->centre) : Vec3::Zero();
-  const Vec3 h = finite ? Vec3(b.hi - m->centre) : Vec3::Zero();
   out->lower_x = lo(l.x());
   out->lower_y = lo(l.y());
   out->lower_z = lo(l.z());
   out->upper_x = hi(h.x());
   out->upper_y = hi(h.y());
   out->upper_z = hi(h.z());
+}
+
+void collide_bounds(const RTCBoundsFunctionArguments* args) {
+  const auto* m = static_cast<const CollideMesh*>(args->geometryUserPtr);
+  const Box3& b = m->boxes[args->primID];
+  const bool finite = b.lo.allFinite() && b.hi.allFinite() && !b.empty();
+  const Vec3 l = finite ? Vec3(b.lo - m->centre) : Vec3::Zero();
+  const Vec3 h = finite ? Vec3(b.hi - m->centre) : Vec3::Zero();
+  store_outward_bounds(l, h, args->bounds_o);
 }
 
 struct CollideState {
@@ -370,16 +374,13 @@ void near_bounds(const RTCBoundsFunctionArguments* args) {
   const auto* m = static_cast<const NearShape*>(args->geometryUserPtr);
   const Box3& b = m->boxes[args->primID];
   RTCBounds* out = args->bounds_o;
-  auto lo = [](double x) { return std::nextafter(float(x), -std::numeric_limits<float>::infinity()); };
-  auto hi = [](double x) { return std::nextafter(float(x), std::numeric_limits<float>::infinity()); };
-  const bool finite = b.lo.allFinite() && b.hi.allFinite() && !b.empty();
-  const double p = m->pad;
-  out->lower_x = finite ? lo(b.lo.x() - p) : 0.0f;
-  out->lower_y = finite ? lo(b.lo.y() - p) : 0.0f;
-  out->lower_z = finite ? lo(b.lo.z() - p) : 0.0f;
-  out->upper_x = finite ? hi(b.hi.x() + p) : -1.0f;  // an empty box for a non-finite triangle
-  out->upper_y = finite ? hi(b.hi.y() + p) : -1.0f;
-  out->upper_z = finite ? hi(b.hi.z() + p) : -1.0f;
+  if (b.lo.allFinite() && b.hi.allFinite() && !b.empty()) {
+    store_outward_bounds(b.lo.array() - m->pad, b.hi.array() + m->pad, out);
+    return;
+  }
+  // An empty box for a non-finite triangle.
+  out->lower_x = out->lower_y = out->lower_z = 0.0f;
+  out->upper_x = out->upper_y = out->upper_z = -1.0f;
 }
 
 /// The query's ray in double and its visitor, behind Embree's context.
