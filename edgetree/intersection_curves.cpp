@@ -4,6 +4,7 @@
 
 #include "qsil/edgetree/intersection_curves.h"
 
+#include "qsil/check.h"
 #include "qsil/ray_tracer.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
@@ -16,6 +17,7 @@
 #include <limits>
 #include <optional>
 #include <tuple>
+#include <type_traits>
 
 namespace qsil::edgetree {
 
@@ -67,6 +69,51 @@ Vec3AD variable(const Vec3& x, int slot) {
   return v;
 }
 
+/// The edge (i, j) of rule.self's triangle in a fixed order (by vertex), so that the two
+/// triangles of an edge make the same point to the last bit and a curve's segments meet exactly.
+std::pair<int, int> ordered_edge(const EndRule& rule, const Tri& self) {
+  int i = rule.i, j = rule.j;
+  if (std::pair(self.ref[size_t(j)].shape, self.ref[size_t(j)].vertex) <
+      std::pair(self.ref[size_t(i)].shape, self.ref[size_t(i)].vertex))
+    std::swap(i, j);
+  return {i, j};
+}
+
+/// The point X = a + s (b - a), s = n.(c0 - a) / n.(b - a), n = (c1 - c0) x (c2 - c0), of the
+/// edge (a, b) of `self` (ordered_edge) with the plane of `other` (c0, c1, c2), s clamped to
+/// [0, 1] (the predicates put a and b strictly on opposite sides; rounding may not: stay on the
+/// edge). T is double or the AutoDiff scalar: make_end's value is this with T = double to the
+/// last bit, because both do the same operations in the same order (segment relies on it and
+/// DCHECKs it). Hence the dot product written out: Eigen's own sums a double 3-vector's products
+/// in another order than an AutoDiff one's (the points then differed in the last bit).
+template <class T>
+Eigen::Matrix<T, 3, 1> edge_plane_point(const Eigen::Matrix<T, 3, 1>& a, const Eigen::Matrix<T, 3, 1>& b,
+                                        const Eigen::Matrix<T, 3, 1>& c0, const Eigen::Matrix<T, 3, 1>& c1,
+                                        const Eigen::Matrix<T, 3, 1>& c2) {
+  auto dot = [](const Eigen::Matrix<T, 3, 1>& u, const Eigen::Matrix<T, 3, 1>& v) -> T {
+    return u[0] * v[0] + (u[1] * v[1] + u[2] * v[2]);
+  };
+  const Eigen::Matrix<T, 3, 1> n = (c1 - c0).cross(c2 - c0);
+  T s = dot(n, c0 - a) / dot(n, b - a);
+  if constexpr (std::is_same_v<T, double>) {
+    if (!(s >= 0)) s = 0.0;
+    if (!(s <= 1)) s = 1.0;
+  } else {
+    if (!(s.value() >= 0)) s = T(0.0, Eigen::Matrix<double, 15, 1>::Zero());
+    if (!(s.value() <= 1)) s = T(1.0, Eigen::Matrix<double, 15, 1>::Zero());
+  }
+  return a + (b - a) * s;
+}
+
+/// The point of the end made by `rule` (make_end's, without its Jacobian).
+Vec3 end_point(const EndRule& rule, const std::array<const Tri*, 2>& tri) {
+  const Tri& self = *tri[size_t(rule.self)];
+  if (rule.j < 0) return self.x[size_t(rule.i)];  // a shared vertex
+  const Tri& other = *tri[size_t(1 - rule.self)];
+  const auto [i, j] = ordered_edge(rule, self);
+  return edge_plane_point<double>(self.x[size_t(i)], self.x[size_t(j)], other.x[0], other.x[1], other.x[2]);
+}
+
 /// The end made by `rule` with its Jacobian (see CrossingEnd); the point itself in `point`.
 CrossingEnd make_end(const EndRule& rule, const std::array<const Tri*, 2>& tri, Vec3& point) {
   CrossingEnd end;
@@ -78,21 +125,9 @@ CrossingEnd make_end(const EndRule& rule, const std::array<const Tri*, 2>& tri, 
     return end;
   }
   const Tri& other = *tri[size_t(1 - rule.self)];
-  // X = a + s (b - a), s = n.(c0 - a) / n.(b - a), n = (c1 - c0) x (c2 - c0). The edge's ends in
-  // a fixed order (by vertex), so that the two triangles of an edge make the same point to the
-  // last bit and a curve's segments meet exactly.
-  int i = rule.i, j = rule.j;
-  if (std::pair(self.ref[size_t(j)].shape, self.ref[size_t(j)].vertex) <
-      std::pair(self.ref[size_t(i)].shape, self.ref[size_t(i)].vertex))
-    std::swap(i, j);
-  const Vec3AD a = variable(self.x[size_t(i)], 0), b = variable(self.x[size_t(j)], 1);
-  const Vec3AD c0 = variable(other.x[0], 2), c1 = variable(other.x[1], 3), c2 = variable(other.x[2], 4);
-  const Vec3AD n = (c1 - c0).cross(c2 - c0);
-  AD s = n.dot(c0 - a) / n.dot(b - a);
-  // The predicates put a and b strictly on opposite sides; rounding may not: stay on the edge.
-  if (!(s.value() >= 0)) s = AD(0.0, Eigen::Matrix<double, 15, 1>::Zero());
-  if (!(s.value() <= 1)) s = AD(1.0, Eigen::Matrix<double, 15, 1>::Zero());
-  const Vec3AD X = a + (b - a) * s;
+  const auto [i, j] = ordered_edge(rule, self);
+  const Vec3AD X = edge_plane_point<AD>(variable(self.x[size_t(i)], 0), variable(self.x[size_t(j)], 1),
+                                        variable(other.x[0], 2), variable(other.x[1], 3), variable(other.x[2], 4));
   end.vertices = {self.ref[size_t(i)], self.ref[size_t(j)], other.ref[0], other.ref[1], other.ref[2]};
   for (int k = 0; k < 3; ++k) {
     point[k] = X[k].value();
@@ -119,6 +154,17 @@ Sharing sharing(const Tri& A, const Tri& B) {
   return s;
 }
 
+/// True iff triangles f and g of `mesh` have two vertex indices in common: they share an edge (or
+/// are one triangle twice), so they share two positions and sharing() would count >= 2. Read from
+/// the indices alone, before any position: in a closed mesh a quarter of the broad phase's pairs.
+bool shares_an_edge(const TriangleMesh& mesh, int f, int g) {
+  const auto& a = mesh.triangles[size_t(f)];
+  const auto& b = mesh.triangles[size_t(g)];
+  int n = 0;
+  for (int i = 0; i < 3; ++i) n += (a[i] == b[0]) + (a[i] == b[1]) + (a[i] == b[2]);
+  return n >= 2;
+}
+
 /// How a triangle meets the other's plane: strictly on both sides (Cross), with exactly one edge
 /// in the plane and its third vertex strictly in front of it (EdgeInPlane: a crossing only if
 /// the triangle across that edge lies strictly behind, pending_segment), or neither.
@@ -130,10 +176,13 @@ struct Sides {
 };
 
 /// The exact sides of every vertex of A and B against the other's plane (a shared vertex: 0).
+/// Where A meets B's plane in neither way (Meets::None) the pair cannot cross (a crossing needs
+/// both to meet, see narrow_phase and pending_segment), so B's sides are not computed: they stay
+/// 0 and B's meets None.
 Sides sides(const Tri& A, const Tri& B, const Sharing& sh) {
   Sides out;
   const std::array<const Tri*, 2> tri{&A, &B};
-  for (int t = 0; t < 2; ++t) {
+  for (int t = 0; t < 2 && (t == 0 || out.meets[0] != Meets::None); ++t) {
     const Tri& self = *tri[size_t(t)];
     const Tri& other = *tri[size_t(1 - t)];
     int plus = 0, minus = 0;
@@ -164,7 +213,6 @@ std::optional<CrossingSegment> segment(const Tri& A, const Tri& B, const Sides& 
   if (!(D.squaredNorm() > 0) || !D.allFinite()) return std::nullopt;
   struct Candidate {
     EndRule rule;
-    CrossingEnd end;
     Vec3 point;
     double lambda;
   };
@@ -179,7 +227,7 @@ std::optional<CrossingSegment> segment(const Tri& A, const Tri& B, const Sides& 
     }
     if (k != 2) return std::nullopt;  // cannot happen for Cross or EdgeInPlane (kept for safety)
     for (Candidate& c : ends[size_t(t)]) {
-      c.end = make_end(c.rule, tri, c.point);
+      c.point = end_point(c.rule, tri);
       c.lambda = D.dot(c.point);
     }
     if (ends[size_t(t)][1].lambda < ends[size_t(t)][0].lambda) std::swap(ends[size_t(t)][0], ends[size_t(t)][1]);
@@ -189,10 +237,14 @@ std::optional<CrossingSegment> segment(const Tri& A, const Tri& B, const Sides& 
   const Candidate& hi = ends[0][1].lambda <= ends[1][1].lambda ? ends[0][1] : ends[1][1];
   if (!(lo.lambda < hi.lambda) || lo.point == hi.point || !lo.point.allFinite() || !hi.point.allFinite())
     return std::nullopt;
+  // ---- Only now the ends' Jacobians (AutoDiff): most candidate pairs of a bumpy surface that
+  // cross each other's plane share a vertex and overlap only there.
   CrossingSegment seg;
+  Vec3 p0, p1;
+  seg.ends = {make_end(lo.rule, tri, p0), make_end(hi.rule, tri, p1)};
+  QSIL_DCHECK_MSG(p0 == lo.point && p1 == hi.point, "intersection curve: an end's point differs from its Jacobian's");
   seg.p0 = lo.point;
   seg.p1 = hi.point;
-  seg.ends = {lo.end, hi.end};
   const std::array<Vec3, 2> n{nA.normalized(), nB.normalized()};
   for (int t = 0; t < 2; ++t) {
     const Tri& self = *tri[size_t(t)];
@@ -254,6 +306,7 @@ struct NarrowResults {
 /// cross the other's plane, or into out.pending when one lies on the other's plane with an edge.
 void narrow_phase(std::span<const CurveMesh> meshes, const TrianglePair& p, NarrowResults& out) {
   ++out.pairs;
+  if (p.mesh0 == p.mesh1 && shares_an_edge(*meshes[size_t(p.mesh0)].mesh, p.triangle0, p.triangle1)) return;
   const Tri A = triangle(meshes, p.mesh0, p.triangle0), B = triangle(meshes, p.mesh1, p.triangle1);
   const Sharing sh = sharing(A, B);
   if (sh.count >= 2) return;  // an edge (or the triangle) in common: no crossing
