@@ -114,7 +114,7 @@ RefitReport EdgeForest::refit(std::span<const ForestShapeInput> shapes) {
   IntersectionCurveStats crossing_stats;
   tbb::task_group crossings_task;
   if (options_.intersection_curves)
-    crossings_task.run([&] { crossings = find_crossings(shapes, crossing_stats); });
+    crossings_task.run([&] { crossings = find_crossings(shapes, crossing_stats, &pair_cache_); });
   refit_edges(shapes, report);
   const NodeFitOptions& options = fit_options_.front();
   constexpr std::uint16_t kFitFlags = kNodeUnrejectable | kNodeBoxOnly | kNodeInherited | kNodeUsedLp;

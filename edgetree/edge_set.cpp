@@ -425,10 +425,10 @@ void EdgeSet::refit_edges(std::span<const ForestShapeInput> shapes, RefitReport&
 }
 
 std::vector<CrossingSegment> EdgeSet::find_crossings(std::span<const ForestShapeInput> shapes,
-                                                     IntersectionCurveStats& stats) {
+                                                     IntersectionCurveStats& stats, CandidatePairCache* cache) {
   std::vector<CurveMesh> meshes;
   for (const ForestShapeInput& in : shapes) meshes.push_back({in.mesh, in.shape});
-  return find_intersection_curves(meshes, &stats);
+  return find_intersection_curves(meshes, &stats, cache);
 }
 
 void EdgeSet::add_crossings(EdgeSet& f, std::span<const ForestShapeInput> shapes, std::vector<CrossingSegment> found,
@@ -499,9 +499,10 @@ std::vector<ForestShapeInput> forest_inputs(const Scene& scene) {
 
 size_t EdgeSet::memory_bytes() const {
   return nodes_.capacity() * sizeof(ForestNode) + edges_.capacity() * sizeof(Edge) +
-         flat_edges_.capacity() * sizeof(FlatEdge) +
-         always_.capacity() * sizeof(Edge) + (crossings_ ? crossings_->capacity() * sizeof(CrossingSegment) : 0) +
-         (roots_.capacity() + always_roots_.capacity() + loose_always_edges_.capacity()) * sizeof(int);
+         flat_edges_.capacity() * sizeof(FlatEdge) + always_.capacity() * sizeof(Edge) +
+         (crossings_ ? crossings_->capacity() * sizeof(CrossingSegment) : 0) +
+         (roots_.capacity() + always_roots_.capacity() + loose_always_edges_.capacity()) * sizeof(int) +
+         pair_cache_.memory_bytes();
 }
 
 }  // namespace qsil::edgetree

@@ -8,7 +8,9 @@
 #include "qsil/ray_tracer.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
 #include <unsupported/Eigen/AutoDiff>
 
 #include <algorithm>
@@ -300,6 +302,8 @@ struct NarrowResults {
   std::vector<std::pair<TrianglePair, CrossingSegment>> found;
   std::vector<Pending> pending;
   long long pairs = 0;
+  std::vector<TrianglePair> kept;  ///< pairs for a CandidatePairCache being filled
+  long long edge_sharing = 0;      ///< pairs sharing an edge by index (not kept)
 };
 
 /// The narrow phase of one candidate pair p: its segment into out.found when both triangles
@@ -356,6 +360,117 @@ std::optional<CrossingSegment> pending_segment(std::span<const CurveMesh> meshes
   return seg;
 }
 
+/// True iff the boxes of p's triangles overlap (closed, in double): the broad phase's exact test.
+bool boxes_overlap(std::span<const CurveMesh> meshes, const TrianglePair& p) {
+  auto box = [&](int mesh, int f) {
+    const TriangleMesh& m = *meshes[size_t(mesh)].mesh;
+    Box3 b;
+    for (int k = 0; k < 3; ++k) b.expand(m.positions[size_t(m.triangles[size_t(f)][k])]);
+    return b;
+  };
+  const Box3 a = box(p.mesh0, p.triangle0), b = box(p.mesh1, p.triangle1);
+  return (a.lo.array() <= b.hi.array()).all() && (b.lo.array() <= a.hi.array()).all();
+}
+
+/// FNV-1a over every mesh's triangle count and vertex indices.
+std::uint64_t triangles_hash(std::span<const CurveMesh> meshes) {
+  std::uint64_t h = 1469598103934665603ull;
+  auto mix = [&](std::int64_t x) {
+    for (int i = 0; i < 8; ++i, x >>= 8) {
+      h ^= std::uint64_t(x & 0xff);
+      h *= 1099511628211ull;
+    }
+  };
+  for (const CurveMesh& m : meshes) {
+    mix(m.mesh->num_triangles());
+    for (const auto& t : m.mesh->triangles) mix((std::int64_t(t[0]) << 42) ^ (std::int64_t(t[1]) << 21) ^ t[2]);
+  }
+  return h;
+}
+
+/// What a search finds of its cache (CandidatePairCache): it serves `meshes` (the same counts and
+/// triangles, finite coordinates, and no vertex moved more than gap / 2 on any axis since it was
+/// filled), the vertices moved too far, or it holds nothing for them.
+enum class CacheCheck { Serves, MovedTooFar, Unusable };
+
+CacheCheck check_cache(const CandidatePairCache& cache, std::span<const CurveMesh> meshes) {
+  if (!cache.valid || cache.positions.size() != meshes.size()) return CacheCheck::Unusable;
+  for (size_t i = 0; i < meshes.size(); ++i)
+    if (cache.positions[i].size() != meshes[i].mesh->positions.size() ||
+        cache.triangle_counts[i] != meshes[i].mesh->num_triangles())
+      return CacheCheck::Unusable;
+  if (triangles_hash(meshes) != cache.triangles_hash) return CacheCheck::Unusable;
+  double d = 0.0;
+  for (size_t i = 0; i < meshes.size(); ++i) {
+    const std::vector<Vec3>& now = meshes[i].mesh->positions;
+    for (size_t v = 0; v < now.size(); ++v) {
+      const double move = (now[v] - cache.positions[i][v]).cwiseAbs().maxCoeff();
+      if (!(move <= std::numeric_limits<double>::max())) return CacheCheck::Unusable;  // not finite
+      d = std::max(d, move);
+    }
+  }
+  // fl(x - y) = (x - y)(1 + e), |e| <= 2^-53: the true move is at most d (1 + 2^-52), and the
+  // product below rounds by 2^-53 more.
+  return 2.0 * d * (1.0 + 0x1p-50) <= cache.gap ? CacheCheck::Serves : CacheCheck::MovedTooFar;
+}
+
+/// How a search with a cache runs: from the cache, filling it, or without it.
+enum class CacheUse { Reuse, Fill, Plain };
+
+/// The cache's policy (CandidatePairCache::gap_edges, served, rest): a fill costs 1.3-1.5
+/// searches without a cache and a search from it about 0.4 (at the initial gap; measured in
+/// docs/experiments/2026-11-26-candidate-pair-cache.md), so it pays where a fill serves at
+/// least one search. The gap doubles (up to kCandidatePairMaxGap) when the vertices moved out
+/// of it before two searches, and halves (down to kCandidatePairMinGap) after eight; where even
+/// the largest gap served none, the next kCandidatePairRest searches run without the cache.
+CacheUse plan(CandidatePairCache& cache, CacheCheck check) {
+  if (check == CacheCheck::Serves) {
+    ++cache.served;
+    return CacheUse::Reuse;
+  }
+  if (cache.rest > 0) {
+    --cache.rest;
+    return CacheUse::Plain;
+  }
+  if (check == CacheCheck::MovedTooFar) {
+    if (cache.served < 2) {
+      if (cache.served == 0 && cache.gap_edges >= kCandidatePairMaxGap) {
+        cache.rest = kCandidatePairRest - 1;
+        cache.valid = false;
+        return CacheUse::Plain;
+      }
+      cache.gap_edges = std::min(2.0 * cache.gap_edges, kCandidatePairMaxGap);
+    } else if (cache.served > 8) {
+      cache.gap_edges = std::max(0.5 * cache.gap_edges, kCandidatePairMinGap);
+    }
+  }
+  return CacheUse::Fill;
+}
+
+/// The meshes' mean edge length (each triangle's three, over every triangle with finite
+/// vertices; 0 if none).
+double mean_edge_length(std::span<const CurveMesh> meshes) {
+  double sum = 0.0;
+  long long n = 0;
+  for (const CurveMesh& m : meshes)
+    for (const auto& t : m.mesh->triangles)
+      for (int k = 0; k < 3; ++k) {
+        const double l = (m.mesh->positions[size_t(t[k])] - m.mesh->positions[size_t(t[(k + 1) % 3])]).norm();
+        if (std::isfinite(l)) {
+          sum += l;
+          ++n;
+        }
+      }
+  return n ? sum / double(n) : 0.0;
+}
+
+bool all_finite(std::span<const CurveMesh> meshes) {
+  for (const CurveMesh& m : meshes)
+    for (const Vec3& x : m.mesh->positions)
+      if (!x.allFinite()) return false;
+  return true;
+}
+
 }  // namespace
 
 SceneVelocities::Block crossing_end_velocity(const CrossingEnd& end, const SceneVelocities& velocities) {
@@ -370,16 +485,68 @@ SceneVelocities::Block crossing_end_velocity(const CrossingEnd& end, const Scene
   return v;
 }
 
-std::vector<CrossingSegment> find_intersection_curves(std::span<const CurveMesh> meshes,
-                                                      IntersectionCurveStats* stats) {
+size_t CandidatePairCache::memory_bytes() const {
+  size_t bytes = pairs.capacity() * sizeof(TrianglePair) + triangle_counts.capacity() * sizeof(int);
+  for (const auto& p : positions) bytes += p.capacity() * sizeof(Vec3);
+  return bytes;
+}
+
+std::vector<CrossingSegment> find_intersection_curves(std::span<const CurveMesh> meshes, IntersectionCurveStats* stats,
+                                                      CandidatePairCache* cache) {
   const auto t0 = std::chrono::steady_clock::now();
   std::vector<const TriangleMesh*> ptrs;
   for (const CurveMesh& m : meshes) ptrs.push_back(m.mesh);
-  // ---- The narrow phase inside the broad phase's callback (Embree's threads), per thread.
   tbb::enumerable_thread_specific<NarrowResults> local;
   double build_seconds = 0;
-  for_each_overlapping_triangle_pair(
-      ptrs, [&](const TrianglePair& p) { narrow_phase(meshes, p, local.local()); }, &build_seconds);
+  const CacheUse use = cache ? plan(*cache, check_cache(*cache, meshes)) : CacheUse::Plain;
+  const bool from_cache = use == CacheUse::Reuse;
+  if (from_cache) {
+    // ---- The cached pairs, with the broad phase's exact box test on the moved meshes.
+    const std::vector<TrianglePair>& pairs = cache->pairs;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, pairs.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
+      NarrowResults& out = local.local();
+      for (size_t i = r.begin(); i < r.end(); ++i)
+        if (boxes_overlap(meshes, pairs[i])) narrow_phase(meshes, pairs[i], out);
+    });
+    local.local().pairs += cache->edge_sharing_pairs;  // they overlap wherever coordinates are finite
+  } else if (use == CacheUse::Fill) {
+    // ---- The broad phase with the cache's gap: every pair is kept, those whose boxes overlap
+    // go to the narrow phase (Embree's threads, per thread).
+    CandidatePairCache fresh;
+    fresh.gap_edges = cache->gap_edges;
+    *cache = std::move(fresh);
+    const double gap = cache->gap_edges * mean_edge_length(meshes);
+    for_each_overlapping_triangle_pair(
+        ptrs,
+        [&](const TrianglePair& p) {
+          NarrowResults& out = local.local();
+          const bool overlap = boxes_overlap(meshes, p);
+          if (p.mesh0 == p.mesh1 && shares_an_edge(*meshes[size_t(p.mesh0)].mesh, p.triangle0, p.triangle1))
+            out.edge_sharing += overlap;
+          else
+            out.kept.push_back(p);
+          if (overlap) narrow_phase(meshes, p, out);
+        },
+        &build_seconds, gap);
+    if (all_finite(meshes)) {
+      for (NarrowResults& l : local) {
+        cache->pairs.insert(cache->pairs.end(), l.kept.begin(), l.kept.end());
+        cache->edge_sharing_pairs += l.edge_sharing;
+        l.kept = {};
+      }
+      for (const CurveMesh& m : meshes) {
+        cache->positions.push_back(m.mesh->positions);
+        cache->triangle_counts.push_back(m.mesh->num_triangles());
+      }
+      cache->triangles_hash = triangles_hash(meshes);
+      cache->gap = gap;
+      cache->valid = true;
+    }
+  } else {
+    // ---- The narrow phase inside the broad phase's callback (Embree's threads), per thread.
+    for_each_overlapping_triangle_pair(
+        ptrs, [&](const TrianglePair& p) { narrow_phase(meshes, p, local.local()); }, &build_seconds);
+  }
   std::vector<std::pair<TrianglePair, CrossingSegment>> found;
   std::vector<Pending> pending;
   long long candidate_pairs = 0;
@@ -408,6 +575,7 @@ std::vector<CrossingSegment> find_intersection_curves(std::span<const CurveMesh>
     stats->candidate_pairs = candidate_pairs;
     stats->crossing_pairs = (long long)out.size();
     stats->build_seconds = build_seconds;
+    stats->from_cache = from_cache;
     stats->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
   return out;

@@ -251,6 +251,7 @@ namespace {
 /// taken around (collide_bounds rounds them outward).
 struct CollideMesh {
   std::vector<Box3> boxes;  ///< per triangle, world frame, double
+  double grow = 0.0;  ///< half the gap: Embree's boxes are grown by it on every side
   Vec3 centre = Vec3::Zero();
 };
 
@@ -271,13 +272,14 @@ void collide_bounds(const RTCBoundsFunctionArguments* args) {
   const auto* m = static_cast<const CollideMesh*>(args->geometryUserPtr);
   const Box3& b = m->boxes[args->primID];
   const bool finite = b.lo.allFinite() && b.hi.allFinite() && !b.empty();
-  const Vec3 l = finite ? Vec3(b.lo - m->centre) : Vec3::Zero();
-  const Vec3 h = finite ? Vec3(b.hi - m->centre) : Vec3::Zero();
+  const Vec3 l = finite ? Vec3(b.lo.array() - m->grow - m->centre.array()) : Vec3::Zero();
+  const Vec3 h = finite ? Vec3(b.hi.array() + m->grow - m->centre.array()) : Vec3::Zero();
   store_outward_bounds(l, h, args->bounds_o);
 }
 
 struct CollideState {
   const std::vector<CollideMesh>* meshes = nullptr;
+  double gap = 0.0;
   const std::function<void(const TrianglePair&)>* visit = nullptr;
 };
 
@@ -292,15 +294,19 @@ void collide_callback(void* user, RTCCollision* collisions, unsigned int count) 
     if (!(std::pair(p.mesh0, p.triangle0) < std::pair(p.mesh1, p.triangle1))) continue;  // the other order, or itself
     const Box3& a = meshes[size_t(p.mesh0)].boxes[size_t(p.triangle0)];
     const Box3& b = meshes[size_t(p.mesh1)].boxes[size_t(p.triangle1)];
-    if ((a.lo.array() <= b.hi.array()).all() && (b.lo.array() <= a.hi.array()).all()) (*state->visit)(p);
+    const double g = state->gap;
+    if ((a.lo.array() <= b.hi.array() + g).all() && (b.lo.array() <= a.hi.array() + g).all()) (*state->visit)(p);
   }
 }
 
 }  // namespace
 
 void for_each_overlapping_triangle_pair(std::span<const TriangleMesh* const> meshes,
-                                        const std::function<void(const TrianglePair&)>& visit, double* build_seconds) {
+                                        const std::function<void(const TrianglePair&)>& visit, double* build_seconds,
+                                        double gap) {
   const auto t0 = std::chrono::steady_clock::now();
+  if (!(gap >= 0.0) || !std::isfinite(gap))
+    throw Error("overlapping triangle pairs: gap " + std::to_string(gap) + " is not a finite non-negative length");
   if (build_seconds) *build_seconds = 0;
   std::vector<CollideMesh> cm(meshes.size());
   Box3 all;
@@ -317,7 +323,22 @@ void for_each_overlapping_triangle_pair(std::span<const TriangleMesh* const> mes
   }
   if (triangles < 2) return;
   const Vec3 centre = all.empty() ? Vec3::Zero() : all.center();
-  for (CollideMesh& m : cm) m.centre = centre;
+  // Two boxes within `gap` overlap once each is grown by half of it; 2^-40 of the largest
+  // coordinate more covers the rounding of the grown bounds in double (a few 2^-53 of it), so
+  // that Embree's float boxes (outward) report every such pair. gap 0: the boxes themselves.
+  double grow = 0.0;
+  if (gap > 0.0) {
+    double largest = 0.0;
+    for (const CollideMesh& m : cm)
+      for (const Box3& b : m.boxes)
+        if (b.lo.allFinite() && b.hi.allFinite())
+          largest = std::max({largest, b.lo.cwiseAbs().maxCoeff(), b.hi.cwiseAbs().maxCoeff()});
+    grow = 0.5 * gap + std::ldexp(largest, -40);
+  }
+  for (CollideMesh& m : cm) {
+    m.centre = centre;
+    m.grow = grow;
+  }
   RTCDevice device = rtcNewDevice(nullptr);
   if (!device) throw Error("Embree: cannot create device");
   rtcSetDeviceErrorFunction(device, embree_error, nullptr);
@@ -336,6 +357,7 @@ void for_each_overlapping_triangle_pair(std::span<const TriangleMesh* const> mes
   if (build_seconds) *build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   CollideState state;
   state.meshes = &cm;
+  state.gap = gap;
   state.visit = &visit;
   rtcCollide(scene, scene, collide_callback, &state);
   const bool failed = rtcGetDeviceError(device) != RTC_ERROR_NONE;

@@ -115,11 +115,14 @@ struct TrianglePair {
 /// rounded outward to float, then the exact box test in double). Nothing is stored per pair (a
 /// million-triangle mesh has tens of millions). Meshes with non-finite coordinates or degenerate
 /// triangles are accepted (a non-finite box overlaps nothing).
+/// `gap` >= 0 (scene units): the pairs whose boxes lie within `gap` of each other on every axis
+/// instead (lo_a <= hi_b + gap and lo_b <= hi_a + gap, evaluated in double: rounding is monotone,
+/// so every pair within `gap` in exact arithmetic is visited); 0: those that overlap.
 /// `build_seconds` (optional) receives the time of Embree's BVH build. Throws qsil::Error if
 /// Embree cannot be initialised.
 void for_each_overlapping_triangle_pair(std::span<const TriangleMesh* const> meshes,
                                         const std::function<void(const TrianglePair&)>& visit,
-                                        double* build_seconds = nullptr);
+                                        double* build_seconds = nullptr, double gap = 0.0);
 
 /// for_each_overlapping_triangle_pair's pairs, sorted (for tests and small meshes).
 std::vector<TrianglePair> overlapping_triangle_pairs(std::span<const TriangleMesh* const> meshes);

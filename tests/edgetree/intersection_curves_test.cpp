@@ -3,6 +3,7 @@
 // closed meshes close, and each end's Jacobian against finite differences of the construction.
 #include "qsil/edgetree/intersection_curves.h"
 #include "qsil/edgetree/edge_set.h"
+#include "qsil/error.h"
 #include "qsil/ray_tracer.h"
 #include "qsil/scene.h"
 #include "test_data.h"
@@ -12,8 +13,11 @@
 
 #include <algorithm>
 #include <map>
+#include <mutex>
 #include <random>
 #include <set>
+#include <string>
+#include <tuple>
 
 namespace qsil::edgetree {
 namespace {
@@ -70,6 +74,51 @@ TEST(IntersectionCurves, BroadPhaseFindsEveryOverlappingPairLikeBruteForce) {
   ASSERT_GT(brute.size(), 1000u);
   EXPECT_EQ(found.size(), brute.size());
   EXPECT_TRUE(found == brute) << "the broad phase differs from brute force";
+}
+
+// ---- The broad phase with a gap: every pair whose boxes lie within it, as brute force finds them
+// (CandidatePairCache fills from it); a test that needs the gap (brute force with none differs).
+TEST(IntersectionCurves, BroadPhaseWithAGapFindsEveryPairWithinItLikeBruteForce) {
+  const TriangleMesh a = sphere(0.5, Vec3(0, 0.1, 0)), b = floor_square(1.0);
+  const std::vector<const TriangleMesh*> meshes{&a, &b};
+  const double gap = 0.05;
+  std::mutex lock;
+  std::vector<TrianglePair> found;
+  for_each_overlapping_triangle_pair(
+      meshes,
+      [&](const TrianglePair& p) {
+        std::lock_guard<std::mutex> guard(lock);
+        found.push_back(p);
+      },
+      nullptr, gap);
+  auto key = [](const TrianglePair& p) { return std::tie(p.mesh0, p.triangle0, p.mesh1, p.triangle1); };
+  std::sort(found.begin(), found.end(), [&](const auto& x, const auto& y) { return key(x) < key(y); });
+  std::vector<std::pair<int, int>> tris;
+  std::vector<Box3> boxes;
+  for (int m = 0; m < 2; ++m)
+    for (int f = 0; f < meshes[size_t(m)]->num_triangles(); ++f) {
+      Box3 box;
+      for (int k = 0; k < 3; ++k)
+        box.expand(meshes[size_t(m)]->positions[size_t(meshes[size_t(m)]->triangles[size_t(f)][k])]);
+      tris.emplace_back(m, f);
+      boxes.push_back(box);
+    }
+  std::vector<TrianglePair> brute, overlapping;
+  for (size_t i = 0; i < tris.size(); ++i)
+    for (size_t j = i + 1; j < tris.size(); ++j) {
+      const TrianglePair p{tris[i].first, tris[i].second, tris[j].first, tris[j].second};
+      if ((boxes[i].lo.array() <= boxes[j].hi.array() + gap).all() &&
+          (boxes[j].lo.array() <= boxes[i].hi.array() + gap).all())
+        brute.push_back(p);
+      if ((boxes[i].lo.array() <= boxes[j].hi.array()).all() && (boxes[j].lo.array() <= boxes[i].hi.array()).all())
+        overlapping.push_back(p);
+    }
+  ASSERT_GT(brute.size(), overlapping.size() + 100) << "the gap adds too few pairs to test it";
+  EXPECT_EQ(found.size(), brute.size());
+  EXPECT_TRUE(found == brute) << "the broad phase with a gap differs from brute force";
+  EXPECT_THROW(for_each_overlapping_triangle_pair(
+                   meshes, [](const TrianglePair&) {}, nullptr, -1.0),
+               Error);
 }
 
 // ---- Two triangles crossing: the segment is the analytic one.
@@ -274,6 +323,91 @@ TEST(IntersectionCurves, EdgeSetKeepsSegmentsAsACrossingGroup) {
   EXPECT_TRUE(without.crossing_groups().empty());
   EXPECT_EQ(without.always_edges().size() + size_t(g.segments), set.always_edges().size());
   EXPECT_EQ(without.edges().size(), set.edges().size());
+}
+
+// ---- The refits' pair cache (CandidatePairCache): the same segments and counts as a search
+// without it, bit for bit, along a trajectory of small and large moves that makes it serve, fill
+// and rest; and a pair that came near only by the two triangles' moving towards each other.
+void expect_same_segments(const std::vector<CrossingSegment>& a, const std::vector<CrossingSegment>& b,
+                          const std::string& what) {
+  ASSERT_EQ(a.size(), b.size()) << what;
+  for (size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(a[i].shape, b[i].shape) << what << " " << i;
+    EXPECT_EQ(a[i].face, b[i].face) << what << " " << i;
+    EXPECT_EQ(a[i].p0, b[i].p0) << what << " " << i;
+    EXPECT_EQ(a[i].p1, b[i].p1) << what << " " << i;
+    EXPECT_EQ(a[i].plane[0], b[i].plane[0]) << what << " " << i;
+    EXPECT_EQ(a[i].plane[1], b[i].plane[1]) << what << " " << i;
+    for (int e = 0; e < 2; ++e) {
+      EXPECT_EQ(a[i].ends[size_t(e)].jacobian, b[i].ends[size_t(e)].jacobian) << what << " " << i;
+      for (int v = 0; v < 5; ++v) {
+        EXPECT_EQ(a[i].ends[size_t(e)].vertices[size_t(v)].shape, b[i].ends[size_t(e)].vertices[size_t(v)].shape);
+        EXPECT_EQ(a[i].ends[size_t(e)].vertices[size_t(v)].vertex, b[i].ends[size_t(e)].vertices[size_t(v)].vertex);
+      }
+    }
+  }
+}
+
+TEST(IntersectionCurves, PairCacheGivesTheSegmentsOfASearchWithoutIt) {
+  TriangleMesh two = load_obj(test::data_file("tests/data/meshes/two-spheres.obj"));
+  TriangleMesh ball = sphere(0.5, Vec3(0.2, 0.1, 0)), ground = floor_square(2.0);
+  const std::vector<CurveMesh> in{{&two, 0}, {&ball, 1}, {&ground, 2}};
+  CandidatePairCache cache;
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> normal;
+  int served = 0, searched = 0;
+  // Moves per step (scene units): small ones the cache serves, large ones it cannot (the gap grows
+  // to its largest, then the cache rests: kCandidatePairRest), small ones again.
+  std::vector<double> steps{0, 0.002, 0.002, 0.002, 0.05, 0.002, 0.3, 0.3, 0.3, 0.3};
+  steps.resize(steps.size() + kCandidatePairRest + 6, 0.002);
+  for (size_t s = 0; s < steps.size(); ++s) {
+    // A smooth move of the ball (a sine field) and a rigid one of the two spheres.
+    const Vec3 dir = Vec3(normal(rng), normal(rng), normal(rng)).normalized();
+    for (Vec3& p : ball.positions) p += steps[s] * std::sin(3.0 * p.dot(dir) + double(s)) * dir;
+    for (Vec3& p : two.positions) p += 0.5 * steps[s] * dir;
+    IntersectionCurveStats with, without;
+    const auto cached = find_intersection_curves(in, &with, &cache);
+    const auto plain = find_intersection_curves(in, &without);
+    ASSERT_GT(plain.size(), 100u) << s;
+    expect_same_segments(cached, plain, "step " + std::to_string(s));
+    EXPECT_EQ(with.candidate_pairs, without.candidate_pairs) << s;
+    EXPECT_EQ(with.crossing_pairs, without.crossing_pairs) << s;
+    (with.from_cache ? served : searched) += 1;
+  }
+  EXPECT_GE(served, 8);
+  EXPECT_GE(searched, 8);
+}
+
+TEST(IntersectionCurves, PairCacheFindsTrianglesThatMovedTowardsEachOther) {
+  // A in the plane z = 0 reaching x = 1; B in the plane x = c, across A's plane: they cross where
+  // c < 1. The gap g comes from the triangles' edges, not their places.
+  auto meshes = [](double shift_a, double c) {
+    return std::pair(triangle({shift_a, -1, 0}, {1 + shift_a, -1, 0}, {1 + shift_a, 1, 0}),
+                     triangle({c, -2, -1}, {c, 2, -1}, {c, 0, 1}));
+  };
+  double g = 0;
+  {
+    auto [a, b] = meshes(0, 5);
+    CandidatePairCache probe;
+    find_intersection_curves(std::vector<CurveMesh>{{&a, 0}, {&b, 1}}, nullptr, &probe);
+    ASSERT_TRUE(probe.valid);
+    g = probe.gap;
+    ASSERT_GT(g, 0.5);
+  }
+  // Boxes 1.2 g apart: no pair is kept. Then each moves 0.7 g towards the other: no vertex moved
+  // more than g, but the boxes moved 1.4 g closer and the triangles cross.
+  auto [a, b] = meshes(0, 1 + 1.2 * g);
+  const std::vector<CurveMesh> in{{&a, 0}, {&b, 1}};
+  CandidatePairCache cache;
+  EXPECT_TRUE(find_intersection_curves(in, nullptr, &cache).empty());
+  ASSERT_TRUE(cache.valid);
+  EXPECT_TRUE(cache.pairs.empty());
+  std::tie(a, b) = meshes(0.7 * g, 1 + 0.5 * g);
+  const auto plain = find_intersection_curves(in);
+  ASSERT_EQ(plain.size(), 1u);
+  IntersectionCurveStats stats;
+  expect_same_segments(find_intersection_curves(in, &stats, &cache), plain, "moved");
+  EXPECT_FALSE(stats.from_cache);
 }
 
 }  // namespace

@@ -299,7 +299,7 @@ class EdgeSet {
   /// What finding the intersection curves did (zeros when off). Its seconds are wall time while
   /// the trees were built beside it (build()), so they overlap the shapes' build_seconds.
   const IntersectionCurveStats& crossing_stats() const { return crossing_stats_; }
-  /// Bytes of the arrays (nodes, edges, roots, intersection-curve segments).
+  /// Bytes of the arrays (nodes, edges, roots, intersection-curve segments, the refits' pair cache).
   size_t memory_bytes() const;
 
  protected:
@@ -314,10 +314,12 @@ class EdgeSet {
   std::vector<int> loose_always_edges_;
   std::vector<Edge> edges_;
   std::vector<Edge> always_;
-  /// The intersection curves of `shapes` (find_intersection_curves over their meshes), its
-  /// statistics into `stats`. Reads the meshes only: build() runs it beside the shapes' trees.
+  /// The intersection curves of `shapes` (find_intersection_curves over their meshes, with
+  /// `cache` if given), its statistics into `stats`. Reads the meshes only: build() runs it beside
+  /// the shapes' trees.
   static std::vector<CrossingSegment> find_crossings(std::span<const ForestShapeInput> shapes,
-                                                     IntersectionCurveStats& stats);
+                                                     IntersectionCurveStats& stats,
+                                                     CandidatePairCache* cache = nullptr);
   /// Appends `segments` (find_crossings') to `f` as always-candidates, one crossing group per
   /// pair of shapes (a tree per group when it has more than opt.always_tree_min_edges segments).
   static void add_crossings(EdgeSet& f, std::span<const ForestShapeInput> shapes, std::vector<CrossingSegment> segments,
@@ -357,6 +359,9 @@ class EdgeSet {
   std::vector<CrossingGroup> crossing_groups_;
   std::shared_ptr<const std::vector<CrossingSegment>> crossings_;  ///< shared by copies: edges point into it
   IntersectionCurveStats crossing_stats_;
+  /// The broad phase's pairs for the refits' intersection curves: filled by the first refit
+  /// (a build that is never refitted keeps none), read by the next while the vertices stay near.
+  CandidatePairCache pair_cache_;
 };
 
 }  // namespace qsil::edgetree

@@ -18,9 +18,11 @@
 
 #include "qsil/math.h"
 #include "qsil/parameters.h"
+#include "qsil/ray_tracer.h"
 #include "qsil/scene.h"
 
 #include <array>
+#include <cstdint>
 #include <span>
 #include <vector>
 
@@ -67,8 +69,54 @@ struct CurveMesh {
 struct IntersectionCurveStats {
   long long candidate_pairs = 0;  ///< triangle pairs whose boxes overlap (the broad phase)
   long long crossing_pairs = 0;   ///< of which cross each other (a segment each)
-  double build_seconds = 0;       ///< wall time of Embree's BVH over the triangles' boxes
+  double build_seconds = 0;       ///< wall time of Embree's BVH over the triangles' boxes (0 from a cache)
   double seconds = 0;             ///< wall time of everything (the exact tests run inside rtcCollide)
+  bool from_cache = false;        ///< the pairs were a CandidatePairCache's (no broad phase)
+};
+
+/// The gap of a CandidatePairCache, in the meshes' mean edge lengths: the pairs kept are those
+/// whose boxes lie within it of each other, and the cache serves until some vertex has moved half
+/// of it. It starts at kCandidatePairGap and adapts to how far the vertices move between searches
+/// within [kCandidatePairMinGap, kCandidatePairMaxGap]; kCandidatePairRest searches run without
+/// the cache where even the largest gap served none. Measured in
+/// docs/experiments/2026-11-26-candidate-pair-cache.md: at a gap of 0.5 a closed mesh keeps 7.5
+/// (icospheres) to 11 (Spot) pairs per triangle, a fill costs 1.3-1.5 searches without a cache
+/// and a search from it about 0.4; at 1, 18-26 pairs, about 2 and 0.5-0.6 (at 4, a search from
+/// the cache costs more than one without it).
+inline constexpr double kCandidatePairGap = 0.5;
+inline constexpr double kCandidatePairMinGap = 0.125;
+inline constexpr double kCandidatePairMaxGap = 1.0;
+inline constexpr int kCandidatePairRest = 8;
+
+/// The broad phase's pairs, kept for later searches over the same meshes after their vertices
+/// moved a little (EdgeForest::refit: an optimiser's steps), so that those skip Embree's BVH
+/// build and traversal. Filled and read by find_intersection_curves only.
+///
+/// Why a search from the cache finds exactly what a search without one finds: the cache holds
+/// every pair of distinct triangles whose boxes (closed, in double) lay within `gap` of each other
+/// on every axis at `positions`, but the pairs of one mesh that share an edge by index (those
+/// never cross and always overlap: only their count is kept). A box's bounds are its vertices'
+/// coordinates, so when no vertex has moved more than d on any axis since, two boxes that
+/// overlap now lay within 2 d of each other then. A search reuses the cache where 2 d <= gap (d
+/// bounded above despite rounding: a difference of doubles is rounded relative to itself), the
+/// meshes have the same vertex and triangle counts and triangles (a hash), and every coordinate
+/// is finite; it then applies the exact box test of the broad phase to the cached pairs. Else it
+/// runs the broad phase with the gap, fills the cache anew and keeps the positions (or, where
+/// filling has not paid, runs without it for a while: see kCandidatePairRest).
+/// Memory: 16 bytes per cached pair (7.5-11 per triangle at kCandidatePairGap) and 24 per vertex.
+struct CandidatePairCache {
+  std::vector<std::vector<Vec3>> positions;  ///< per mesh, as when the pairs were found
+  std::vector<int> triangle_counts;          ///< per mesh
+  std::uint64_t triangles_hash = 0;          ///< of every mesh's triangles, in order
+  double gap = 0.0;                          ///< scene units (kCandidatePairGap x mean edge length)
+  std::vector<TrianglePair> pairs;           ///< in the broad phase's order (its threads' in turn)
+  long long edge_sharing_pairs = 0;          ///< pairs of one mesh sharing an edge by index (not in `pairs`)
+  bool valid = false;                        ///< filled by a search (false: empty)
+  double gap_edges = kCandidatePairGap;      ///< the gap of the next fill, in mean edge lengths
+  int served = 0;                            ///< searches served since the fill
+  int rest = 0;                              ///< searches left to run without the cache
+  /// Bytes of its arrays.
+  size_t memory_bytes() const;
 };
 
 /// Every crossing segment between the triangles of `meshes`, between two meshes and within one
@@ -92,8 +140,12 @@ struct IntersectionCurveStats {
 /// An end at a vertex that lies in the other plane (shared by both triangles, or exactly on it)
 /// is that vertex, and moves with it (one-sided: where it leaves the plane, the end follows one
 /// of its edges). Throws qsil::Error if Embree cannot be initialised. `stats` (optional)
-/// receives the counts and times.
+/// receives the counts and times. `cache` (optional): where it holds for `meshes` (see
+/// CandidatePairCache) the pairs come from it instead of the broad phase, else the broad phase
+/// fills it; the result and the counts are the same either way, bit for bit (where every
+/// coordinate is finite, as the scene loader and set_vertices require).
 std::vector<CrossingSegment> find_intersection_curves(std::span<const CurveMesh> meshes,
-                                                      IntersectionCurveStats* stats = nullptr);
+                                                      IntersectionCurveStats* stats = nullptr,
+                                                      CandidatePairCache* cache = nullptr);
 
 }  // namespace qsil::edgetree
