@@ -156,8 +156,9 @@ Sharing sharing(const Tri& A, const Tri& B) {
   return s;
 }
 
-/// True iff triangles f and g of `mesh` have two vertex indices in common: they share an edge (or
-/// are one triangle twice), so they share two positions and sharing() would count >= 2. Read from
+/// True iff two or more (i, j) have triangle f's vertex index i equal to g's index j: they share
+/// an edge, or are one triangle twice (or a degenerate triangle's repeated index meets the other),
+/// so sharing() would count >= 2 by positions too. Read from
 /// the indices alone, before any position: in a closed mesh a quarter of the broad phase's pairs.
 bool shares_an_edge(const TriangleMesh& mesh, int f, int g) {
   const auto& a = mesh.triangles[size_t(f)];
@@ -383,7 +384,8 @@ std::uint64_t triangles_hash(std::span<const CurveMesh> meshes) {
   };
   for (const CurveMesh& m : meshes) {
     mix(m.mesh->num_triangles());
-    for (const auto& t : m.mesh->triangles) mix((std::int64_t(t[0]) << 42) ^ (std::int64_t(t[1]) << 21) ^ t[2]);
+    for (const auto& t : m.mesh->triangles)
+      for (int k = 0; k < 3; ++k) mix(t[k]);
   }
   return h;
 }
@@ -417,12 +419,13 @@ CacheCheck check_cache(const CandidatePairCache& cache, std::span<const CurveMes
 /// How a search with a cache runs: from the cache, filling it, or without it.
 enum class CacheUse { Reuse, Fill, Plain };
 
-/// The cache's policy (CandidatePairCache::gap_edges, served, rest): a fill costs 1.3-1.5
-/// searches without a cache and a search from it about 0.4 (at the initial gap; measured in
-/// docs/experiments/2026-11-26-candidate-pair-cache.md), so it pays where a fill serves at
-/// least one search. The gap doubles (up to kCandidatePairMaxGap) when the vertices moved out
-/// of it before two searches, and halves (down to kCandidatePairMinGap) after eight; where even
-/// the largest gap served none, the next kCandidatePairRest searches run without the cache.
+/// The cache's policy (CandidatePairCache::gap_edges, served, rest): at gaps up to
+/// kCandidatePairMaxGap a fill costs 1.1-1.5 searches without a cache and a search from it
+/// 0.3-0.4 (measured in docs/experiments/2026-11-26-candidate-pair-cache.md), so a fill pays
+/// where it serves at least one search. The gap doubles (up to kCandidatePairMaxGap) when the
+/// vertices moved out of it before two searches, and halves (down to kCandidatePairMinGap)
+/// after more than eight; where even the largest gap served none, the next kCandidatePairRest
+/// searches run without the cache (and it frees its arrays meanwhile).
 CacheUse plan(CandidatePairCache& cache, CacheCheck check) {
   if (check == CacheCheck::Serves) {
     ++cache.served;
@@ -435,8 +438,10 @@ CacheUse plan(CandidatePairCache& cache, CacheCheck check) {
   if (check == CacheCheck::MovedTooFar) {
     if (cache.served < 2) {
       if (cache.served == 0 && cache.gap_edges >= kCandidatePairMaxGap) {
-        cache.rest = kCandidatePairRest - 1;
-        cache.valid = false;
+        CandidatePairCache resting;
+        resting.gap_edges = cache.gap_edges;
+        resting.rest = kCandidatePairRest - 1;
+        cache = std::move(resting);
         return CacheUse::Plain;
       }
       cache.gap_edges = std::min(2.0 * cache.gap_edges, kCandidatePairMaxGap);

@@ -301,6 +301,35 @@ TEST(ForestRefit, NoMotionAndCrossings) {
   EXPECT_EQ(f.always_edges().size(), rebuilt.always_edges().size());
 }
 
+// A refit after a small move takes its curves' pairs from the pair cache its first refit filled
+// (CandidatePairCache), and its crossing segments are those of a forest built at the new places.
+TEST(ForestRefit, CurvesFromThePairCacheAreThoseOfABuild) {
+  TriangleMesh a = make_cube(4), b = transformed(make_cube(4), 1.0, Vec3(1.5, 0.3, 0.2));
+  std::vector<ForestShapeInput> in{{&a, 0, false, CreaseSet::Concave}, {&b, 1, false, CreaseSet::Concave}};
+  EdgeForest f = EdgeForest::build(in);
+  ASSERT_TRUE(f.refit(in).refitted);  // fills the cache
+  EXPECT_FALSE(f.crossing_stats().from_cache);
+  for (int step = 1; step <= 3; ++step) {
+    for (Vec3& p : b.positions) p += 1e-3 * Vec3(std::sin(3 * p.y() + step), std::cos(2 * p.z()), 0.5);
+    ASSERT_TRUE(f.refit(in).refitted);
+    EXPECT_TRUE(f.crossing_stats().from_cache) << step;
+    const EdgeForest built = EdgeForest::build(in);
+    EXPECT_EQ(f.crossing_stats().candidate_pairs, built.crossing_stats().candidate_pairs) << step;
+    std::vector<const Edge*> mine, theirs;
+    for (const Edge& e : f.always_edges())
+      if (e.crossing) mine.push_back(&e);
+    for (const Edge& e : built.always_edges())
+      if (e.crossing) theirs.push_back(&e);
+    ASSERT_GT(mine.size(), 8u);
+    ASSERT_EQ(mine.size(), theirs.size()) << step;
+    for (size_t i = 0; i < mine.size(); ++i) {
+      EXPECT_EQ(mine[i]->p0, theirs[i]->p0) << step << " " << i;
+      EXPECT_EQ(mine[i]->p1, theirs[i]->p1) << step << " " << i;
+      EXPECT_EQ(mine[i]->crossing->ends[0].jacobian, theirs[i]->crossing->ends[0].jacobian) << step << " " << i;
+    }
+  }
+}
+
 // A refit refuses what is not a move of the vertices built, changing nothing.
 TEST(ForestRefit, RefusesOtherTopology) {
   TriangleMesh a = make_cube(4);

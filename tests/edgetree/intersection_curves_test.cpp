@@ -351,13 +351,14 @@ void expect_same_segments(const std::vector<CrossingSegment>& a, const std::vect
 TEST(IntersectionCurves, PairCacheGivesTheSegmentsOfASearchWithoutIt) {
   TriangleMesh two = load_obj(test::data_file("tests/data/meshes/two-spheres.obj"));
   TriangleMesh ball = sphere(0.5, Vec3(0.2, 0.1, 0)), ground = floor_square(2.0);
+  ground.triangles.push_back(ground.triangles[0]);  // a triangle twice: counted, never crossing
   const std::vector<CurveMesh> in{{&two, 0}, {&ball, 1}, {&ground, 2}};
   CandidatePairCache cache;
   std::mt19937_64 rng(3);
   std::normal_distribution<double> normal;
   int served = 0, searched = 0;
-  // Moves per step (scene units): small ones the cache serves, large ones it cannot (the gap grows
-  // to its largest, then the cache rests: kCandidatePairRest), small ones again.
+  // Moves per step (scene units): small ones the cache serves, large ones it cannot (the cache
+  // rests: kCandidatePairRest), small ones again; then the same counts with other triangles.
   std::vector<double> steps{0, 0.002, 0.002, 0.002, 0.05, 0.002, 0.3, 0.3, 0.3, 0.3};
   steps.resize(steps.size() + kCandidatePairRest + 6, 0.002);
   for (size_t s = 0; s < steps.size(); ++s) {
@@ -376,6 +377,17 @@ TEST(IntersectionCurves, PairCacheGivesTheSegmentsOfASearchWithoutIt) {
   }
   EXPECT_GE(served, 8);
   EXPECT_GE(searched, 8);
+  // Another topology with the same counts (two triangles of the ball swap a vertex), unmoved:
+  // the cache must not serve it.
+  IntersectionCurveStats before;
+  ASSERT_GT(find_intersection_curves(in, &before, &cache).size(), 100u);
+  ASSERT_TRUE(before.from_cache && cache.valid);
+  std::swap(ball.triangles[0][1], ball.triangles[7][1]);
+  IntersectionCurveStats with, without;
+  const auto cached = find_intersection_curves(in, &with, &cache);
+  expect_same_segments(cached, find_intersection_curves(in, &without), "other topology");
+  EXPECT_FALSE(with.from_cache);
+  EXPECT_EQ(with.candidate_pairs, without.candidate_pairs);
 }
 
 TEST(IntersectionCurves, PairCacheFindsTrianglesThatMovedTowardsEachOther) {
@@ -394,20 +406,24 @@ TEST(IntersectionCurves, PairCacheFindsTrianglesThatMovedTowardsEachOther) {
     g = probe.gap;
     ASSERT_GT(g, 0.5);
   }
-  // Boxes 1.2 g apart: no pair is kept. Then each moves 0.7 g towards the other: no vertex moved
-  // more than g, but the boxes moved 1.4 g closer and the triangles cross.
-  auto [a, b] = meshes(0, 1 + 1.2 * g);
-  const std::vector<CurveMesh> in{{&a, 0}, {&b, 1}};
-  CandidatePairCache cache;
-  EXPECT_TRUE(find_intersection_curves(in, nullptr, &cache).empty());
-  ASSERT_TRUE(cache.valid);
-  EXPECT_TRUE(cache.pairs.empty());
-  std::tie(a, b) = meshes(0.7 * g, 1 + 0.5 * g);
-  const auto plain = find_intersection_curves(in);
-  ASSERT_EQ(plain.size(), 1u);
-  IntersectionCurveStats stats;
-  expect_same_segments(find_intersection_curves(in, &stats, &cache), plain, "moved");
-  EXPECT_FALSE(stats.from_cache);
+  // Boxes s g apart: no pair is kept. Then each moves m g towards the other: no vertex moved more
+  // than the gap, but the boxes moved 2 m g closer and the triangles cross. (1.2, 0.7): a cache
+  // that served for moves up to the whole gap would miss it; (1.0002, 0.5002): one that served
+  // a little beyond half the gap.
+  for (const auto& [s, m] : {std::pair(1.2, 0.7), std::pair(1.0002, 0.5002)}) {
+    auto [a, b] = meshes(0, 1 + s * g);
+    const std::vector<CurveMesh> in{{&a, 0}, {&b, 1}};
+    CandidatePairCache cache;
+    EXPECT_TRUE(find_intersection_curves(in, nullptr, &cache).empty());
+    ASSERT_TRUE(cache.valid);
+    EXPECT_TRUE(cache.pairs.empty());
+    std::tie(a, b) = meshes(m * g, 1 + (s - m) * g);
+    const auto plain = find_intersection_curves(in);
+    ASSERT_EQ(plain.size(), 1u) << s;
+    IntersectionCurveStats stats;
+    expect_same_segments(find_intersection_curves(in, &stats, &cache), plain, "moved " + std::to_string(s));
+    EXPECT_FALSE(stats.from_cache);
+  }
 }
 
 }  // namespace

@@ -81,11 +81,11 @@ struct IntersectionCurveStats {
 /// the cache where even the largest gap served none. Measured in
 /// docs/experiments/2026-11-26-candidate-pair-cache.md: at a gap of 0.5 a closed mesh keeps 7.5
 /// (icospheres) to 11 (Spot) pairs per triangle, a fill costs 1.3-1.5 searches without a cache
-/// and a search from it about 0.4; at 1, 18-26 pairs, about 2 and 0.5-0.6 (at 4, a search from
-/// the cache costs more than one without it).
+/// and a search from it about 0.4; at 1, 18-26 pairs, about 2 and 0.5-0.6, where a fill pays only
+/// if it serves three searches: not worth the wait.
 inline constexpr double kCandidatePairGap = 0.5;
 inline constexpr double kCandidatePairMinGap = 0.125;
-inline constexpr double kCandidatePairMaxGap = 1.0;
+inline constexpr double kCandidatePairMaxGap = 0.5;
 inline constexpr int kCandidatePairRest = 8;
 
 /// The broad phase's pairs, kept for later searches over the same meshes after their vertices
@@ -104,6 +104,7 @@ inline constexpr int kCandidatePairRest = 8;
 /// runs the broad phase with the gap, fills the cache anew and keeps the positions (or, where
 /// filling has not paid, runs without it for a while: see kCandidatePairRest).
 /// Memory: 16 bytes per cached pair (7.5-11 per triangle at kCandidatePairGap) and 24 per vertex.
+/// Not thread-safe: one search at a time per cache.
 struct CandidatePairCache {
   std::vector<std::vector<Vec3>> positions;  ///< per mesh, as when the pairs were found
   std::vector<int> triangle_counts;          ///< per mesh
