@@ -303,8 +303,8 @@ struct NarrowResults {
   std::vector<std::pair<TrianglePair, CrossingSegment>> found;
   std::vector<Pending> pending;
   long long pairs = 0;
-  std::vector<TrianglePair> kept;  ///< pairs for a CandidatePairCache being filled
-  long long edge_sharing = 0;      ///< pairs sharing an edge by index (not kept)
+  std::vector<CandidatePairCache::Pair> kept;  ///< pairs for a CandidatePairCache being filled
+  long long edge_sharing = 0;                  ///< pairs sharing an edge by index (not kept)
 };
 
 /// The narrow phase of one candidate pair p: its segment into out.found when both triangles
@@ -491,7 +491,8 @@ SceneVelocities::Block crossing_end_velocity(const CrossingEnd& end, const Scene
 }
 
 size_t CandidatePairCache::memory_bytes() const {
-  size_t bytes = pairs.capacity() * sizeof(TrianglePair) + triangle_counts.capacity() * sizeof(int);
+  size_t bytes =
+      pairs.capacity() * sizeof(Pair) + (triangle_counts.capacity() + first_triangle.capacity()) * sizeof(int);
   for (const auto& p : positions) bytes += p.capacity() * sizeof(Vec3);
   return bytes;
 }
@@ -507,11 +508,20 @@ std::vector<CrossingSegment> find_intersection_curves(std::span<const CurveMesh>
   const bool from_cache = use == CacheUse::Reuse;
   if (from_cache) {
     // ---- The cached pairs, with the broad phase's exact box test on the moved meshes.
-    const std::vector<TrianglePair>& pairs = cache->pairs;
+    const std::vector<CandidatePairCache::Pair>& pairs = cache->pairs;
+    const std::vector<int>& first = cache->first_triangle;
+    auto unpack = [&](int t, int& mesh, int& f) {  // the mesh whose range holds t
+      mesh = int(std::upper_bound(first.begin(), first.end(), t) - first.begin()) - 1;
+      f = t - first[size_t(mesh)];
+    };
     tbb::parallel_for(tbb::blocked_range<size_t>(0, pairs.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
       NarrowResults& out = local.local();
-      for (size_t i = r.begin(); i < r.end(); ++i)
-        if (boxes_overlap(meshes, pairs[i])) narrow_phase(meshes, pairs[i], out);
+      for (size_t i = r.begin(); i < r.end(); ++i) {
+        TrianglePair p;
+        unpack(pairs[i].a, p.mesh0, p.triangle0);
+        unpack(pairs[i].b, p.mesh1, p.triangle1);
+        if (boxes_overlap(meshes, p)) narrow_phase(meshes, p, out);
+      }
     });
     local.local().pairs += cache->edge_sharing_pairs;  // they overlap wherever coordinates are finite
   } else if (use == CacheUse::Fill) {
@@ -521,6 +531,9 @@ std::vector<CrossingSegment> find_intersection_curves(std::span<const CurveMesh>
     fresh.gap_edges = cache->gap_edges;
     *cache = std::move(fresh);
     const double gap = cache->gap_edges * mean_edge_length(meshes);
+    std::vector<long long> first(1, 0);
+    for (const CurveMesh& m : meshes) first.push_back(first.back() + m.mesh->num_triangles());
+    const bool indexable = first.back() <= std::numeric_limits<int>::max();  // else no cache is kept
     for_each_overlapping_triangle_pair(
         ptrs,
         [&](const TrianglePair& p) {
@@ -528,12 +541,12 @@ std::vector<CrossingSegment> find_intersection_curves(std::span<const CurveMesh>
           const bool overlap = boxes_overlap(meshes, p);
           if (p.mesh0 == p.mesh1 && shares_an_edge(*meshes[size_t(p.mesh0)].mesh, p.triangle0, p.triangle1))
             out.edge_sharing += overlap;
-          else
-            out.kept.push_back(p);
+          else if (indexable)
+            out.kept.push_back({int(first[size_t(p.mesh0)] + p.triangle0), int(first[size_t(p.mesh1)] + p.triangle1)});
           if (overlap) narrow_phase(meshes, p, out);
         },
         &build_seconds, gap);
-    if (all_finite(meshes)) {
+    if (indexable && all_finite(meshes)) {
       for (NarrowResults& l : local) {
         cache->pairs.insert(cache->pairs.end(), l.kept.begin(), l.kept.end());
         cache->edge_sharing_pairs += l.edge_sharing;
@@ -543,6 +556,7 @@ std::vector<CrossingSegment> find_intersection_curves(std::span<const CurveMesh>
         cache->positions.push_back(m.mesh->positions);
         cache->triangle_counts.push_back(m.mesh->num_triangles());
       }
+      for (long long f : first) cache->first_triangle.push_back(int(f));
       cache->triangles_hash = triangles_hash(meshes);
       cache->gap = gap;
       cache->valid = true;

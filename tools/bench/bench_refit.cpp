@@ -7,7 +7,8 @@
 ///   curves' own time in each (a refit finds them anew; a build finds them beside its trees):
 ///   a forest's first refit, which fills the curves' pair cache (CandidatePairCache), and a
 ///   refit from the cache (the vertices unmoved); and build and refit of a forest without
-///   intersection curves;
+///   intersection curves; the forest's memory (EdgeForest::memory_bytes) per edge as built and
+///   once refitted, and the difference per triangle (mostly the pair cache);
 /// - quality along an optimisation-like trajectory: `steps` steps, each moving every vertex by a
 ///   smooth random displacement field of amplitude `amplitude` times the bounding-box diagonal
 ///   (three sines of random direction, frequency and phase per step: what a Large Steps update
@@ -162,11 +163,14 @@ int main(int argc, char** argv) {
     // A forest's first refit fills its intersection curves' pair cache (CandidatePairCache), the
     // next ones on unmoved vertices search from it: both timed, each the best of 3.
     double refit_fill = 1e30, refit_fill_cross = 0;
+    size_t bytes_built = 0, bytes_refitted = 0;  // the forest's, before and after its first refit
     for (int r = 0; r < 3; ++r) {
       EdgeForest fresh = EdgeForest::build(span);
+      bytes_built = fresh.memory_bytes();
       const auto t0 = std::chrono::steady_clock::now();
       rep = fresh.refit(span);
       const double t = seconds_since(t0);
+      bytes_refitted = fresh.memory_bytes();
       if (t < refit_fill) std::tie(refit_fill, refit_fill_cross) = std::pair(t, rep.crossing_seconds);
     }
     forest.refit(span);
@@ -194,6 +198,11 @@ int main(int argc, char** argv) {
         name.c_str(), mesh.num_triangles(), forest.edges().size() + forest.always_edges().size(), build, build_cross,
         refit_fill, refit_fill_cross, refit_fill / build, refit, refit_cross, refit / build, build_bare, refit_bare,
         refit_bare / build_bare);
+    const size_t edges = forest.edges().size() + forest.always_edges().size();
+    std::printf("%s: forest memory %.1f bytes per edge as built, %.1f once refitted (the pair cache: %.1f bytes per "
+                "triangle)\n",
+                name.c_str(), double(bytes_built) / double(edges), double(bytes_refitted) / double(edges),
+                (double(bytes_refitted) - double(bytes_built)) / double(mesh.num_triangles()));
     // ---- quality along a trajectory
     std::printf("%5s %9s %8s %8s %8s %7s %9s %9s %8s %8s %6s\n", "step", "moved", "growth", "retired", "unflat",
                 "advise", "FA-refit", "FA-build", "refit s", "build s", "pairs");

@@ -103,14 +103,20 @@ inline constexpr int kCandidatePairRest = 8;
 /// is finite; it then applies the exact box test of the broad phase to the cached pairs. Else it
 /// runs the broad phase with the gap, fills the cache anew and keeps the positions (or, where
 /// filling has not paid, runs without it for a while: see kCandidatePairRest).
-/// Memory: 16 bytes per cached pair (7.5-11 per triangle at kCandidatePairGap) and 24 per vertex.
-/// Not thread-safe: one search at a time per cache.
+/// Memory: 8 bytes per cached pair (7.5-11 per triangle at kCandidatePairGap on closed meshes,
+/// about 21 on the teapot's) and 24 per vertex. Not thread-safe: one search at a time per cache.
 struct CandidatePairCache {
+  /// A pair by the triangles' indices over all meshes in turn (mesh m's triangle f is
+  /// first_triangle[m] + f): half a TrianglePair's size.
+  struct Pair {
+    int a = 0, b = 0;
+  };
   std::vector<std::vector<Vec3>> positions;  ///< per mesh, as when the pairs were found
   std::vector<int> triangle_counts;          ///< per mesh
+  std::vector<int> first_triangle;           ///< per mesh and one more: prefix sums of triangle_counts
   std::uint64_t triangles_hash = 0;          ///< of every mesh's triangles, in order
   double gap = 0.0;                          ///< scene units (kCandidatePairGap x mean edge length)
-  std::vector<TrianglePair> pairs;           ///< in the broad phase's order (its threads' in turn)
+  std::vector<Pair> pairs;                   ///< in the broad phase's order (its threads' in turn)
   long long edge_sharing_pairs = 0;          ///< pairs of one mesh sharing an edge by index (not in `pairs`)
   bool valid = false;                        ///< filled by a search (false: empty)
   double gap_edges = kCandidatePairGap;      ///< the gap of the next fill, in mean edge lengths
