@@ -363,14 +363,8 @@ std::optional<CrossingSegment> pending_segment(std::span<const CurveMesh> meshes
 
 /// True iff the boxes of p's triangles overlap (closed, in double): the broad phase's exact test.
 bool boxes_overlap(std::span<const CurveMesh> meshes, const TrianglePair& p) {
-  auto box = [&](int mesh, int f) {
-    const TriangleMesh& m = *meshes[size_t(mesh)].mesh;
-    Box3 b;
-    for (int k = 0; k < 3; ++k) b.expand(m.positions[size_t(m.triangles[size_t(f)][k])]);
-    return b;
-  };
-  const Box3 a = box(p.mesh0, p.triangle0), b = box(p.mesh1, p.triangle1);
-  return (a.lo.array() <= b.hi.array()).all() && (b.lo.array() <= a.hi.array()).all();
+  const Box3 a = meshes[size_t(p.mesh0)].mesh->triangle_bounds(p.triangle0);
+  return a.within(meshes[size_t(p.mesh1)].mesh->triangle_bounds(p.triangle1));
 }
 
 /// FNV-1a over every mesh's triangle count and vertex indices.

@@ -251,7 +251,7 @@ namespace {
 /// taken around (collide_bounds rounds them outward).
 struct CollideMesh {
   std::vector<Box3> boxes;  ///< per triangle, world frame, double
-  double grow = 0.0;  ///< half the gap: Embree's boxes are grown by it on every side
+  double grow = 0.0;        ///< half the gap: Embree's boxes are grown by it on every side
   Vec3 centre = Vec3::Zero();
 };
 
@@ -294,8 +294,7 @@ void collide_callback(void* user, RTCCollision* collisions, unsigned int count) 
     if (!(std::pair(p.mesh0, p.triangle0) < std::pair(p.mesh1, p.triangle1))) continue;  // the other order, or itself
     const Box3& a = meshes[size_t(p.mesh0)].boxes[size_t(p.triangle0)];
     const Box3& b = meshes[size_t(p.mesh1)].boxes[size_t(p.triangle1)];
-    const double g = state->gap;
-    if ((a.lo.array() <= b.hi.array() + g).all() && (b.lo.array() <= a.hi.array() + g).all()) (*state->visit)(p);
+    if (a.within(b, state->gap)) (*state->visit)(p);
   }
 }
 
@@ -315,8 +314,7 @@ void for_each_overlapping_triangle_pair(std::span<const TriangleMesh* const> mes
     const TriangleMesh& mesh = *meshes[i];
     cm[i].boxes.resize(mesh.triangles.size());
     for (size_t f = 0; f < mesh.triangles.size(); ++f) {
-      Box3& b = cm[i].boxes[f];
-      for (int k = 0; k < 3; ++k) b.expand(mesh.positions[size_t(mesh.triangles[f][k])]);
+      const Box3& b = cm[i].boxes[f] = mesh.triangle_bounds(int(f));
       if (b.lo.allFinite() && b.hi.allFinite()) all.expand(b);
     }
     triangles += mesh.triangles.size();
@@ -324,17 +322,10 @@ void for_each_overlapping_triangle_pair(std::span<const TriangleMesh* const> mes
   if (triangles < 2) return;
   const Vec3 centre = all.empty() ? Vec3::Zero() : all.center();
   // Two boxes within `gap` overlap once each is grown by half of it; 2^-40 of the largest
-  // coordinate more covers the rounding of the grown bounds in double (a few 2^-53 of it), so
-  // that Embree's float boxes (outward) report every such pair. gap 0: the boxes themselves.
-  double grow = 0.0;
-  if (gap > 0.0) {
-    double largest = 0.0;
-    for (const CollideMesh& m : cm)
-      for (const Box3& b : m.boxes)
-        if (b.lo.allFinite() && b.hi.allFinite())
-          largest = std::max({largest, b.lo.cwiseAbs().maxCoeff(), b.hi.cwiseAbs().maxCoeff()});
-    grow = 0.5 * gap + std::ldexp(largest, -40);
-  }
+  // coordinate (that of `all`, the finite boxes' union) more covers the rounding of the grown
+  // bounds in double (a few 2^-53 of it), so that Embree's float boxes (outward) report every
+  // such pair. gap 0: the boxes themselves.
+  const double grow = gap > 0.0 ? 0.5 * gap + std::ldexp(all.max_abs(), -40) : 0.0;
   for (CollideMesh& m : cm) {
     m.centre = centre;
     m.grow = grow;
@@ -366,13 +357,16 @@ void for_each_overlapping_triangle_pair(std::span<const TriangleMesh* const> mes
   if (failed) throw Error("Embree: collision query failed");
 }
 
-std::vector<TrianglePair> overlapping_triangle_pairs(std::span<const TriangleMesh* const> meshes) {
+std::vector<TrianglePair> overlapping_triangle_pairs(std::span<const TriangleMesh* const> meshes, double gap) {
   std::mutex lock;
   std::vector<TrianglePair> pairs;
-  for_each_overlapping_triangle_pair(meshes, [&](const TrianglePair& p) {
-    std::lock_guard<std::mutex> guard(lock);
-    pairs.push_back(p);
-  });
+  for_each_overlapping_triangle_pair(
+      meshes,
+      [&](const TrianglePair& p) {
+        std::lock_guard<std::mutex> guard(lock);
+        pairs.push_back(p);
+      },
+      nullptr, gap);
   std::sort(pairs.begin(), pairs.end(), [](const TrianglePair& a, const TrianglePair& b) {
     return std::tie(a.mesh0, a.triangle0, a.mesh1, a.triangle1) < std::tie(b.mesh0, b.triangle0, b.mesh1, b.triangle1);
   });

@@ -51,6 +51,11 @@ struct Box3 {
     hi = hi.cwiseMax(b.hi);
   }
   bool empty() const { return (lo.array() > hi.array()).any(); }
+  /// True iff this box and b (closed) lie within `gap` of each other on every axis, evaluated in
+  /// double (lo <= b.hi + gap and b.lo <= hi + gap); gap 0: they overlap.
+  bool within(const Box3& b, double gap = 0.0) const {
+    return (lo.array() <= b.hi.array() + gap).all() && (b.lo.array() <= hi.array() + gap).all();
+  }
   Vec3 center() const { return 0.5 * (lo + hi); }
   Vec3 extent() const { return hi - lo; }
   double diagonal() const { return empty() ? 0.0 : extent().norm(); }

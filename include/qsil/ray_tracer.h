@@ -124,8 +124,8 @@ void for_each_overlapping_triangle_pair(std::span<const TriangleMesh* const> mes
                                         const std::function<void(const TrianglePair&)>& visit,
                                         double* build_seconds = nullptr, double gap = 0.0);
 
-/// for_each_overlapping_triangle_pair's pairs, sorted (for tests and small meshes).
-std::vector<TrianglePair> overlapping_triangle_pairs(std::span<const TriangleMesh* const> meshes);
+/// for_each_overlapping_triangle_pair's pairs (with `gap`), sorted (for tests and small meshes).
+std::vector<TrianglePair> overlapping_triangle_pairs(std::span<const TriangleMesh* const> meshes, double gap = 0.0);
 
 /// The triangles near a ray: a BVH (Embree user geometry) over every triangle's axis-aligned
 /// box grown by `reach` on every side, for estimators whose rays see triangles they do not hit

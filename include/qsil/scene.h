@@ -41,6 +41,12 @@ struct TriangleMesh {
     return (positions[t[1]] - positions[t[0]]).cross(positions[t[2]] - positions[t[0]]);
   }
   double area(int f) const { return 0.5 * face_cross(f).norm(); }
+  /// Axis-aligned box of triangle f's vertices.
+  Box3 triangle_bounds(int f) const {
+    Box3 b;
+    for (int k = 0; k < 3; ++k) b.expand(positions[size_t(triangles[size_t(f)][k])]);
+    return b;
+  }
   Box3 bounds() const {
     Box3 b;
     for (const auto& p : positions) b.expand(p);

@@ -13,7 +13,6 @@
 
 #include <algorithm>
 #include <map>
-#include <mutex>
 #include <random>
 #include <set>
 #include <string>
@@ -50,16 +49,12 @@ TriangleMesh floor_square(double half, double height = 0) {
                  {{0, 2, 1}, {0, 3, 2}});
 }
 
-// ---- The broad phase: every pair of triangles whose boxes overlap, as brute force finds them.
-TEST(IntersectionCurves, BroadPhaseFindsEveryOverlappingPairLikeBruteForce) {
-  const TriangleMesh a = sphere(0.5, Vec3(0, 0.1, 0)), b = floor_square(1.0);
-  TriangleMesh c = load_obj(test::data_file("tests/data/meshes/two-spheres.obj"));
-  const std::vector<const TriangleMesh*> meshes{&a, &b, &c};
-  const std::vector<TrianglePair> found = overlapping_triangle_pairs(meshes);
-  std::vector<TrianglePair> brute;
+/// Brute force over all pairs of triangles of `meshes`: those whose boxes lie within `gap` of each
+/// other on every axis (gap 0: overlap), sorted as overlapping_triangle_pairs sorts them.
+std::vector<TrianglePair> brute_force_pairs(const std::vector<const TriangleMesh*>& meshes, double gap) {
   std::vector<std::pair<int, int>> tris;
   std::vector<Box3> boxes;
-  for (int m = 0; m < 3; ++m)
+  for (int m = 0; m < int(meshes.size()); ++m)
     for (int f = 0; f < meshes[size_t(m)]->num_triangles(); ++f) {
       Box3 box;
       for (int k = 0; k < 3; ++k)
@@ -67,10 +62,22 @@ TEST(IntersectionCurves, BroadPhaseFindsEveryOverlappingPairLikeBruteForce) {
       tris.emplace_back(m, f);
       boxes.push_back(box);
     }
+  std::vector<TrianglePair> out;
   for (size_t i = 0; i < tris.size(); ++i)
     for (size_t j = i + 1; j < tris.size(); ++j)
-      if ((boxes[i].lo.array() <= boxes[j].hi.array()).all() && (boxes[j].lo.array() <= boxes[i].hi.array()).all())
-        brute.push_back({tris[i].first, tris[i].second, tris[j].first, tris[j].second});
+      if ((boxes[i].lo.array() <= boxes[j].hi.array() + gap).all() &&
+          (boxes[j].lo.array() <= boxes[i].hi.array() + gap).all())
+        out.push_back({tris[i].first, tris[i].second, tris[j].first, tris[j].second});
+  return out;
+}
+
+// ---- The broad phase: every pair of triangles whose boxes overlap, as brute force finds them.
+TEST(IntersectionCurves, BroadPhaseFindsEveryOverlappingPairLikeBruteForce) {
+  const TriangleMesh a = sphere(0.5, Vec3(0, 0.1, 0)), b = floor_square(1.0);
+  TriangleMesh c = load_obj(test::data_file("tests/data/meshes/two-spheres.obj"));
+  const std::vector<const TriangleMesh*> meshes{&a, &b, &c};
+  const std::vector<TrianglePair> found = overlapping_triangle_pairs(meshes);
+  const std::vector<TrianglePair> brute = brute_force_pairs(meshes, 0.0);
   ASSERT_GT(brute.size(), 1000u);
   EXPECT_EQ(found.size(), brute.size());
   EXPECT_TRUE(found == brute) << "the broad phase differs from brute force";
@@ -82,43 +89,12 @@ TEST(IntersectionCurves, BroadPhaseWithAGapFindsEveryPairWithinItLikeBruteForce)
   const TriangleMesh a = sphere(0.5, Vec3(0, 0.1, 0)), b = floor_square(1.0);
   const std::vector<const TriangleMesh*> meshes{&a, &b};
   const double gap = 0.05;
-  std::mutex lock;
-  std::vector<TrianglePair> found;
-  for_each_overlapping_triangle_pair(
-      meshes,
-      [&](const TrianglePair& p) {
-        std::lock_guard<std::mutex> guard(lock);
-        found.push_back(p);
-      },
-      nullptr, gap);
-  auto key = [](const TrianglePair& p) { return std::tie(p.mesh0, p.triangle0, p.mesh1, p.triangle1); };
-  std::sort(found.begin(), found.end(), [&](const auto& x, const auto& y) { return key(x) < key(y); });
-  std::vector<std::pair<int, int>> tris;
-  std::vector<Box3> boxes;
-  for (int m = 0; m < 2; ++m)
-    for (int f = 0; f < meshes[size_t(m)]->num_triangles(); ++f) {
-      Box3 box;
-      for (int k = 0; k < 3; ++k)
-        box.expand(meshes[size_t(m)]->positions[size_t(meshes[size_t(m)]->triangles[size_t(f)][k])]);
-      tris.emplace_back(m, f);
-      boxes.push_back(box);
-    }
-  std::vector<TrianglePair> brute, overlapping;
-  for (size_t i = 0; i < tris.size(); ++i)
-    for (size_t j = i + 1; j < tris.size(); ++j) {
-      const TrianglePair p{tris[i].first, tris[i].second, tris[j].first, tris[j].second};
-      if ((boxes[i].lo.array() <= boxes[j].hi.array() + gap).all() &&
-          (boxes[j].lo.array() <= boxes[i].hi.array() + gap).all())
-        brute.push_back(p);
-      if ((boxes[i].lo.array() <= boxes[j].hi.array()).all() && (boxes[j].lo.array() <= boxes[i].hi.array()).all())
-        overlapping.push_back(p);
-    }
-  ASSERT_GT(brute.size(), overlapping.size() + 100) << "the gap adds too few pairs to test it";
+  const std::vector<TrianglePair> found = overlapping_triangle_pairs(meshes, gap);
+  const std::vector<TrianglePair> brute = brute_force_pairs(meshes, gap);
+  ASSERT_GT(brute.size(), brute_force_pairs(meshes, 0.0).size() + 100) << "the gap adds too few pairs to test it";
   EXPECT_EQ(found.size(), brute.size());
   EXPECT_TRUE(found == brute) << "the broad phase with a gap differs from brute force";
-  EXPECT_THROW(for_each_overlapping_triangle_pair(
-                   meshes, [](const TrianglePair&) {}, nullptr, -1.0),
-               Error);
+  EXPECT_THROW(overlapping_triangle_pairs(meshes, -1.0), Error);
 }
 
 // ---- Two triangles crossing: the segment is the analytic one.
