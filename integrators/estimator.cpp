@@ -5,14 +5,15 @@
 #include "qsil/integrators/estimator.h"
 
 #include "pixel_loop.h"
-#include "render_setup.h"
-#include "vertex_recorder.h"
 #include "qsil/check.h"
 #include "qsil/error.h"
 #include "qsil/integrators/boundary_hook.h"
 #include "qsil/integrators/geometry_view.h"
 #include "qsil/integrators/path_tracer.h"
 #include "qsil/integrators/regularized_tracer.h"
+#include "qsil/integrators/warp_field.h"
+#include "render_setup.h"
+#include "vertex_recorder.h"
 
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/task_arena.h>
@@ -140,6 +141,10 @@ class GradientEstimator final : public Estimator::Impl, private RenderSetup {
       set_up_boundary_term(s, tracer, config.method, &vel, vel.moving, config.sppi, lights.environment,
                            boundary, boundary_ctx, primary, setup, config.intersection_curves);
     }
+    if (config.method == Method::WarpedArea && vel.any_moving()) {
+      warped = true;  // no structure: every direction is warped (warp_field.h)
+      setup.structure = "warped-area sampling (" + std::to_string(config.warped_area.rays) + " auxiliary rays)";
+    }
     if (config.method == Method::Regularized) {
       near.emplace(s, *regularization_of(config));
       setup.structure = "near-triangle BVH (regularized, reach " + std::to_string(near->query().reach()) + ")";
@@ -159,6 +164,8 @@ class GradientEstimator final : public Estimator::Impl, private RenderSetup {
     tbb::enumerable_thread_specific<TopSamples> largest{TopSamples(options.largest_samples)};
     if (near && options.largest_samples > 0)
       throw Error("regularized: the largest samples' paths are not traced for this method");
+    if (warped && options.largest_samples > 0)
+      throw Error("was: the largest samples' paths are not traced for this method");
     const RegularizedContext rc{&ctx, near ? &*near : nullptr};
     PathStats total;
     run_pixels(
@@ -172,6 +179,11 @@ class GradientEstimator final : public Estimator::Impl, private RenderSetup {
           const CameraRay ray = near ? CameraRay{} : trace_camera_ray(ctx, x, y, u, st);
           if (near) {
             L = regularized_camera_sample(rc, view, x, y, u, sampler, st);
+          } else if (warped) {
+            // The auxiliary rays and the pixel border draw from streams of their own (salts 3
+            // and 4), so they leave the path's decisions unchanged.
+            Sampler aux(options.seed, pixel, uint64_t(s), 3), border(options.seed, pixel, uint64_t(s), 4);
+            L = warped_pixel_sample(ctx, view, config.warped_area, x, y, ray, sampler, aux, border, st);
           } else if (traversals > 0) {
             // The boundary term draws from a stream of its own, so it leaves the path's decisions unchanged.
             Sampler bsampler(options.seed, pixel, uint64_t(s), 1);
@@ -239,6 +251,7 @@ class GradientEstimator final : public Estimator::Impl, private RenderSetup {
 
   SceneVelocities vel;
   std::optional<SoftScene> near;  ///< Method::Regularized only
+  bool warped = false;            ///< Method::WarpedArea with something moving
 };
 
 /// Central finite differences with common random numbers (`qsil fd`): the primal scene and, per
@@ -383,8 +396,9 @@ std::string SetupReport::describe() const {
 
 Estimator::Estimator(const Scene& scene, EstimatorConfig config) {
   if (!config.params.empty() && config.method != Method::FiniteDifferences && config.method != Method::None &&
-      config.method != Method::Regularized && !samples_edges(config.method))
+      config.method != Method::Regularized && config.method != Method::WarpedArea && !samples_edges(config.method))
     throw Error("method " + std::string(method_name(config.method)) + " cannot estimate derivatives");
+  if (config.method == Method::WarpedArea) check_warped_area_sampling(config.warped_area);
   check_sample_rates(scene.camera, config.sppi, config.sppp);
   const auto t0 = Clock::now();
   impl_ = make_impl(scene, std::move(config));

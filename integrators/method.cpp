@@ -21,6 +21,7 @@ std::string_view method_name(Method method) {
     case Method::Uniform: return "uniform";
     case Method::None: return "none";
     case Method::Regularized: return "regularized";
+    case Method::WarpedArea: return "was";
     case Method::FiniteDifferences: return "fd";
   }
   return "?";

@@ -250,8 +250,9 @@ class ReverseEstimator::Impl : public RenderSetup {
       chosen[size_t(sh)] = true;
       chosen_index[size_t(sh)] = int(i);
     }
-    if (config.method == Method::Regularized)
-      throw Error("reverse mode: method regularized is not supported (forward mode only: qsil grad)");
+    if (config.method == Method::Regularized || config.method == Method::WarpedArea)
+      throw Error("reverse mode: method " + std::string(method_name(config.method)) +
+                  " is not supported (forward mode only: qsil grad)");
     if (config.method != Method::None && !samples_edges(config.method))
       throw Error("method " + std::string(method_name(config.method)) + " cannot estimate derivatives");
     if (samples_edges(config.method)) {

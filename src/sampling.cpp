@@ -27,6 +27,19 @@ Vec3 square_to_uniform_sphere(const Vec2& u) {
   return {r * std::cos(phi), r * std::sin(phi), z};
 }
 
+VonMisesFisherSample square_to_von_mises_fisher(const Vec2& u, double kappa) {
+  // x in (exp(-2 kappa), 1]: 1 - cos = -log(x) / kappa; sin^2 = (1 - cos)(1 + cos).
+  const double x = u.x() + (1.0 - u.x()) * std::exp(-2.0 * kappa);
+  const double s = x > 0 ? std::clamp(-std::log(x) / kappa, 0.0, 2.0) : 2.0;
+  const double r = std::sqrt(std::max(0.0, s * (2.0 - s)));
+  const double phi = 2.0 * kPi * u.y();
+  return {Vec3(r * std::cos(phi), r * std::sin(phi), 1.0 - s), s};
+}
+
+double von_mises_fisher_pdf(double one_minus_cos, double kappa) {
+  return kappa * std::exp(-kappa * one_minus_cos) / (2.0 * kPi * -std::expm1(-2.0 * kappa));
+}
+
 Vec3 square_to_uniform_hemisphere(const Vec2& u) {
   const double z = u.x();
   const double r = std::sqrt(std::max(0.0, 1.0 - z * z));

@@ -83,6 +83,7 @@ EstimatorConfig method_config(const Scene& scene, Method m, const std::vector<Pa
   if (m == Method::FiniteDifferences) return EstimatorConfig::finite_differences(params, steps);
   EstimatorConfig c = EstimatorConfig::gradient(params, m, o.sppi, o.sppp);
   if (m == Method::Regularized) c.regularization = Regularization::for_scene(scene, o.reg_width);
+  c.warped_area = o.warped_area;
   return c;
 }
 

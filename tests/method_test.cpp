@@ -31,7 +31,8 @@ TEST(Method, SubsetsRejectOtherMethodsNamingTheOptionAndTheChoices) {
     FAIL() << "fd is not a --boundary method";
   } catch (const Error& e) {
     EXPECT_EQ(std::string(e.what()),
-              "--boundary 'fd': unsupported (supported: quadric, quadric-box, vsphere, vsphere-solid, uniform, none, regularized)");
+              "--boundary 'fd': unsupported (supported: quadric, quadric-box, vsphere, vsphere-solid, uniform, none, "
+              "regularized, was)");
   }
   EXPECT_THROW(parse_method("none", "--method", kReferenceMethods), Error);
   EXPECT_THROW(parse_method("Quadric", "--methods", kAllMethods), Error);  // case matters

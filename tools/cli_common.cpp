@@ -91,6 +91,7 @@ void add_boundary_flags(CLI::App& app, BoundaryFlags& flags, const std::string& 
   app.add_option(method_option, flags.method, method_help)->capture_default_str();
   add_sample_rate_options(app, flags.sppi, flags.sppp);
   add_regularization_options(app, flags.reg_width, "for --boundary regularized");
+  add_warped_area_options(app, flags.warped_area, "--boundary was");
   if (!curves_flag) return;
   bool& intersection_curves = flags.intersection_curves;
   app.add_flag_callback(
@@ -108,12 +109,33 @@ void add_regularization_options(CLI::App& app, double& width, const std::string&
       ->capture_default_str();
 }
 
+void add_warped_area_options(CLI::App& app, WarpedAreaSampling& was, const std::string& what) {
+  app.add_option("--was-rays", was.rays,
+                 "Warped-area sampling (" + what +
+                     "): auxiliary rays per warped direction (Bangaru et al. 2020; biased, less with more rays)")
+      ->check(CLI::Range(1, 1024))
+      ->capture_default_str();
+  app.add_option("--was-kappa", was.kappa,
+                 "Warped-area sampling (" + what + "): concentration of the auxiliary rays' von Mises-Fisher lobe")
+      ->check(CLI::Range(1.0, 1e8))
+      ->capture_default_str();
+  app.add_flag("--was-unbiased", was.unbiased,
+               "Warped-area sampling (" + what +
+                   "): estimate the warp field's limit for infinitely many auxiliary rays without bias (a random "
+                   "number of them, 2.2 x --was-rays on average; Blanchet & Glynn 2015's randomised multilevel "
+                   "estimator)");
+  app.add_option("--was-exponent", was.exponent,
+                 "Warped-area sampling (" + what + "): exponent gamma of the harmonic weights (D + B)^-gamma, > 1")
+      ->capture_default_str();
+}
+
 EstimatorConfig gradient_config(const Scene& scene, std::vector<ParameterSpec> params, Method method,
                                 const BoundaryFlags& flags) {
   EstimatorConfig config = EstimatorConfig::gradient(std::move(params), method, flags.sppi, flags.sppp);
   config.intersection_curves = flags.intersection_curves;
   if (method == Method::Regularized)
     config.regularization = Regularization::for_scene(scene, flags.reg_width);
+  config.warped_area = flags.warped_area;
   return config;
 }
 

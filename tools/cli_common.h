@@ -72,7 +72,13 @@ struct BoundaryFlags {
   /// --reg-width: regularized's blur width, as a fraction of the scene's bounding-box diagonal
   /// (Regularization::for_scene).
   double reg_width = 1e-3;
+  /// --was-rays, --was-kappa, --was-exponent: was's auxiliary rays (WarpedAreaSampling).
+  WarpedAreaSampling warped_area;
 };
+
+/// Adds --was-rays, --was-kappa and --was-exponent (WarpedAreaSampling) to `app`, into `was`;
+/// `what` says for which option (for the help text).
+void add_warped_area_options(CLI::App& app, WarpedAreaSampling& was, const std::string& what);
 
 /// Adds --reg-width W (Regularization::for_scene) to `app`, into `width`; `what` says what it
 /// regularises (for the help text).

@@ -31,7 +31,9 @@ const CommandRegistrar registrar{
                           "quadric-box (dual box only), vsphere (Li 2019's Hough-space tree, hollow v-sphere test), "
                           "vsphere-solid (redner's original solid v-sphere test), uniform (no rejection, length x "
                           "dihedral angle), none (interior term only: misses silhouettes, shadows, outlines), "
-                          "regularized (Quinn 2021's blurred visibility, interior term only; biased: --reg-width)",
+                          "regularized (Quinn 2021's blurred visibility, interior term only; biased: --reg-width), "
+                          "was (Bangaru 2020's warped-area sampling: every direction warped, no edges; biased "
+                          "for a fixed --was-rays, unbiased with --was-unbiased)",
                           true);
        app.add_option("--preview-dir", flags->preview_dir, "Write primal.png and one diverging PNG per parameter here");
        app.add_option("--largest-samples", flags->render.largest_samples,

@@ -28,6 +28,9 @@ inline double luminance(double r, double g, double b) { return 0.2126 * r + 0.71
 /// Generic 3-vector and colour over a scalar type T (double, or a dual number in forward mode).
 template <class T>
 using Vec3T = Eigen::Matrix<T, 3, 1>;
+/// A 2-vector over scalar type T (film positions over duals).
+template <class T>
+using Vec2T = Eigen::Matrix<T, 2, 1>;
 template <class T>
 using ColorT = Eigen::Array<T, 3, 1>;
 

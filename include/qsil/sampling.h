@@ -44,6 +44,22 @@ Vec3 square_to_cosine_hemisphere(const Vec2& u);
 /// (0 below the horizon).
 inline double cosine_hemisphere_pdf(double cos_theta) { return cos_theta > 0 ? cos_theta * kInvPi : 0.0; }
 
+/// A direction drawn from the von Mises-Fisher distribution around +z, with 1 - cos(theta) kept
+/// exactly (the direction's z rounds it away at large kappa).
+struct VonMisesFisherSample {
+  Vec3 dir;                  ///< unit
+  double one_minus_cos = 0;  ///< 1 - dir.z, in [0, 2]
+};
+
+/// The von Mises-Fisher distribution on S^2 around +z with concentration kappa > 0, density
+/// kappa exp(kappa (cos theta - 1)) / (2 pi (1 - exp(-2 kappa))) per steradian; inversion of
+/// cos theta = 1 + log(u.x + (1 - u.x) exp(-2 kappa)) / kappa, phi = 2 pi u.y (W. Jakob 2012,
+/// "Numerically stable sampling of the von Mises-Fisher distribution on S^2"). Stable for
+/// kappa up to 1e8 and beyond.
+VonMisesFisherSample square_to_von_mises_fisher(const Vec2& u, double kappa);
+/// Density of square_to_von_mises_fisher at a direction with 1 - cos theta = `one_minus_cos`, sr^-1.
+double von_mises_fisher_pdf(double one_minus_cos, double kappa);
+
 /// Uniform point on a triangle as barycentric coordinates (b0, b1, b2), b0+b1+b2 = 1
 /// (pbrt-v4 SampleUniformTriangle, the area-preserving "square to triangle" map of Heitz 2019,
 /// no rejection). A point is b0*p0 + b1*p1 + b2*p2; pdf = 1/area per unit area.

@@ -23,6 +23,7 @@
 #include "qsil/integrators/method.h"
 #include "qsil/integrators/regularized_visibility.h"
 #include "qsil/integrators/sample_trace.h"
+#include "qsil/integrators/warp_field.h"
 #include "qsil/parameters.h"
 #include "qsil/scene.h"
 
@@ -65,6 +66,8 @@ struct EstimatorConfig {
   /// are those of the regularised image (the oracle of the regularised derivative); other methods
   /// ignore it.
   Regularization regularization;
+  /// Method::WarpedArea: its auxiliary rays, kappa and exponent (qsil/integrators/warp_field.h).
+  WarpedAreaSampling warped_area;
 
   /// The primal image.
   static EstimatorConfig primal();

@@ -24,39 +24,42 @@ enum class VSphereTest;  // vsphere_tree.h
 /// A derivative estimator: the boundary-term sampler of `qsil grad`, the interior term alone, or
 /// finite differences. The first four are also the four rejection tests of `qsil slices`.
 enum class Method {
-  Quadric,            ///< `quadric`: edge forest, dual box + bounding quadric pair test [QSS] (default)
-  QuadricBox,         ///< `quadric-box`: the same forest with the dual box test only (ablation)
-  VSphere,            ///< `vsphere`: Li 2019's Hough-space tree, hollow v-sphere test ([QSS] App. F)
-  VSphereSolid,       ///< `vsphere-solid`: redner's original solid v-sphere test
-  Uniform,            ///< `uniform`: no rejection, edges by length x dihedral angle (a floor)
-  None,               ///< `none`: the interior term only (misses silhouettes, shadows, outlines)
+  Quadric,       ///< `quadric`: edge forest, dual box + bounding quadric pair test [QSS] (default)
+  QuadricBox,    ///< `quadric-box`: the same forest with the dual box test only (ablation)
+  VSphere,       ///< `vsphere`: Li 2019's Hough-space tree, hollow v-sphere test ([QSS] App. F)
+  VSphereSolid,  ///< `vsphere-solid`: redner's original solid v-sphere test
+  Uniform,       ///< `uniform`: no rejection, edges by length x dihedral angle (a floor)
+  None,          ///< `none`: the interior term only (misses silhouettes, shadows, outlines)
   /// `regularized`: Quinn 2021's blurred visibility, differentiated by the interior term alone
   /// (qsil/integrators/regularized_visibility.h); biased, its bias set by the blur width
   Regularized,
+  /// `was`: Bangaru et al. 2020's warped-area sampling: every sampled direction, the camera's too,
+  /// warped (qsil/integrators/warp_field.h); biased for a fixed number of auxiliary rays
+  WarpedArea,
   FiniteDifferences,  ///< `fd`: central finite differences with common random numbers
 };
 
 /// Every method, in the order above.
-inline constexpr std::array<Method, 8> kAllMethods = {Method::Quadric,      Method::QuadricBox, Method::VSphere,
-                                                      Method::VSphereSolid, Method::Uniform,    Method::None,
-                                                      Method::Regularized,  Method::FiniteDifferences};
+inline constexpr std::array<Method, 9> kAllMethods = {
+    Method::Quadric, Method::QuadricBox,  Method::VSphere,    Method::VSphereSolid,     Method::Uniform,
+    Method::None,    Method::Regularized, Method::WarpedArea, Method::FiniteDifferences};
 /// The methods that sample edges (`qsil candidates`).
 inline constexpr std::array<Method, 5> kEdgeSamplingMethods = {Method::Quadric, Method::QuadricBox, Method::VSphere,
                                                                Method::VSphereSolid, Method::Uniform};
 /// The methods with a rejection test ([QSS] Fig. 7, `qsil slices`), in display order.
 inline constexpr std::array<Method, 4> kRejectionMethods = {Method::Quadric, Method::QuadricBox, Method::VSphere,
                                                             Method::VSphereSolid};
-/// The values of `qsil grad --boundary`: every edge sampler, none, and regularized.
-inline constexpr std::array<Method, 7> kBoundaryMethods = {Method::Quadric,      Method::QuadricBox, Method::VSphere,
+/// The values of `qsil grad --boundary`: every edge sampler, none, regularized and was.
+inline constexpr std::array<Method, 8> kBoundaryMethods = {Method::Quadric,      Method::QuadricBox, Method::VSphere,
                                                            Method::VSphereSolid, Method::Uniform,    Method::None,
-                                                           Method::Regularized};
+                                                           Method::Regularized,  Method::WarpedArea};
 /// Unbiased gradient methods (`qsil reference --method`): every edge sampler, and fd.
 inline constexpr std::array<Method, 6> kReferenceMethods = {Method::Quadric, Method::QuadricBox,
                                                             Method::VSphere, Method::VSphereSolid,
                                                             Method::Uniform, Method::FiniteDifferences};
 
 /// The method's name on the command line and in outputs: "quadric", "quadric-box", "vsphere",
-/// "vsphere-solid", "uniform", "none", "regularized", "fd".
+/// "vsphere-solid", "uniform", "none", "regularized", "was", "fd".
 std::string_view method_name(Method method);
 
 /// The method named `name` among `allowed`. Throws qsil::Error

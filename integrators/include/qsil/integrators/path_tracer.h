@@ -96,15 +96,18 @@ inline constexpr double kShadingNormalMinCos = 1e-3;
 /// black, and that changes only at silhouettes. A twosided BSDF seen from the back flips the
 /// shading normal first (and the test uses |ng.wo|).
 /// At a constant interaction (si.constant) the frame is computed in doubles and lifted.
-template <class T>
-ShadingPoint<T> make_shading_point(const PathContext& ctx, const SurfaceInteraction<T>& si, const Vec3& wo_world) {
+/// `Dir`: Vec3 (a fixed direction), or Vec3T<T> (warped-area sampling's moving wo, warp_field.h;
+/// constant wherever si is: make_interaction). Callers use make_shading_point.
+template <class T, class Dir>
+ShadingPoint<T> shading_point_toward(const PathContext& ctx, const SurfaceInteraction<T>& si, const Dir& wo_world) {
+  const Vec3 wo_value = value(wo_world);
   if constexpr (!std::is_same_v<T, double>) {
     if (si.constant) {
       SurfaceInteraction<double> s;
       s.shape = si.shape;
       s.ng = value(si.ng);
       s.ns = value(si.ns);
-      const ShadingPoint<double> sp = make_shading_point(ctx, s, wo_world);
+      const ShadingPoint<double> sp = shading_point_toward(ctx, s, wo_value);
       FrameT<T> frame;
       frame.s = lift<T>(sp.frame.s);
       frame.t = lift<T>(sp.frame.t);
@@ -115,8 +118,8 @@ ShadingPoint<T> make_shading_point(const PathContext& ctx, const SurfaceInteract
   const Shape& shape = ctx.scene->shapes[si.shape];
   const BSDFDesc* bsdf = &ctx.scene->bsdfs[shape.bsdf];
   Vec3T<T> ns = si.ns;
-  const Vec3T<T> wo = lift<T>(wo_world);
-  double gw = value(si.ng).dot(wo_world);
+  const Vec3T<T> wo = direction_over<T>(wo_world);
+  double gw = value(si.ng).dot(wo_value);
   if (gw < 0 && bsdf->twosided) {
     ns = -ns;
     gw = -gw;
@@ -132,6 +135,20 @@ ShadingPoint<T> make_shading_point(const PathContext& ctx, const SurfaceInteract
   return ShadingPoint<T>{bsdf, FrameT<T>(ns), Frame(value(ns))};
 }
 
+/// shading_point_toward a fixed viewer direction.
+template <class T>
+ShadingPoint<T> make_shading_point(const PathContext& ctx, const SurfaceInteraction<T>& si, const Vec3& wo_world) {
+  return shading_point_toward(ctx, si, wo_world);
+}
+
+/// shading_point_toward a moving viewer direction (warped-area sampling).
+template <class T>
+requires(!std::is_same_v<T, double>) ShadingPoint<T> make_shading_point(const PathContext& ctx,
+                                                                        const SurfaceInteraction<T>& si,
+                                                                        const Vec3T<T>& wo_world) {
+  return shading_point_toward(ctx, si, wo_world);
+}
+
 /// A path vertex's BSDF as the tracers use it: its shading point, the viewer direction wo in its
 /// frame (over T, and detached), and f_s cos toward a world direction.
 template <class T>
@@ -140,20 +157,24 @@ struct VertexBSDF {
   Vec3T<T> wo;
   Vec3 wo_value;
   bool constant = false;  ///< the interaction is constant: evaluate in doubles and lift
-  /// f_s cos toward world direction w (over T; in doubles, lifted, at a constant interaction).
-  ColorT<T> toward(const Vec3& w) const {
-    if constexpr (!std::is_same_v<T, double>)
+  /// f_s cos toward world direction w (over T; in doubles, lifted, at a constant interaction
+  /// toward a fixed direction). `Dir`: Vec3, or Vec3T<T> (a warped direction, warp_field.h).
+  template <class Dir = Vec3>
+  ColorT<T> toward(const Dir& w) const {
+    if constexpr (!std::is_same_v<T, double> && std::is_same_v<Dir, Vec3>)
       if (constant) return lift<T>(bsdf_eval<double>(*sp.bsdf, sp.frame_value.to_local(w), wo_value));
-    return bsdf_eval<T>(*sp.bsdf, sp.frame.to_local(lift<T>(w)), wo);
+    return bsdf_eval<T>(*sp.bsdf, sp.frame.to_local(direction_over<T>(w)), wo);
   }
 };
 
 /// The VertexBSDF of interaction `si` seen from world direction `wo_world` (toward the viewer):
 /// make_shading_point, and wo in its frame (in doubles, lifted, at a constant interaction).
-template <class T>
-VertexBSDF<T> vertex_bsdf(const PathContext& ctx, const SurfaceInteraction<T>& si, const Vec3& wo_world) {
-  const ShadingPoint<T> sp = make_shading_point(ctx, si, wo_world);
-  const Vec3T<T> wo = si.constant ? lift<T>(sp.frame_value.to_local(wo_world)) : sp.frame.to_local(lift<T>(wo_world));
+/// `Dir` as for shading_point_toward: Vec3, or Vec3T<T> (warped-area sampling).
+template <class T, class Dir = Vec3>
+VertexBSDF<T> vertex_bsdf(const PathContext& ctx, const SurfaceInteraction<T>& si, const Dir& wo_world) {
+  const ShadingPoint<T> sp = shading_point_toward(ctx, si, wo_world);
+  const Vec3T<T> wo =
+      si.constant ? lift<T>(sp.frame_value.to_local(value(wo_world))) : sp.frame.to_local(direction_over<T>(wo_world));
   return VertexBSDF<T>{sp, wo, value(wo), si.constant};
 }
 
@@ -317,13 +338,23 @@ struct PathRay {
   double bsdf_pdf = 0;
 };
 
+/// The directions of a path are fixed (qsil's parametrization): trace_path's default `Warp`.
+struct NoWarp {
+  static constexpr bool enabled = false;
+};
+
 /// Radiance arriving at `ray.origin` from `ray.dir` along a path, plus its forward-mode derivative
 /// when T is a dual. At every vertex that may still scatter (segments < max_depth),
 /// `hook(si, sp, wo_local_value, beta, segments_so_far, sampler, stats, L)` may add to L.
-template <class View, class Hook = NoVertexHook>
+/// `warp`: NoWarp (directions fixed), or warped-area sampling's DirectionWarp (warp_field.h):
+/// every direction sampled at a vertex (toward the next vertex, toward a light) is then moved
+/// by `warp(si, wo_world, w, stats)`, the path continues along the warped direction (the next
+/// hit, the next vertex's wo) and its contribution is multiplied by the warp's Jacobian. The
+/// ray's own direction is `warp.first_direction(ray.dir)` (its Jacobian is the caller's).
+template <class View, class Hook = NoVertexHook, class Warp = NoWarp>
 ColorT<typename View::Real> trace_path(const PathContext& ctx, const View& view,
                                        const PathRay<typename View::Real>& ray, Sampler& sampler, PathStats& stats,
-                                       const Hook& hook = {}) {
+                                       const Hook& hook = {}, const Warp& warp = {}) {
   using T = typename View::Real;
   // Paths that carry derivatives draw diffuse directions from the defensive mixture
   // (kDerivativeDiffuseUniformShare, bsdf.h); primal paths from the cosine density.
@@ -332,6 +363,8 @@ ColorT<typename View::Real> trace_path(const PathContext& ctx, const View& view,
   ColorT<T> beta = lift<T>(Color::Ones().eval());
   Vec3T<T> o = ray.origin;
   Vec3 d = ray.dir;
+  Vec3T<T> d_warped;  // d moving with theta (Warp::enabled only)
+  if constexpr (Warp::enabled) d_warped = warp.first_direction(ray.dir);
   Hit hit = ray.first_hit;
   double bsdf_pdf_prev = ray.bsdf_pdf;
   for (int seg = ray.segments_before + 1;; ++seg) {
@@ -340,7 +373,8 @@ ColorT<typename View::Real> trace_path(const PathContext& ctx, const View& view,
       if (ctx.environment && ctx.environment->present()) L += beta * lift<T>(escaped_radiance(ctx, d, bsdf_pdf_prev));
       break;
     }
-    SurfaceInteraction<T> si = make_interaction(view, hit, o, d, ctx.tracer->local_origin());
+    SurfaceInteraction<T> si = Warp::enabled ? make_interaction(view, hit, o, d_warped, ctx.tracer->local_origin())
+                                             : make_interaction(view, hit, o, d, ctx.tracer->local_origin());
     // A view with a tape (reverse mode, qsil/integrators/reverse.h) records the hit and gives its
     // point and shading normal derivative slots of their own; the other views have no attach().
     if constexpr (requires { view.attach(si, hit, value(o), d, true); }) {
@@ -362,10 +396,19 @@ ColorT<typename View::Real> trace_path(const PathContext& ctx, const View& view,
     }
     if (seg >= ctx.max_depth) break;
 
-    const VertexBSDF<T> vertex = vertex_bsdf(ctx, si, wo_world);
+    const VertexBSDF<T> vertex =
+        Warp::enabled ? vertex_bsdf(ctx, si, Vec3T<T>(-d_warped)) : vertex_bsdf(ctx, si, wo_world);
     const ShadingPoint<T>& sp = vertex.sp;
     const Vec3& wo_value = vertex.wo_value;
-    const auto bsdf_toward = [&](const Vec3& w) { return vertex.toward(w); };
+    // f_s cos toward w; under a warp, along the warped w and times the warp's Jacobian.
+    const auto bsdf_toward = [&](const Vec3& w) -> ColorT<T> {
+      if constexpr (Warp::enabled) {
+        const auto warped = warp(si, wo_world, w, stats);
+        return vertex.toward(warped.dir) * warped.jacobian;
+      } else {
+        return vertex.toward(w);
+      }
+    };
     hook(si, sp, wo_value, beta, seg, sampler, stats, L);
 
     // ---- Next-event estimation: keep only the sampled direction; re-evaluate along it.
@@ -376,7 +419,14 @@ ColorT<typename View::Real> trace_path(const PathContext& ctx, const View& view,
     const BSDFSample bs = bsdf_sample(*sp.bsdf, wo_value, sampler.next2(), uniform_share);
     if (!bs.valid || !(bs.pdf > 0)) break;
     const Vec3 wi = sp.frame_value.to_world(bs.wi).normalized();
-    const ColorT<T> f = bsdf_toward(wi);
+    ColorT<T> f;
+    if constexpr (Warp::enabled) {
+      const auto warped = warp(si, wo_world, wi, stats);
+      f = vertex.toward(warped.dir) * warped.jacobian;
+      d_warped = warped.dir;
+    } else {
+      f = bsdf_toward(wi);
+    }
     beta = beta * f / T(bs.pdf);
     if ((value(beta) == 0).all()) break;
     bsdf_pdf_prev = bs.pdf;

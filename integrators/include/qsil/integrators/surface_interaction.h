@@ -3,12 +3,15 @@
 /// The differentiable hit point of a fixed-direction ray (docs/architecture.md §4): Embree chooses the
 /// triangle; the distance t, the barycentrics, the point and the normals are recomputed over the
 /// view's scalar type from the (moving) vertices and the (moving) ray origin. The direction is a
-/// detached double: directions are fixed in qsil's parametrization.
+/// detached double (directions are fixed in qsil's parametrization), or, for warped-area sampling
+/// (warp_field.h), a direction over the view's scalar type.
 
 #include "qsil/dual.h"
 #include "qsil/integrators/geometry_view.h"
 #include "qsil/ray_tracer.h"
 #include "qsil/scene.h"
+
+#include <type_traits>
 
 namespace qsil {
 
@@ -58,6 +61,16 @@ SurfaceInteraction<T> lift_interaction(const SurfaceInteraction<double>& si) {
   return r;
 }
 
+/// Direction `d` over scalar type T: a fixed one (Vec3) lifted with zero derivatives, one that
+/// moves with theta (Vec3T<T>, warped-area sampling) as it is.
+template <class T, class Dir>
+Vec3T<T> direction_over(const Dir& d) {
+  if constexpr (std::is_same_v<Dir, Vec3>)
+    return lift<T>(d);
+  else
+    return d;
+}
+
 /// Ray-triangle intersection (Moller-Trumbore 1997) over scalar T with origin o (T) and fixed unit
 /// direction d, for the triangle Embree reported in `hit`. Works outside the triangle too (the
 /// barycentrics are then extrapolated): Embree decided which triangle is hit. With hit.exact the
@@ -68,14 +81,23 @@ SurfaceInteraction<T> lift_interaction(const SurfaceInteraction<double>& si) {
 /// and an origin with zero derivatives, DualView) gets it computed in doubles and lifted (zero
 /// derivatives, the same values): the dual arithmetic would only carry zeros (docs/architecture.md
 /// §4 "Constant interactions").
-template <class View>
+///
+/// `Dir` is Vec3 (a fixed direction: qsil's parametrization) or Vec3T<View::Real> (a direction
+/// that moves with theta: warped-area sampling's warped directions, warp_field.h; unit in value,
+/// its derivatives tangent). A moving direction makes the hit constant only when its derivatives
+/// are zero too.
+template <class View, class Dir = Vec3>
 SurfaceInteraction<typename View::Real> make_interaction(const View& view, const Hit& hit,
-                                                         const Vec3T<typename View::Real>& o, const Vec3& d,
+                                                         const Vec3T<typename View::Real>& o, const Dir& d,
                                                          const Vec3& local_origin = Vec3::Zero()) {
   using T = typename View::Real;
+  constexpr bool fixed_direction = std::is_same_v<Dir, Vec3>;
   if constexpr (requires { view.constant_hit(hit.shape, o); }) {
-    if (view.constant_hit(hit.shape, o))
-      return lift_interaction<T>(make_interaction(PrimalView{view.scene}, hit, value(o), d, local_origin));
+    bool constant = view.constant_hit(hit.shape, o);
+    if constexpr (!fixed_direction)
+      for (int i = 0; i < 3 && constant; ++i) constant = (d[i].derivatives().array() == 0).all();
+    if (constant)
+      return lift_interaction<T>(make_interaction(PrimalView{view.scene}, hit, value(o), Vec3(value(d)), local_origin));
   }
   SurfaceInteraction<T> si;
   si.shape = hit.shape;
@@ -86,7 +108,7 @@ SurfaceInteraction<typename View::Real> make_interaction(const View& view, const
   const Vec3T<T> v1 = view.position(hit.shape, tri[1]);
   const Vec3T<T> v2 = view.position(hit.shape, tri[2]);
   const Vec3T<T> e1 = v1 - v0, e2 = v2 - v0;
-  const Vec3T<T> dT = lift<T>(d);
+  const Vec3T<T> dT = direction_over<T>(d);
   const Vec3T<T> pvec = dT.cross(e2);
   const T det = e1.dot(pvec);
   const T inv_det = T(1.0) / det;

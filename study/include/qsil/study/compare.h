@@ -11,11 +11,12 @@
 /// forest fit, v-sphere tree, ...) is not charged to any budget and is reported per method
 /// (setup_seconds in the CSV and JSON, and one log line per method).
 
-#include "qsil/study/progressive.h"
-#include "qsil/study/reference.h"
 #include "qsil/integrators/method.h"
+#include "qsil/integrators/warp_field.h"
 #include "qsil/parameters.h"
 #include "qsil/scene.h"
+#include "qsil/study/progressive.h"
+#include "qsil/study/reference.h"
 
 #include <cstdint>
 #include <filesystem>
@@ -42,6 +43,7 @@ struct CompareOptions {
   /// `regularized`: its blur width as a fraction of the scene's bounding-box diagonal
   /// (Regularization::for_scene).
   double reg_width = 1e-3;
+  WarpedAreaSampling warped_area;  ///< was's auxiliary rays (EstimatorConfig::warped_area)
   std::filesystem::path out;  ///< output directory (created)
   uint64_t seed = 0;          ///< base seed: every method, target and the reference derive theirs
   int threads = 0;
