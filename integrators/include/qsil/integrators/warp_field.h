@@ -17,14 +17,15 @@
 ///   v_i    = d/dtheta normalize(y_i(theta) - p(theta)): y_i the auxiliary hit attached to its
 ///            triangle (fixed barycentrics), p the shading point (velocities relative to p);
 ///            0 for a ray that escapes,
-///   div V  = (sum_i grad_w K_i . v_i - V . sum_i grad_w K_i) / sum_i K_i,
+///   div V  = (sum_i grad_w K_i . v_i - V . sum_i grad_w K_i) / sum_i K_i - 2 w.V
+///            (the last term: the divergence on the sphere of V's tangent part, which the warp uses),
 ///   grad_w K_i = gamma kappa (D + 1) (D + B_i)^-gamma-1 (w_i - (w_i.w) w) / q.
 /// B_i (triangle_boundary_test) is 0 on the hit triangle's edges and 1 at the incentre of the
 /// triangle's projection along w_i. N auxiliary rays give a ratio estimate: [WAS]'s biased
 /// fixed-N variant (its bias shrinks as N grows; measured in docs/experiments/). Pdfs and MIS
-/// weights stay detached: the term a detached weight drops, -(grad w_s . V_s) F, is linear in
-/// V_s, whose distribution given w is the same for every strategy, so the strategies' dropped
-/// terms cancel in expectation (docs/design-notes.md "Warped-area sampling").
+/// weights stay detached: the weights partition unity over the unwarped direction, and each
+/// strategy's estimate there is linear in the field it drew, drawn alike by every strategy
+/// (docs/design-notes.md "Warped-area sampling").
 
 #include "qsil/dual.h"
 #include "qsil/error.h"
@@ -51,14 +52,18 @@ struct WarpedAreaSampling {
   /// ratio estimates from rays x 2^L rays and from each half, over P(L = l) (the single-term
   /// randomised multilevel estimator of Blanchet & Glynn 2015, "Unbiased Monte Carlo for
   /// optimization and functions of expectations via multi-level randomization", WSC). Expected
-  /// rays per warp: 2.2 x `rays`. False: the fixed-N ratio estimate (biased, [WAS] §5).
+  /// rays per warp: 2.2 x `rays`, at most kWarpMaxRays. False: the fixed-N ratio estimate
+  /// (biased, [WAS] §5).
   bool unbiased = false;
 };
 
 /// The level ratio r of WarpedAreaSampling::unbiased: P(L >= l) = r^l.
 inline constexpr double kWarpLevelRatio = 0.35355339059327373;  // 2^-1.5
-/// Highest level of WarpedAreaSampling::unbiased (P(L > 24) = 2^-37.5: the truncation).
-inline constexpr int kWarpMaxLevel = 24;
+/// Most auxiliary rays one warp of WarpedAreaSampling::unbiased traces: its highest level l_max
+/// is the largest with rays x 2^l_max <= this, and takes the probability P(L >= l_max), so the
+/// estimate's mean is that of the ratio estimate from rays x 2^l_max rays (a bias below 10^-5
+/// of the fixed-N bias of 8 rays).
+inline constexpr int kWarpMaxRays = 1 << 20;
 
 /// Throws qsil::Error unless rays is in [1, 1024], kappa in [1, 1e8] and exponent in (1, 16]
 /// (gamma > 1: a weight's limit far from the direction is then 0).
@@ -191,9 +196,12 @@ WarpedDirection<typename View::Real> warp_field(const PathContext& ctx, const Vi
     for (int i = 0; i < was.rays; ++i) add_ray(sums);
     e = WarpEstimate<N>::ratio(sums);
   } else {
-    // Level L by inversion of P(L >= l) = r^l; the estimate Delta_L / P(L = l).
-    const int level = std::min(kWarpMaxLevel, int(std::log1p(-aux.next()) / std::log(kWarpLevelRatio)));
-    const double p_level = (1 - kWarpLevelRatio) * std::pow(kWarpLevelRatio, level);
+    // Level L by inversion of P(L >= l) = r^l, truncated at max_level; the estimate
+    // Delta_L / P(L = l), the highest level's P(L >= max_level).
+    int max_level = 0;
+    while ((was.rays << (max_level + 1)) <= kWarpMaxRays) ++max_level;
+    const int level = std::min(max_level, int(std::log1p(-aux.next()) / std::log(kWarpLevelRatio)));
+    const double p_level = (level < max_level ? 1 - kWarpLevelRatio : 1.0) * std::pow(kWarpLevelRatio, double(level));
     const int half = level == 0 ? was.rays : was.rays << (level - 1);
     WarpSums<N> a, b;
     for (int i = 0; i < half; ++i) add_ray(a);
@@ -212,7 +220,10 @@ WarpedDirection<typename View::Real> warp_field(const PathContext& ctx, const Vi
   WarpedDirection<T> r;
   r.dir = lift<T>(w);
   r.jacobian = T(1.0);
-  e.V -= w * (w.transpose() * e.V);  // tangent at w
+  // The field the warp uses is V's tangent part P V (the v_i are tangent at their own w_i, not
+  // at w): its divergence on the sphere is div V - 2 w.V.
+  e.div -= 2.0 * (w.transpose() * e.V);
+  e.V -= w * (w.transpose() * e.V);
   for (int c = 0; c < 3; ++c) r.dir[c].derivatives() = e.V.row(c).transpose();
   r.jacobian.derivatives() = e.div.transpose();
   return r;
