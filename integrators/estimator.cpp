@@ -5,6 +5,8 @@
 #include "qsil/integrators/estimator.h"
 
 #include "pixel_loop.h"
+#include "render_setup.h"
+#include "vertex_recorder.h"
 #include "qsil/check.h"
 #include "qsil/error.h"
 #include "qsil/integrators/boundary_hook.h"
@@ -12,8 +14,6 @@
 #include "qsil/integrators/path_tracer.h"
 #include "qsil/integrators/regularized_tracer.h"
 #include "qsil/integrators/warp_field.h"
-#include "render_setup.h"
-#include "vertex_recorder.h"
 
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/task_arena.h>

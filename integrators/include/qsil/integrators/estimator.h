@@ -23,7 +23,7 @@
 #include "qsil/integrators/method.h"
 #include "qsil/integrators/regularized_visibility.h"
 #include "qsil/integrators/sample_trace.h"
-#include "qsil/integrators/warp_field.h"
+#include "qsil/integrators/warped_area_sampling.h"
 #include "qsil/parameters.h"
 #include "qsil/scene.h"
 
@@ -44,7 +44,8 @@ struct EstimatorConfig {
   /// Parameters theta_k (1 to 8); empty: the primal image (method ignored).
   std::vector<ParameterSpec> params;
   /// With parameters: an edge-sampling method or Method::None (primal + interior term + boundary
-  /// term of that method), or Method::FiniteDifferences.
+  /// term of that method), Method::Regularized or Method::WarpedArea (no boundary term: a blurred
+  /// image, or warped directions), or Method::FiniteDifferences.
   Method method = Method::Quadric;
   /// Secondary boundary-term traversals per shading point (edge-sampling methods), on average over
   /// a pixel's samples: a fraction is taken by a stratified pick of samples (boundary_traversals
@@ -66,7 +67,7 @@ struct EstimatorConfig {
   /// are those of the regularised image (the oracle of the regularised derivative); other methods
   /// ignore it.
   Regularization regularization;
-  /// Method::WarpedArea: its auxiliary rays, kappa and exponent (qsil/integrators/warp_field.h).
+  /// Method::WarpedArea: its auxiliary rays, kappa and exponent (warped_area_sampling.h).
   WarpedAreaSampling warped_area;
 
   /// The primal image.

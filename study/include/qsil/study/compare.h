@@ -12,7 +12,7 @@
 /// (setup_seconds in the CSV and JSON, and one log line per method).
 
 #include "qsil/integrators/method.h"
-#include "qsil/integrators/warp_field.h"
+#include "qsil/integrators/warped_area_sampling.h"
 #include "qsil/parameters.h"
 #include "qsil/scene.h"
 #include "qsil/study/progressive.h"
