@@ -19,6 +19,7 @@
 #include "qsil/ray_tracer.h"
 #include "qsil/rng.h"
 #include "qsil/scene.h"
+#include "estimator_runs.h"
 #include "test_data.h"
 
 #include <gtest/gtest.h>
@@ -33,21 +34,9 @@ namespace {
 
 const char* kPenumbra = "tests/data/gradient/penumbra-sign.xml";
 
-RenderOptions quiet(int spp, uint64_t seed) {
-  RenderOptions o;
-  o.spp = spp;
-  o.seed = seed;
-  o.progress = false;
-  return o;
-}
-
-struct Sum {
-  double value = 0, se = 0;
-};
-Sum derivative_sum(const RenderResult& r) {
-  const ImageSum s = r.film.derivative_sum(0);
-  return {s.sum, s.standard_error};
-}
+using test::derivative_sum;
+using test::quiet;
+using test::Sum;
 
 // ---- The candidate query
 

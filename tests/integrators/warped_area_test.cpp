@@ -23,6 +23,7 @@
 //   many standard errors off the quadric method's derivative, 32 rays closer by more than 3
 //   combined standard errors;
 // - what it refuses, it refuses with a message.
+#include "estimator_runs.h"
 #include "integrators/light_setup.h"
 #include "qsil/error.h"
 #include "qsil/integrators/estimator.h"
@@ -49,22 +50,9 @@ namespace {
 const char* kPlaneLight = "tests/data/gradient/plane-light.xml";
 const char* kPenumbra = "tests/data/gradient/penumbra-sign.xml";
 
-RenderOptions quiet(int spp, uint64_t seed) {
-  RenderOptions o;
-  o.spp = spp;
-  o.seed = seed;
-  o.progress = false;
-  return o;
-}
-
-struct Sum {
-  double value = 0, se = 0;
-};
-
-Sum derivative_sum(const RenderResult& r) {
-  const ImageSum s = r.film.derivative_sum(0);
-  return {s.sum, s.standard_error};
-}
+using test::derivative_sum;
+using test::quiet;
+using test::Sum;
 
 EstimatorConfig was_config(const std::vector<ParameterSpec>& params, int rays, bool unbiased = false) {
   EstimatorConfig c = EstimatorConfig::gradient(params, Method::WarpedArea);
@@ -121,21 +109,30 @@ TEST(WarpedArea, BoundaryTestIsZeroOnEdgesOneAtTheIncentreAndScaleFree) {
   EXPECT_EQ(triangle_boundary_test(a, b, c, Vec3(0.2, 0.2, 0), Vec3(1, 0, 0)), 0.0);
 }
 
+// The warp field from a static floor point of penumbra-sign while the occluder rises
+// (occluder:translate:0,1,0): the set-up of the two field tests below.
+struct RisingOccluder {
+  const Scene scene = load_scene(test::data_file(kPenumbra), {{"res", "8"}});
+  const SceneVelocities vel = compute_velocities(scene, parse_parameters({"occluder:translate:0,1,0"}, scene));
+  const RayTracer tracer{scene};
+  const LightSetup lights{scene};
+  const PathContext ctx = lights.context(scene, tracer);
+  const DualView<1> view{&scene, &vel};
+  /// warp_field of direction w at the static floor point p (auxiliary rays offset 1e-6 above it).
+  WarpedDirection<Dual<1>> warp(const WarpedAreaSampling& was, const Vec3& p, const Vec3& w, Sampler& aux) const {
+    PathStats stats;
+    const auto spawn = [&](const Vec3&) { return Vec3(p + Vec3(0, 1e-6, 0)); };
+    return warp_field(ctx, view, was, lift<Dual<1>>(p), true, w, spawn, false, aux, stats);
+  }
+};
+
 // From a floor point of penumbra-sign just outside the occluder's shadow (x = 0.35), toward the
 // light past the occluder's edge x = 0.3 (y = 1) by a small angle: the occluder rises
 // (occluder:translate:0,1,0), so the edge moves across the direction.
 TEST(WarpedArea, UnbiasedFieldIsTheLimitOfTheRatioEstimates) {
-  const Scene scene = load_scene(test::data_file(kPenumbra), {{"res", "8"}});
-  const auto params = parse_parameters({"occluder:translate:0,1,0"}, scene);
-  const SceneVelocities vel = compute_velocities(scene, params);
-  const RayTracer tracer(scene);
-  const LightSetup lights(scene);
-  const PathContext ctx = lights.context(scene, tracer);
-  const DualView<1> view{&scene, &vel};
+  const RisingOccluder occluder;
   const Vec3 p(0.35, 0, 0.05);
   const Vec3 w = Vec3(-0.05 + 0.002, 1, 0).normalized();
-  const auto spawn = [&](const Vec3&) { return Vec3(p + Vec3(0, 1e-6, 0)); };
-  PathStats stats;
   struct Mean {
     double sum = 0, sum2 = 0;
     int n = 0;
@@ -145,7 +142,7 @@ TEST(WarpedArea, UnbiasedFieldIsTheLimitOfTheRatioEstimates) {
   };
   // The velocity across the edge (x) and the divergence, per estimate.
   const auto estimate = [&](const WarpedAreaSampling& was, Sampler& aux, Mean& vx, Mean& div) {
-    const WarpedDirection<Dual<1>> r = warp_field(ctx, view, was, lift<Dual<1>>(p), true, w, spawn, false, aux, stats);
+    const WarpedDirection<Dual<1>> r = occluder.warp(was, p, w, aux);
     vx.add(r.dir.x().derivatives()[0]);
     div.add(r.jacobian.derivatives()[0]);
   };
@@ -191,28 +188,19 @@ TEST(WarpedArea, UnbiasedFieldIsTheLimitOfTheRatioEstimates) {
 // 0.015 %), while two lobe widths beside it on the lit side (the aux rays there see the static
 // light) it is well below.
 TEST(WarpedArea, FieldAtAnOutlineIsTheOutlinesVelocity) {
-  const Scene scene = load_scene(test::data_file(kPenumbra), {{"res", "8"}});
-  const auto params = parse_parameters({"occluder:translate:0,1,0"}, scene);
-  const SceneVelocities vel = compute_velocities(scene, params);
-  const RayTracer tracer(scene);
-  const LightSetup lights(scene);
-  const PathContext ctx = lights.context(scene, tracer);
-  const DualView<1> view{&scene, &vel};
+  const RisingOccluder occluder;
   const Vec3 p(0.6, 0, 0.1);
   const Vec3 e(0.3, 1, 0.1);  // a point of the occluder's edge (along z)
   const Vec3 wb = (e - p).normalized();
   const Vec3 across = wb.cross(Vec3(0, 0, 1)).normalized();  // normal to the outline on the sphere
   const double outline_speed = ((Vec3(0, 1, 0) - wb * wb.y()) / (e - p).norm()).dot(across);
-  const auto spawn = [&](const Vec3&) { return Vec3(p + Vec3(0, 1e-6, 0)); };
   WarpedAreaSampling many;
   many.rays = 4096;
-  PathStats stats;
   const auto field_across = [&](const Vec3& w) {
     double sum = 0;
     for (int i = 0; i < 8; ++i) {
       Sampler aux(13, 0, uint64_t(i));
-      const WarpedDirection<Dual<1>> r =
-          warp_field(ctx, view, many, lift<Dual<1>>(p), true, w, spawn, false, aux, stats);
+      const WarpedDirection<Dual<1>> r = occluder.warp(many, p, w, aux);
       sum += Vec3(r.dir.x().derivatives()[0], r.dir.y().derivatives()[0], r.dir.z().derivatives()[0]).dot(across) / 8;
     }
     return sum;
