@@ -81,7 +81,7 @@ void attach_boundary(const Scene& scene, const RayTracer& tracer, Method method,
 }  // namespace
 
 BoundarySetup build_boundary_setup(const Scene& scene, Method method, bool intersection_curves) {
-  QSIL_CHECK_MSG(samples_edges(method), "no edge sampler for method " << method_name(method));
+  QSIL_CHECK_MSG(uses_edge_set(method), "no edge set for method " << method_name(method));
   const auto t0 = std::chrono::steady_clock::now();
   BoundarySetup out;
   const std::vector<edgetree::ForestShapeInput> inputs = edgetree::forest_inputs(scene);
@@ -98,7 +98,10 @@ BoundarySetup build_boundary_setup(const Scene& scene, Method method, bool inter
     edgetree::EdgeSetOptions options;
     options.intersection_curves = intersection_curves;
     out.edges = std::make_unique<edgetree::EdgeSet>(edgetree::EdgeSet::build(inputs, options));
-    if (method == Method::Uniform) {
+    if (method == Method::Projective) {
+      // No secondary edge sampler: its boundary sample space is built by the estimator
+      // (integrators/projective_boundary.h), over these edges.
+    } else if (method == Method::Uniform) {
       out.sampler = std::make_unique<edgetree::UniformEdgeSampler>(*out.edges);
     } else {
       // Li 2019: the Hough origin is the camera centre (docs/architecture.md §7).
@@ -165,7 +168,9 @@ void describe_boundary_setup(const BoundarySetup& boundary, Method method, int p
     }
     setup.structure = uses_quadrics(method) ? "edge forest (dual box + quadrics)" : "edge forest (dual box)";
   } else {
-    setup.structure = method == Method::Uniform ? "edge set + uniform tables" : "edge set + v-sphere tree";
+    setup.structure = method == Method::Uniform      ? "edge set + uniform tables"
+                      : method == Method::Projective ? "edge set + boundary segment tables"
+                                                     : "edge set + v-sphere tree";
   }
 }
 

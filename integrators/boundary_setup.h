@@ -32,7 +32,8 @@ struct BoundarySetup {
   double seconds = 0;                              ///< wall time of the build
 };
 
-/// Builds the structures of `method` (one of kEdgeSamplingMethods) over every shape of `scene`
+/// Builds the structures of `method` (one of kEdgeSamplingMethods, or Projective: the edge set
+/// alone, no sampler) over every shape of `scene`
 /// (a moving shading point sees static edges move too, docs/architecture.md §5), with the
 /// segments of the intersection curves among the always-candidates unless `intersection_curves`
 /// is false. The v-sphere tree's Hough origin is the camera centre. The scene must outlive the
@@ -60,7 +61,7 @@ void check_sample_rates(const Camera& camera, double sppi, double sppp);
 /// Fills the set-up report's edge-structure fields from a built boundary method: build time, edge
 /// count, fitted and quadric node counts, `primary_edges`, and the structure's name ("edge forest
 /// (dual box + quadrics)", "edge forest (dual box)", "edge set + uniform tables", "edge set +
-/// v-sphere tree").
+/// v-sphere tree", "edge set + boundary segment tables").
 void describe_boundary_setup(const BoundarySetup& boundary, Method method, int primary_edges, SetupReport& setup);
 
 /// The boundary term of a run, set up once (what GradientEstimator and ReverseEstimator both do):

@@ -5,6 +5,7 @@
 #include "qsil/integrators/estimator.h"
 
 #include "pixel_loop.h"
+#include "projective_boundary.h"
 #include "render_setup.h"
 #include "vertex_recorder.h"
 #include "qsil/check.h"
@@ -137,9 +138,11 @@ class GradientEstimator final : public Estimator::Impl, private RenderSetup {
   GradientEstimator(const Scene& s, EstimatorConfig c)
       : Impl(s, std::move(c)), RenderSetup(s), vel(compute_velocities(s, config.params)) {
     // ---- The boundary method's structures, only when something moves.
-    if (samples_edges(config.method) && vel.any_moving()) {
+    if (uses_edge_set(config.method) && vel.any_moving()) {
       set_up_boundary_term(s, tracer, config.method, &vel, vel.moving, config.sppi, lights.environment,
                            boundary, boundary_ctx, primary, setup, config.intersection_curves);
+      // Projective sampling: no secondary edge sampler, its boundary sample space instead.
+      if (config.method == Method::Projective) projective = make_projective_edges(*boundary.edges, boundary_ctx.moving);
     }
     if (config.method == Method::WarpedArea && vel.any_moving()) {
       warped = true;  // no structure: every direction is warped (warp_field.h)
@@ -166,6 +169,8 @@ class GradientEstimator final : public Estimator::Impl, private RenderSetup {
       throw Error("regularized: the largest samples' paths are not traced for this method");
     if (warped && options.largest_samples > 0)
       throw Error("was: the largest samples' paths are not traced for this method");
+    if (config.method == Method::Projective && options.largest_samples > 0)
+      throw Error("projective: the largest samples' paths are not traced for this method");
     const RegularizedContext rc{&ctx, near ? &*near : nullptr};
     PathStats total;
     run_pixels(
@@ -210,13 +215,20 @@ class GradientEstimator final : public Estimator::Impl, private RenderSetup {
         },
         r, total, fraction);
     if (options.largest_samples > 0) trace_largest(options, largest, r);
-    // ---- Primary silhouettes: sppp edge samples per pixel sample, splatted where they land.
-    if (with_boundary) {
+    // ---- Primary silhouettes: sppp edge samples per pixel sample, splatted where they land;
+    // projective sampling's boundary segments (sppi per pixel sample) after them, alike.
+    if (boundary.edges) {
       const auto t0 = Clock::now();
       PathStats primary_stats;
       add_primary_boundary(r.film, ctx, vel, primary, config.sppp, first, count, options.seed,
                            options.threads, primary_stats, options.part, options.parts,
                            options.parts > 1 ? &r.splats : nullptr);
+      // A run in parts draws all of them in its last part: merged in order (merge_part), every
+      // splat sum is then formed in the whole run's order, primary splats first.
+      if (projective && options.part == options.parts - 1)
+        r.nonfinite +=
+            add_projective_boundary(r.film, ctx, vel, *projective, boundary_ctx.sppi, first, count, options.seed,
+                                    options.threads, primary_stats, 0, 1, options.parts > 1 ? &r.splats : nullptr);
       const double dt = seconds_since(t0);
       r.seconds += dt;
       r.rays += primary_stats.rays;
@@ -252,6 +264,7 @@ class GradientEstimator final : public Estimator::Impl, private RenderSetup {
   SceneVelocities vel;
   std::optional<SoftScene> near;  ///< Method::Regularized only
   bool warped = false;            ///< Method::WarpedArea with something moving
+  std::optional<ProjectiveEdges> projective;  ///< Method::Projective with something moving
 };
 
 /// Central finite differences with common random numbers (`qsil fd`): the primal scene and, per
@@ -396,7 +409,7 @@ std::string SetupReport::describe() const {
 
 Estimator::Estimator(const Scene& scene, EstimatorConfig config) {
   if (!config.params.empty() && config.method != Method::FiniteDifferences && config.method != Method::None &&
-      config.method != Method::Regularized && config.method != Method::WarpedArea && !samples_edges(config.method))
+      config.method != Method::Regularized && config.method != Method::WarpedArea && !uses_edge_set(config.method))
     throw Error("method " + std::string(method_name(config.method)) + " cannot estimate derivatives");
   if (config.method == Method::WarpedArea) check_warped_area_sampling(config.warped_area);
   check_sample_rates(scene.camera, config.sppi, config.sppp);

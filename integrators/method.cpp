@@ -22,6 +22,7 @@ std::string_view method_name(Method method) {
     case Method::None: return "none";
     case Method::Regularized: return "regularized";
     case Method::WarpedArea: return "was";
+    case Method::Projective: return "projective";
     case Method::FiniteDifferences: return "fd";
   }
   return "?";
@@ -43,6 +44,8 @@ Method parse_method(std::string_view name, std::string_view option, std::span<co
 bool samples_edges(Method method) {
   return std::find(kEdgeSamplingMethods.begin(), kEdgeSamplingMethods.end(), method) != kEdgeSamplingMethods.end();
 }
+
+bool uses_edge_set(Method method) { return samples_edges(method) || method == Method::Projective; }
 
 bool uses_edge_forest(Method method) { return method == Method::Quadric || method == Method::QuadricBox; }
 

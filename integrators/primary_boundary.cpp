@@ -7,6 +7,7 @@
 #include "qsil/edgetree/mesh_edges.h"
 #include "qsil/error.h"
 #include "qsil/integrators/boundary_term.h"
+#include "sample_chunks.h"
 
 #include <tbb/parallel_for.h>
 
@@ -115,45 +116,12 @@ void run_chunk(const PathContext& ctx, const SceneVelocities& vel, const Primary
   sample_chunk(ctx, primary, count, per_sample, seed, chunk, stats, accept, emit);
 }
 
-/// The chunks of samples [first_sample, first_sample + spp) of the primary term and this part's
-/// share of them (see add_primary_boundary for the numbering).
-struct ChunkPlan {
-  double per_sample = 0;         ///< each sample estimates the whole image's term; a pixel's mean divides by spp
-  long long g0 = 0, g1 = 0;      ///< global sample numbers of the range
-  long long c0 = 0, chunks = 0;  ///< this part's first chunk and chunk count
-  static constexpr long long kChunkSize = 1024;
-  ChunkPlan(const Camera& cam, const PrimaryEdges& primary, double ratio, int first_sample, int spp, int part,
-            int parts) {
-    const long long per_index = primary_samples_per_index(cam.width, cam.height, ratio);
-    if (!(double(per_index) * (double(first_sample) + double(spp)) < 0x1p62))
-      throw Error("primary boundary term: " + std::to_string(per_index) + " samples per sample index up to sample " +
-                  std::to_string(first_sample + spp) + " overflow its numbering (fewer --primary-samples)");
-    const long long num_samples = per_index * spp;
-    per_sample = double(spp) / double(std::max(1LL, num_samples));
-    // Sample index s owns primary samples [s n, (s + 1) n), n a whole number of chunks; chunk c
-    // holds numbers [c 1024, (c + 1) 1024) and draws from stream (seed, c, 0, 2), whichever run
-    // draws it: no range starts inside a chunk.
-    g0 = per_index * first_sample;
-    g1 = g0 + num_samples;
-    const long long first_chunk = g0 / kChunkSize, all_chunks = (g1 + kChunkSize - 1) / kChunkSize - first_chunk;
-    // This part's share of the chunks: a contiguous run of them, in order.
-    c0 = first_chunk + all_chunks * part / parts;
-    chunks = first_chunk + all_chunks * (part + 1) / parts - c0;
-    if (primary.empty() || num_samples <= 0) chunks = 0;
-  }
-  /// Runs body(j, count, chunk) in parallel for chunks j in [j0, j1) of this part (default: all):
-  /// `count` samples of global chunk `chunk` (a whole chunk: ranges start at a chunk's start).
-  template <class Body>
-  void run(int threads, Body&& body, long long j0 = 0, long long j1 = -1) const {
-    QSIL_DCHECK(g0 % kChunkSize == 0);
-    auto one = [&](long long j) {
-      const long long c = c0 + j;
-      const long long begin = std::max(g0, c * kChunkSize), end = std::min(g1, (c + 1) * kChunkSize);
-      body(j, end - begin, c);
-    };
-    in_arena(threads, [&] { tbb::parallel_for(j0, j1 < 0 ? chunks : j1, one); });
-  }
-};
+/// The chunk plan of the primary term (see add_primary_boundary for the numbering).
+ChunkPlan primary_plan(const Camera& cam, const PrimaryEdges& primary, double ratio, int first_sample, int spp,
+                       int part, int parts) {
+  return ChunkPlan(primary_samples_per_index(cam.width, cam.height, ratio), primary.empty(), first_sample, spp, part,
+                   parts, "primary boundary term", "--sppp");
+}
 
 }  // namespace
 
@@ -249,7 +217,7 @@ PrimaryEdges find_primary_edges(const Scene& scene, const edgetree::EdgeSet& edg
 void add_primary_boundary(Film& film, const PathContext& ctx, const SceneVelocities& velocities,
                           const PrimaryEdges& edges, double ratio, int first_sample, int spp, uint64_t seed,
                           int threads, PathStats& stats, int part, int parts, std::vector<FilmSplat>* deferred) {
-  const ChunkPlan plan(ctx.scene->camera, edges, ratio, first_sample, spp, part, parts);
+  const ChunkPlan plan = primary_plan(ctx.scene->camera, edges, ratio, first_sample, spp, part, parts);
   std::vector<std::vector<FilmSplat>> splats{static_cast<size_t>(plan.chunks)};
   std::vector<PathStats> chunk_stats{static_cast<size_t>(plan.chunks)};
   const int K = velocities.num_params;
@@ -259,23 +227,12 @@ void add_primary_boundary(Film& film, const PathContext& ctx, const SceneVelocit
                                     chunk_stats[size_t(j)]);
     });
   });
-  // Merge in chunk order: the same sums whatever the thread count (or hand them on in that order).
-  for (long long c = 0; c < plan.chunks; ++c) {
-    if (deferred) {
-      deferred->insert(deferred->end(), splats[size_t(c)].begin(), splats[size_t(c)].end());
-      std::vector<FilmSplat>().swap(splats[size_t(c)]);
-    } else {
-      for (const FilmSplat& s : splats[size_t(c)]) film.splat(s.x, s.y, s.channel, s.value);
-    }
-    stats.rays += chunk_stats[size_t(c)].rays;
-    stats.boundary_traversals += chunk_stats[size_t(c)].boundary_traversals;
-    stats.boundary_zero += chunk_stats[size_t(c)].boundary_zero;
-  }
+  merge_chunk_splats(splats, chunk_stats, film, stats, deferred);
 }
 
 void for_each_primary_sample(const PathContext& ctx, const PrimaryEdges& edges, double ratio, int first_sample, int spp,
                              uint64_t seed, int threads, PathStats& stats, const PrimarySampleFn& fn) {
-  const ChunkPlan plan(ctx.scene->camera, edges, ratio, first_sample, spp, 0, 1);
+  const ChunkPlan plan = primary_plan(ctx.scene->camera, edges, ratio, first_sample, spp, 0, 1);
   // In batches of chunks (a bounded buffer), each drawn in parallel and handed on in order.
   const long long batch = 64;
   std::vector<std::vector<PrimarySample>> samples{static_cast<size_t>(batch)};

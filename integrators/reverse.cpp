@@ -250,7 +250,8 @@ class ReverseEstimator::Impl : public RenderSetup {
       chosen[size_t(sh)] = true;
       chosen_index[size_t(sh)] = int(i);
     }
-    if (config.method == Method::Regularized || config.method == Method::WarpedArea)
+    if (config.method == Method::Regularized || config.method == Method::WarpedArea ||
+        config.method == Method::Projective)
       throw Error("reverse mode: method " + std::string(method_name(config.method)) +
                   " is not supported (forward mode only: qsil grad)");
     if (config.method != Method::None && !samples_edges(config.method))

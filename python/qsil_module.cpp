@@ -250,16 +250,16 @@ void bind_forward(py::module_& m) {
               for (int c = 0; c < 3; ++c) a(k, y, x, c) = r->film.mean(layout.derivative(k, c), x, y);
         return py::make_tuple(film_image(r->film, [&](int c) { return layout.primal(c); }), d);
       };
-  m.def("grad", grad,
-      py::arg("scene"), py::arg("params"), py::arg("spp") = 0, py::arg("seed") = 0, py::arg("threads") = 0,
-      py::arg("boundary") = "quadric", py::arg("sppi") = 0, py::arg("sppp") = kDefaultSppp,
-      py::arg("intersection_curves") = true, py::arg("reg_width") = 1e-3,
-      "Forward mode: (image (H, W, 3), derivatives (K, H, W, 3)) for 1-8 parameter specs "
-      "('ID:translate:X,Y,Z', 'ID:rotate:X,Y,Z', 'ID:scale', 'ID:vertex:I:X,Y,Z'). sppi: secondary "
-      "boundary-term samples per shading point on average over a pixel's samples (0: the method's default, 0.5 for "
-      "quadric); sppp: primary edge samples per pixel sample (`qsil grad --help`); intersection_curves=False: do not "
-      "sample the curves where surfaces cross (to measure what they add; biased where surfaces cross); reg_width: "
-      "boundary='regularized''s blur width as a fraction of the scene's bounding-box diagonal (`qsil grad --help`)");
+  m.def("grad", grad, py::arg("scene"), py::arg("params"), py::arg("spp") = 0, py::arg("seed") = 0,
+        py::arg("threads") = 0, py::arg("boundary") = "quadric", py::arg("sppi") = 0, py::arg("sppp") = kDefaultSppp,
+        py::arg("intersection_curves") = true, py::arg("reg_width") = 1e-3,
+        "Forward mode: (image (H, W, 3), derivatives (K, H, W, 3)) for 1-8 parameter specs "
+        "('ID:translate:X,Y,Z', 'ID:rotate:X,Y,Z', 'ID:scale', 'ID:vertex:I:X,Y,Z'). sppi: secondary "
+        "boundary-term samples per shading point on average over a pixel's samples (0: the method's default, 0.5 for "
+        "quadric; for boundary='projective', boundary segments per pixel sample, default 1); sppp: primary edge "
+        "samples per pixel sample (`qsil grad --help`); intersection_curves=False: do not "
+        "sample the curves where surfaces cross (to measure what they add; biased where surfaces cross); reg_width: "
+        "boundary='regularized''s blur width as a fraction of the scene's bounding-box diagonal (`qsil grad --help`)");
   // The keyword names before 2026-11-25 (boundary_spp, primary_samples): the same function.
   m.def("grad", grad, py::arg("scene"), py::arg("params"), py::arg("spp") = 0, py::arg("seed") = 0,
         py::arg("threads") = 0, py::arg("boundary") = "quadric", py::arg("boundary_spp") = 0,

@@ -32,7 +32,7 @@ TEST(Method, SubsetsRejectOtherMethodsNamingTheOptionAndTheChoices) {
   } catch (const Error& e) {
     EXPECT_EQ(std::string(e.what()),
               "--boundary 'fd': unsupported (supported: quadric, quadric-box, vsphere, vsphere-solid, uniform, none, "
-              "regularized, was)");
+              "regularized, was, projective)");
   }
   EXPECT_THROW(parse_method("none", "--method", kReferenceMethods), Error);
   EXPECT_THROW(parse_method("Quadric", "--methods", kAllMethods), Error);  // case matters
@@ -47,11 +47,14 @@ TEST(Method, StructurePredicates) {
     EXPECT_EQ(samples_edges(m), in_edge) << method_name(m);
     EXPECT_LE(uses_quadrics(m), uses_edge_forest(m)) << method_name(m);  // quadrics need a forest
     EXPECT_LE(uses_edge_forest(m), samples_edges(m)) << method_name(m);
+    EXPECT_LE(samples_edges(m), uses_edge_set(m)) << method_name(m);  // every edge sampler reads the edge set
   }
   EXPECT_TRUE(uses_quadrics(Method::Quadric));
   EXPECT_FALSE(uses_quadrics(Method::QuadricBox));
   EXPECT_TRUE(uses_edge_forest(Method::QuadricBox));
   for (Method m : {Method::VSphere, Method::VSphereSolid, Method::Uniform}) EXPECT_FALSE(uses_edge_forest(m));
+  EXPECT_TRUE(uses_edge_set(Method::Projective));
+  EXPECT_FALSE(samples_edges(Method::Projective));
   // The rejection methods are the first four, in display order.
   for (size_t i = 0; i < kRejectionMethods.size(); ++i) EXPECT_EQ(kRejectionMethods[i], kAllMethods[i]);
 }

@@ -75,7 +75,8 @@ void add_sample_rate_options(CLI::App& app, double& sppi, double& sppp) {
                  "is a stratified pick of samples: 0.5 = every other sample, weighted 2); 0 = the method's default "
                  "(quadric, quadric-box: 0.5; the others: 1). Quadric and quadric-box split each into ceil(s / 4), at "
                  "most 16, at a shading point moving s times as fast as the mesh's fastest vertex (grazing hits; "
-                 "docs/architecture.md §5)")
+                 "docs/architecture.md §5). For projective: boundary segments per pixel sample, R x width x height "
+                 "per sample index (docs/architecture.md §16)")
       ->capture_default_str()
       ->check(qsil::cli::non_negative_number());
   app.add_option("--sppp,--primary-samples", sppp,

@@ -26,7 +26,7 @@ for scene in spot-mirror shadow-quad direct sunk; do
   esac
   "$qsil" render "scenes/$scene.xml" "${common[@]}" -o "$out/r.exr" >&2
   digest "$scene render" "$out/r.exr"
-  for method in quadric quadric-box vsphere vsphere-solid uniform none was; do
+  for method in quadric quadric-box vsphere vsphere-solid uniform none was projective; do
     "$qsil" grad "scenes/$scene.xml" "${common[@]}" --param "$param" --boundary "$method" -o "$out/g.exr" >&2
     digest "$scene grad $method" "$out/g.exr"
   done

@@ -1,7 +1,8 @@
 // Runs split into parts (qsil/integrators/distributed.h), without MPI: the parts of a run, combined
 // in order with merge_part, equal the whole run bit for bit — every sum, squared sum, splat sum
 // and count of the film, and every counter — for any number of parts and threads, for the primal
-// image, the gradient with and without a boundary term (primary splats included) and finite
+// image, the gradient with and without a boundary term (primary splats included; projective
+// sampling's boundary segments too) and finite
 // differences. A distributed run transports exactly these films (tests/mpi_cli_test.cpp checks
 // the program under mpirun).
 #include "qsil/integrators/distributed.h"
@@ -70,6 +71,8 @@ TEST(Distributed, PartsCombineToTheWholeRunBitForBit) {
                                   "quadric " + at);
     expect_parts_combine_to_whole(Estimator(scene, EstimatorConfig::gradient(params, Method::None)), o,
                                   "interior " + at);
+    expect_parts_combine_to_whole(Estimator(scene, EstimatorConfig::gradient(params, Method::Projective)), o,
+                                  "projective " + at);
     expect_parts_combine_to_whole(Estimator(scene, EstimatorConfig::finite_differences(params)), o, "fd " + at);
   }
 }

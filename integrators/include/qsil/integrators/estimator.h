@@ -43,13 +43,15 @@ inline constexpr double kDefaultSppp = 0.25;
 struct EstimatorConfig {
   /// Parameters theta_k (1 to 8); empty: the primal image (method ignored).
   std::vector<ParameterSpec> params;
-  /// With parameters: an edge-sampling method or Method::None (primal + interior term + boundary
-  /// term of that method), Method::Regularized or Method::WarpedArea (no boundary term: a blurred
-  /// image, or warped directions), or Method::FiniteDifferences.
+  /// With parameters: an edge-sampling method, Method::Projective or Method::None (primal +
+  /// interior term + boundary term of that method), Method::Regularized or Method::WarpedArea (no
+  /// boundary term: a blurred image, or warped directions), or Method::FiniteDifferences.
   Method method = Method::Quadric;
   /// Secondary boundary-term traversals per shading point (edge-sampling methods), on average over
   /// a pixel's samples: a fraction is taken by a stratified pick of samples (boundary_traversals
-  /// in boundary_term.h). 0: the method's default (default_sppi), else in [1/1024, 1024].
+  /// in boundary_term.h). Method::Projective: boundary segments per pixel sample instead
+  /// (integrators/projective_boundary.h). 0: the method's default (default_sppi), else in
+  /// [1/1024, 1024].
   double sppi = 0;
   /// Primary boundary-term edge samples per pixel sample (edge-sampling methods; Mitsuba 3's
   /// `sppp` as a ratio to spp): ratio x W x H edge samples per sample index, rounded up to a whole
@@ -128,8 +130,8 @@ struct SetupReport {
   double seconds = 0;       ///< wall time of the whole set-up
   double edge_seconds = 0;  ///< of which the edge structure: edge set, forest fit, v-sphere tree, tables
   /// What was built for the derivatives: "none" (primal, interior term only, or nothing moves),
-  /// "edge set + uniform tables", "edge set + v-sphere tree", "edge forest (dual box)", "edge forest
-  /// (dual box + quadrics)", or "N scenes (primal and displaced), ..." for finite differences.
+  /// "edge set + uniform tables", "edge set + v-sphere tree", "edge set + boundary segment tables", "edge forest (dual
+  /// box)", "edge forest (dual box + quadrics)", or "N scenes (primal and displaced), ..." for finite differences.
   std::string structure = "none";
   int edges = 0;          ///< edges of the edge set (tree and always-candidate edges)
   int fitted_nodes = 0;   ///< forest nodes with a fitted dual bound (0 without a forest)

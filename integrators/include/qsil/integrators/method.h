@@ -36,30 +36,35 @@ enum class Method {
   /// `was`: Bangaru et al. 2020's warped-area sampling: every sampled direction, the camera's too,
   /// warped (qsil/integrators/warp_field.h); biased for a fixed number of auxiliary rays
   WarpedArea,
+  /// `projective`: Zhang, Roussel, Jakob 2023's projective sampling without guiding (Mitsuba 3's
+  /// `prb_projective` with guiding "none"): the secondary boundary term from boundary segments
+  /// sampled over every edge and direction and connected to the camera
+  /// (integrators/projective_boundary.h); the primary term as the edge samplers'
+  Projective,
   FiniteDifferences,  ///< `fd`: central finite differences with common random numbers
 };
 
 /// Every method, in the order above.
-inline constexpr std::array<Method, 9> kAllMethods = {
-    Method::Quadric, Method::QuadricBox,  Method::VSphere,    Method::VSphereSolid,     Method::Uniform,
-    Method::None,    Method::Regularized, Method::WarpedArea, Method::FiniteDifferences};
+inline constexpr std::array<Method, 10> kAllMethods = {
+    Method::Quadric, Method::QuadricBox,  Method::VSphere,    Method::VSphereSolid, Method::Uniform,
+    Method::None,    Method::Regularized, Method::WarpedArea, Method::Projective,   Method::FiniteDifferences};
 /// The methods that sample edges (`qsil candidates`).
 inline constexpr std::array<Method, 5> kEdgeSamplingMethods = {Method::Quadric, Method::QuadricBox, Method::VSphere,
                                                                Method::VSphereSolid, Method::Uniform};
 /// The methods with a rejection test ([QSS] Fig. 7, `qsil slices`), in display order.
 inline constexpr std::array<Method, 4> kRejectionMethods = {Method::Quadric, Method::QuadricBox, Method::VSphere,
                                                             Method::VSphereSolid};
-/// The values of `qsil grad --boundary`: every edge sampler, none, regularized and was.
-inline constexpr std::array<Method, 8> kBoundaryMethods = {Method::Quadric,      Method::QuadricBox, Method::VSphere,
-                                                           Method::VSphereSolid, Method::Uniform,    Method::None,
-                                                           Method::Regularized,  Method::WarpedArea};
+/// The values of `qsil grad --boundary`: every edge sampler, none, regularized, was and projective.
+inline constexpr std::array<Method, 9> kBoundaryMethods = {
+    Method::Quadric, Method::QuadricBox,  Method::VSphere,    Method::VSphereSolid, Method::Uniform,
+    Method::None,    Method::Regularized, Method::WarpedArea, Method::Projective};
 /// Unbiased gradient methods (`qsil reference --method`): every edge sampler, and fd.
 inline constexpr std::array<Method, 6> kReferenceMethods = {Method::Quadric, Method::QuadricBox,
                                                             Method::VSphere, Method::VSphereSolid,
                                                             Method::Uniform, Method::FiniteDifferences};
 
 /// The method's name on the command line and in outputs: "quadric", "quadric-box", "vsphere",
-/// "vsphere-solid", "uniform", "none", "regularized", "was", "fd".
+/// "vsphere-solid", "uniform", "none", "regularized", "was", "projective", "fd".
 std::string_view method_name(Method method);
 
 /// The method named `name` among `allowed`. Throws qsil::Error
@@ -71,6 +76,9 @@ std::string method_list(std::span<const Method> allowed);
 
 /// True for the five edge samplers (a boundary term with a secondary edge sampler).
 bool samples_edges(Method method);
+/// True for the methods whose boundary term reads the scene's edge set: the five edge samplers
+/// and projective (its boundary sample space and the primary edges).
+bool uses_edge_set(Method method);
 /// True for quadric and quadric-box: sampling traverses the fitted edge forest.
 bool uses_edge_forest(Method method);
 /// True for quadric only: the forest's nodes carry fitted dual quadrics (the others need none).
@@ -79,7 +87,8 @@ bool uses_quadrics(Method method);
 /// (EstimatorConfig::sppi = 0): 0.5 for quadric and quadric-box, one traversal every other pixel
 /// sample (their boundary term is cheap in variance and dear in time against the interior term;
 /// measured: docs/experiments/2026-11-25-sample-allocation.md §5 "How many traversals"); 1 for
-/// the baselines, whose boundary term holds most of their variance.
+/// the baselines, whose boundary term holds most of their variance. For projective it is not per
+/// vertex: boundary segments per pixel sample (1), as Mitsuba 3's sppi is per pixel.
 double default_sppi(Method method);
 
 /// The shading-point speed per extra secondary traversal a method uses (BoundaryContext::

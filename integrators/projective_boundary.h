@@ -1,0 +1,110 @@
+#pragma once
+/// @file projective_boundary.h
+/// Projective sampling's secondary boundary term (Zhang, Roussel, Jakob 2023, "Projective Sampling
+/// for Differentiable Rendering of Geometry", ACM TOG 42(6), §4-§5, without its guiding; the
+/// role of Mitsuba 3's `prb_projective` with guiding "none"; docs/architecture.md §16). Edge
+/// samplers choose an edge per shading point; projective sampling draws *boundary segments*
+/// instead, with no shading point: a point y on an edge and a direction w, uniformly over the
+/// valid (y, w) of every edge, and finds the shading point p as the first hit from y along -w.
+///
+/// Estimator. The secondary boundary term of pixel j is, over the camera paths' vertices p
+/// (docs/architecture.md §4-§5; boundary_term.h),
+///   dI_j = sum over depths of integral We_j(path to p) f_s(p; w, wo) cos_s(w) dL(w) J dt dA_p,
+/// with J dt = g . v_t dt, g = (w0 x w1) / |w_t|^3 (edge_sight), v_t the edge point's velocity
+/// relative to p. With p = y - s w (s = |y - p|), dA_p = s^2 / |n_g(p) . w| dw, so per boundary
+/// segment (t, w) drawn with density pdf(t, w):
+///   contribution = W(p) F(p; w, wo) dL (g . v_t) s^2 / (|n_g(p) . w| pdf(t, w)),
+/// F = f_s cos_s (bsdf_eval), W(p) the importance of p for the camera: a walk from p toward the
+/// camera (light tracing: BSDF-sampled directions, each vertex q connected to the pinhole, whose
+/// importance per unit area is We = f_x f_y / cos^3(theta) |n_g(q) . w_c| / r^2 in the pixel it
+/// projects to, pixel units as primary_boundary.h; the adjoint's shading-normal factor
+/// |n_g . u| / |n_g . u'| at each step, Veach 1997 §5.3). As in Mitsuba 3, one connection among
+/// the walk's visible ones is kept by reservoir sampling (its weight times their count), and the
+/// jump dL is evaluated once, for that connection's path depth.
+///
+/// Velocities are relative to p (trap 2): p is moved as the camera path it ends reaches it, with
+/// that path's directions fixed (the parametrization of the interior term, path_tracer.h): the
+/// kept connection's vertices are retraced from the camera with duals. Every edge of every shape
+/// is in the sample space, static ones too (seen from a moving p they move); see
+/// make_projective_edges for the weights.
+///
+/// What it does not sample (measure zero in (t, w), though not in the per-vertex form): an edge in
+/// p's own plane seen along that plane (OwnFace, edge_point.h), whose contribution comes from
+/// smooth shading normals at grazing directions; docs/architecture.md §16 says where that matters.
+
+#include "qsil/edgetree/edge_set.h"
+#include "qsil/film.h"
+#include "qsil/integrators/path_tracer.h"
+#include "qsil/parameters.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace qsil {
+
+/// Share of the boundary sample space's probability given to the edges of shapes that do not
+/// move, when there are edges of both kinds: they contribute only where the shading point moves
+/// (a moving shape, or a camera path through one), so they get less than their measure, never 0.
+inline constexpr double kProjectiveStaticShare = 0.25;
+
+/// Share of the walk's directions drawn uniformly on the sphere (the rest by BSDF sampling):
+/// a defensive mixture, so that no direction the integrand reaches has zero density.
+inline constexpr double kProjectiveUniformShare = 0.1;
+
+/// A direction w of a boundary segment through an edge, drawn by sample_edge_direction: unit,
+/// world; pdf its solid-angle density (1/sr).
+struct EdgeDirection {
+  Vec3 w = Vec3::Zero();
+  double pdf = 0;
+};
+
+/// The measure (sr) of the directions along which edge e can be a discontinuity for a point on
+/// the line through an edge point: the silhouette lune (n0 . w)(n1 . w) < 0 of an edge whose
+/// faces' normals are n0 and n1, 4 x the angle between them, for a two-faced edge that is no
+/// crease; the whole sphere (4 pi) for a crease, a boundary, non-manifold or inconsistent edge
+/// and a segment of an intersection curve. 0 for a retired edge.
+double edge_direction_measure(const edgetree::Edge& e);
+
+/// A direction uniform over edge e's directions (edge_direction_measure) from three uniform
+/// numbers: in the lune, the azimuth about the edge uniform in one of its two wedges (u.x chooses
+/// and is reused) and cos of the angle to the edge uniform (u.y); on the sphere, uniform.
+/// pdf = 1 / edge_direction_measure(e). A zero-measure edge gives pdf 0.
+EdgeDirection sample_edge_direction(const edgetree::Edge& e, const Vec2& u);
+
+/// The boundary sample space of projective sampling over an edge set: every edge (tree and
+/// always-candidate edges, intersection-curve segments) with weight length x
+/// edge_direction_measure (uniform over the valid (y, w)), the edges of shapes that do not move
+/// scaled so that they hold kProjectiveStaticShare of the total when both kinds exist. The edges
+/// point into the edge set.
+struct ProjectiveEdges {
+  std::vector<const edgetree::Edge*> edges;
+  std::vector<double> cdf;  ///< cumulative weights (size edges + 1, cdf[0] = 0)
+  bool empty() const { return edges.empty() || !(cdf.back() > 0); }
+  /// The probability of edge i (its weight over the total).
+  double probability(size_t i) const { return (cdf[i + 1] - cdf[i]) / cdf.back(); }
+};
+
+/// The sample space of `edges` (above); `moving[s]` tells whether shape (or crossing group) s
+/// moves (an index it does not cover: moving).
+ProjectiveEdges make_projective_edges(const edgetree::EdgeSet& edges, const std::vector<bool>& moving);
+
+/// Boundary segments per sample index for a W x H image at `ratio` segments per pixel sample:
+/// ratio W H rounded up to a whole chunk of 1024 (at least one). Throws qsil::Error unless ratio
+/// is in (0, 1024].
+long long projective_samples_per_index(int width, int height, double ratio);
+
+/// Adds the secondary boundary term of the sample range [first_sample, first_sample + spp) to the
+/// derivative channels of `film` (a gradient film of velocities.num_params parameters) by
+/// projective sampling (the file comment): projective_samples_per_index(W, H, ratio) boundary
+/// segments per sample index, numbered and drawn in chunks as the primary term's
+/// (sample_chunks.h), chunk c from Sampler(seed, c, 0, 5), splatted where their connection lands.
+/// Deterministic for a seed whatever the thread count. Counts rays, boundary segments (as
+/// traversals) and zero contributions in `stats`; returns the number of contributions that were
+/// not finite (replaced by zero). Part `part` of `parts` and `deferred` as for
+/// add_primary_boundary.
+uint64_t add_projective_boundary(Film& film, const PathContext& ctx, const SceneVelocities& velocities,
+                                 const ProjectiveEdges& edges, double ratio, int first_sample, int spp, uint64_t seed,
+                                 int threads, PathStats& stats, int part = 0, int parts = 1,
+                                 std::vector<FilmSplat>* deferred = nullptr);
+
+}  // namespace qsil
