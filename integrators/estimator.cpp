@@ -142,7 +142,18 @@ class GradientEstimator final : public Estimator::Impl, private RenderSetup {
       set_up_boundary_term(s, tracer, config.method, &vel, vel.moving, config.sppi, lights.environment,
                            boundary, boundary_ctx, primary, setup, config.intersection_curves);
       // Projective sampling: no secondary edge sampler, its boundary sample space instead.
-      if (config.method == Method::Projective) projective = make_projective_edges(*boundary.edges, boundary_ctx.moving);
+      if (config.method == Method::Projective) {
+        projective = make_projective_edges(*boundary.edges, boundary_ctx.moving);
+        const auto t0 = Clock::now();
+        PathStats training;
+        guide = train_segment_guide(ctx, vel, *projective, config.projective_guiding, 0, training);
+        if (!guide.uniform()) {
+          char buf[160];
+          std::snprintf(buf, sizeof buf, " + grid guide (%d^3 cells, %g training segments per pixel, %.3f s)",
+                        guide.resolution(), config.projective_guiding.training, seconds_since(t0));
+          setup.structure += buf;
+        }
+      }
     }
     if (config.method == Method::WarpedArea && vel.any_moving()) {
       warped = true;  // no structure: every direction is warped (warp_field.h)
@@ -227,7 +238,7 @@ class GradientEstimator final : public Estimator::Impl, private RenderSetup {
       // splat sum is then formed in the whole run's order, primary splats first.
       if (projective && options.part == options.parts - 1)
         r.nonfinite +=
-            add_projective_boundary(r.film, ctx, vel, *projective, boundary_ctx.sppi, first, count, options.seed,
+            add_projective_boundary(r.film, ctx, vel, *projective, guide, boundary_ctx.sppi, first, count, options.seed,
                                     options.threads, primary_stats, 0, 1, options.parts > 1 ? &r.splats : nullptr);
       const double dt = seconds_since(t0);
       r.seconds += dt;
@@ -265,6 +276,7 @@ class GradientEstimator final : public Estimator::Impl, private RenderSetup {
   std::optional<SoftScene> near;  ///< Method::Regularized only
   bool warped = false;            ///< Method::WarpedArea with something moving
   std::optional<ProjectiveEdges> projective;  ///< Method::Projective with something moving
+  SegmentGuide guide;                         ///< ...and its guide (uniform: unguided)
 };
 
 /// Central finite differences with common random numbers (`qsil fd`): the primal scene and, per
@@ -412,6 +424,7 @@ Estimator::Estimator(const Scene& scene, EstimatorConfig config) {
       config.method != Method::Regularized && config.method != Method::WarpedArea && !uses_edge_set(config.method))
     throw Error("method " + std::string(method_name(config.method)) + " cannot estimate derivatives");
   if (config.method == Method::WarpedArea) check_warped_area_sampling(config.warped_area);
+  if (config.method == Method::Projective) check_projective_guiding(config.projective_guiding);
   check_sample_rates(scene.camera, config.sppi, config.sppp);
   const auto t0 = Clock::now();
   impl_ = make_impl(scene, std::move(config));

@@ -3,6 +3,7 @@
 
 #include "projective_boundary.h"
 
+#include "qsil/check.h"
 #include "qsil/dual.h"
 #include "qsil/error.h"
 #include "qsil/integrators/edge_jump.h"
@@ -19,6 +20,21 @@
 namespace qsil {
 
 namespace {
+
+/// A uniform number in [0, 1) with 53 bits from two of the sampler's 32-bit ones: u.x picks an edge
+/// and, as the remainder, t (boundary_segment), whose resolution would otherwise be 2^-32 over
+/// the whole sample space (a lattice of a few thousand t on an edge of a large mesh).
+double next53(Sampler& sampler) {
+  const double hi = sampler.next(), lo = sampler.next();
+  return std::min(hi + lo * 0x1p-32, std::nextafter(1.0, 0.0));
+}
+
+/// The seed of the guide's training segments (train_segment_guide): fixed, so that the guide
+/// depends on the scene alone.
+constexpr uint64_t kGuideSeed = 0x9e3779b97f4a7c15ULL;
+
+/// The fewest training segments per cell of the guide (train_segment_guide).
+constexpr double kGuideTrainingPerCell = 32;
 
 /// Whether edge e is a discontinuity only along its silhouette lune: two faces, no crease.
 bool lune_edge(const edgetree::Edge& e) {
@@ -69,156 +85,221 @@ Eigen::Matrix<double, 3, N> shading_point_velocity(const PathContext& ctx, const
   return dp;
 }
 
-/// Draws `count` boundary segments of chunk `chunk` from Sampler(seed, chunk, 0, 5) and appends
-/// their splats (forward mode, N >= the parameter count) to `out`; returns the non-finite ones.
+/// What the camera and the tracer give every segment of a run.
+struct SegmentContext {
+  const PathContext& ctx;
+  const SceneVelocities& vel;
+  const ProjectiveEdges& edges;
+  double fx = 0, fy = 0;
+  Vec3 o, forward;
+  SegmentContext(const PathContext& c, const SceneVelocities& v, const ProjectiveEdges& e) : ctx(c), vel(v), edges(e) {
+    const Camera& cam = c.scene->camera;
+    const Vec2 tanf = cam.tan_half_fov();
+    fx = cam.width / (2.0 * tanf.x());
+    fy = cam.height / (2.0 * tanf.y());
+    o = cam.origin();
+    forward = cam.to_world.block<3, 1>(0, 2).normalized();
+  }
+};
+
+/// A contributing boundary segment: the pixel its connection lands in, its weight (importance x F x
+/// jump over the segment's density, per sample: the pixel's derivative k gains c J[k]) and J.
 template <int N>
-uint64_t run_chunk(const PathContext& ctx, const SceneVelocities& vel, const ProjectiveEdges& edges, long long count,
-                   double per_sample, uint64_t seed, long long chunk, std::vector<FilmSplat>& out, PathStats& stats) {
+struct SegmentValue {
+  int px = 0, py = 0;
+  Color c = Color::Zero();
+  Eigen::Matrix<double, 1, N> J;
+};
+
+/// The boundary segment of u (boundary_segment), drawn with density pdf x `density`, evaluated:
+/// the shading point, the walk toward the camera with its reservoir, the jump and its Jacobian
+/// (the file comment of projective_boundary.h). Nothing for a zero contribution (counted in
+/// stats.boundary_zero). Draws the walk's and the jump's numbers from `sampler`.
+template <int N>
+std::optional<SegmentValue<N>> evaluate_segment(const SegmentContext& sc, const Vec3& u, double density,
+                                                Sampler& sampler, std::array<WalkVertex, kUnboundedDepthCap>& walk,
+                                                PathStats& stats) {
+  const PathContext& ctx = sc.ctx;
   const Camera& cam = ctx.scene->camera;
-  const Vec2 tanf = cam.tan_half_fov();
-  const double fx = cam.width / (2.0 * tanf.x()), fy = cam.height / (2.0 * tanf.y());
-  const Vec3 o = cam.origin();
-  const Vec3 forward = cam.to_world.block<3, 1>(0, 2).normalized();
   const PrimalView pv{ctx.scene};
   const Vec3& local_origin = ctx.tracer->local_origin();
-  const int K = vel.num_params;
+  const Vec3& o = sc.o;
+  ++stats.boundary_traversals;
+  const BoundarySegment seg = boundary_segment(sc.edges, u);
+  const double pdf = seg.pdf * density;  // per unit t and steradian
+  const edgetree::Edge& e = *sc.edges.edges[seg.edge];
+  const double t = seg.t;
+  const Vec3& w = seg.direction.w;
+  if (!(pdf > 0)) {
+    ++stats.boundary_zero;
+    return std::nullopt;
+  }
+  // ---- The shading point p: the first hit from the edge point along -w (not the edge's faces).
+  const Vec3 y = e.p0 + t * (e.p1 - e.p0);
+  ++stats.rays;
+  walk[0].hit = ctx.tracer->intersect(y, -w, kInf, edge_faces(e, false));
+  if (!walk[0].hit.valid()) {
+    ++stats.boundary_zero;
+    return std::nullopt;
+  }
+  walk[0].si = make_interaction(pv, walk[0].hit, y, Vec3(-w), local_origin);
+  walk[0].wi = w;
+  const double s = walk[0].si.t, cos_p = std::abs(walk[0].si.ng.dot(w));
+  if (!(s > 0 && cos_p > 0) || !walk[0].si.p.allFinite()) {
+    ++stats.boundary_zero;
+    return std::nullopt;
+  }
+  // ---- The walk toward the camera: connect each vertex, keep one connection (reservoir).
+  Color beta = Color::Constant(s * s / (cos_p * pdf));
+  Connection kept;
+  int found = 0;
+  for (int k = 0; k + 1 < ctx.max_depth; ++k) {
+    const SurfaceInteraction<double>& si = walk[size_t(k)].si;
+    const Vec3& wi = walk[size_t(k)].wi;
+    const Vec3 to_cam = o - si.p;
+    const double r = to_cam.norm();
+    double depth = 0;
+    const Vec2 film = cam.project(si.p, &depth);
+    if (r > 0 && depth > 0 && film.x() >= 0 && film.x() < cam.width && film.y() >= 0 && film.y() < cam.height) {
+      const Vec3 wc = to_cam / r;
+      const double cos_theta = -wc.dot(sc.forward);
+      const Color f = vertex_bsdf(ctx, si, wc).toward(wi);
+      if (cos_theta > 0 && (f != 0).any()) {
+        const Vec3 origin = spawn_origin(si, wc);
+        ++stats.rays;
+        if (!ctx.tracer->occluded(origin, wc, (o - origin).norm() * (1.0 - 1.0 / 4096.0), IgnoreSet{})) {
+          ++found;
+          if (sampler.next() * found < 1.0) {
+            const double We = sc.fx * sc.fy / (cos_theta * cos_theta * cos_theta) * std::abs(si.ng.dot(wc)) / (r * r);
+            kept = {k, std::clamp(int(film.x()), 0, cam.width - 1), std::clamp(int(film.y()), 0, cam.height - 1),
+                    Color(beta * f * We), wc};
+          }
+        }
+      }
+    }
+    if (k + 2 >= ctx.max_depth) break;  // a connection one vertex further would leave p no segment
+    // A direction from the BSDF, proposed in the frame seen from wi (the one it reaches is
+    // not known yet), mixed with the uniform sphere.
+    const ShadingPoint<double> proposal = make_shading_point(ctx, si, wi);
+    const Vec3 wi_local = proposal.frame_value.to_local(wi);
+    const double choose = sampler.next();
+    const Vec2 uv = sampler.next2();
+    Vec3 u;
+    if (choose < kProjectiveUniformShare) {
+      u = square_to_uniform_sphere(uv);
+    } else {
+      // A proposal below the horizon (bs.valid false) is still a direction with density pdf,
+      // which pdf_u counts (bsdf_pdf includes it): it is kept, not dropped. No direction at all
+      // (the surface seen from behind) leaves only the uniform part, as pdf_u says.
+      const BSDFSample bs = bsdf_sample(*proposal.bsdf, wi_local, uv);
+      if (!(bs.pdf > 0)) break;
+      u = proposal.frame_value.to_world(bs.wi).normalized();
+    }
+    const double pdf_u =
+        kProjectiveUniformShare * uniform_sphere_pdf() +
+        (1 - kProjectiveUniformShare) * bsdf_pdf(*proposal.bsdf, proposal.frame_value.to_local(u), wi_local);
+    const Color f = vertex_bsdf(ctx, si, u).toward(wi);
+    if (!(pdf_u > 0) || (f == 0).all()) break;
+    const Vec3 origin = spawn_origin(si, u);
+    ++stats.rays;
+    const Hit next = ctx.tracer->intersect(origin, u, kInf, IgnoreSet{});
+    if (!next.valid()) break;
+    WalkVertex& v = walk[size_t(k + 1)];
+    v.hit = next;
+    v.si = make_interaction(pv, next, origin, u, local_origin);
+    v.wi = -u;
+    const double cos_in = std::abs(v.si.ng.dot(u));
+    if (!(cos_in > 0) || !v.si.p.allFinite()) break;
+    // Adjoint step: f_s cos at this vertex, the next one's |n_g . u| back to area, over the pdf.
+    beta = beta * f * (std::abs(si.ng.dot(u)) / (pdf_u * cos_in));
+  }
+  if (found == 0) {
+    ++stats.boundary_zero;
+    return std::nullopt;
+  }
+  // ---- The jump at p for the kept connection's depth, and its Jacobian with p's velocity.
+  const SurfaceInteraction<double>& p = walk[0].si;
+  const Vec3 wo_p = kept.vertex == 0 ? kept.wo_p : Vec3(-walk[1].wi);
+  OwnFace own;
+  if (e.crossing) {
+    own.up = p.ng.dot(wo_p) < 0 ? Vec3(-p.ng) : p.ng;  // crossing_jump
+  } else if (e.shape == p.shape) {
+    own.face = face_in_plane(ctx.scene->shapes[size_t(e.shape)].mesh, e, p.triangle, p.ng, p.p);
+    if (own.face >= 0) own.up = p.ng.dot(wo_p) < 0 ? Vec3(-p.ng) : p.ng;
+  }
+  const EdgeJumpInputs in{.edge = e,
+                          .t = t,
+                          .p = p.p,
+                          .vis_origin = spawn_origin(p, own.face >= 0 ? Vec3(-own.up) : w),
+                          .through_back_faces = leaves_below(p, wo_p, w),
+                          .own = own,
+                          .segments = kept.vertex + 1};
+  const Eigen::Matrix<double, 3, N> dp = shading_point_velocity<N>(ctx, sc.vel, walk, kept.vertex);
+  Eigen::Matrix<double, 1, N> J;
+  const std::optional<Color> jump = edge_jump_with(ctx, in, sampler, stats, [&](const Vec3& g) {
+    J = edge_point_jacobian<N>(sc.vel, e, t, g, dp);
+    return !J.isZero(0.0);
+  });
+  if (!jump || (*jump == 0).all()) {
+    ++stats.boundary_zero;
+    return std::nullopt;
+  }
+  return SegmentValue<N>{kept.px, kept.py, Color(kept.weight * *jump * double(found)), J};
+}
+
+/// Draws `count` boundary segments of chunk `chunk` from Sampler(seed, chunk, 0, 5), their u from
+/// `guide`, and appends their splats (forward mode, N >= the parameter count) to `out`; returns
+/// the non-finite ones.
+template <int N>
+uint64_t run_chunk(const SegmentContext& sc, const SegmentGuide& guide, long long count, double per_sample,
+                   uint64_t seed, long long chunk, std::vector<FilmSplat>& out, PathStats& stats) {
+  const int K = sc.vel.num_params;
   const FilmLayout layout(K);
   uint64_t nonfinite = 0;
   std::array<WalkVertex, kUnboundedDepthCap> walk;
   Sampler sampler(seed, uint64_t(chunk), 0, 5);
   for (long long i = 0; i < count; ++i) {
-    ++stats.boundary_traversals;
-    // ---- The boundary segment: an edge by its weight, t uniform, a direction over its valid ones.
-    const double ue = sampler.next() * edges.cdf.back();
-    const size_t ei = std::min(size_t(std::upper_bound(edges.cdf.begin(), edges.cdf.end(), ue) - edges.cdf.begin()) - 1,
-                               edges.edges.size() - 1);
-    const edgetree::Edge& e = *edges.edges[ei];
-    const double t = sampler.next();
-    const EdgeDirection dir = sample_edge_direction(e, sampler.next2());
-    const double pdf = edges.probability(ei) * dir.pdf;  // per unit t and steradian
-    const Vec3& w = dir.w;
-    if (!(pdf > 0)) {
-      ++stats.boundary_zero;
-      continue;
+    Vec3 u;
+    if (guide.uniform()) {
+      const double ux = next53(sampler);
+      u = Vec3(ux, sampler.next(), sampler.next());
+    } else {
+      const double choose = sampler.next(), pick = sampler.next();
+      const double wx = next53(sampler);
+      const Vec3 within(wx, sampler.next(), sampler.next());
+      u = guide.sample(choose, pick, within);
     }
-    // ---- The shading point p: the first hit from the edge point along -w (not the edge's faces).
-    const Vec3 y = e.p0 + t * (e.p1 - e.p0);
-    ++stats.rays;
-    walk[0].hit = ctx.tracer->intersect(y, -w, kInf, edge_faces(e, false));
-    if (!walk[0].hit.valid()) {
-      ++stats.boundary_zero;
-      continue;
-    }
-    walk[0].si = make_interaction(pv, walk[0].hit, y, Vec3(-w), local_origin);
-    walk[0].wi = w;
-    const double s = walk[0].si.t, cos_p = std::abs(walk[0].si.ng.dot(w));
-    if (!(s > 0 && cos_p > 0) || !walk[0].si.p.allFinite()) {
-      ++stats.boundary_zero;
-      continue;
-    }
-    // ---- The walk toward the camera: connect each vertex, keep one connection (reservoir).
-    Color beta = Color::Constant(s * s / (cos_p * pdf));
-    Connection kept;
-    int found = 0;
-    for (int k = 0; k + 1 < ctx.max_depth; ++k) {
-      const SurfaceInteraction<double>& si = walk[size_t(k)].si;
-      const Vec3& wi = walk[size_t(k)].wi;
-      const Vec3 to_cam = o - si.p;
-      const double r = to_cam.norm();
-      double depth = 0;
-      const Vec2 film = cam.project(si.p, &depth);
-      if (r > 0 && depth > 0 && film.x() >= 0 && film.x() < cam.width && film.y() >= 0 && film.y() < cam.height) {
-        const Vec3 wc = to_cam / r;
-        const double cos_theta = -wc.dot(forward);
-        const Color f = vertex_bsdf(ctx, si, wc).toward(wi);
-        if (cos_theta > 0 && (f != 0).any()) {
-          const Vec3 origin = spawn_origin(si, wc);
-          ++stats.rays;
-          if (!ctx.tracer->occluded(origin, wc, (o - origin).norm() * (1.0 - 1.0 / 4096.0), IgnoreSet{})) {
-            ++found;
-            if (sampler.next() * found < 1.0) {
-              const double We = fx * fy / (cos_theta * cos_theta * cos_theta) * std::abs(si.ng.dot(wc)) / (r * r);
-              kept = {k, std::clamp(int(film.x()), 0, cam.width - 1), std::clamp(int(film.y()), 0, cam.height - 1),
-                      Color(beta * f * We), wc};
-            }
-          }
-        }
-      }
-      if (k + 2 >= ctx.max_depth) break;  // a connection one vertex further would leave p no segment
-      // A direction from the BSDF, proposed in the frame seen from wi (the one it reaches is
-      // not known yet), mixed with the uniform sphere.
-      const ShadingPoint<double> proposal = make_shading_point(ctx, si, wi);
-      const Vec3 wi_local = proposal.frame_value.to_local(wi);
-      const double choose = sampler.next();
-      const Vec2 uv = sampler.next2();
-      Vec3 u;
-      if (choose < kProjectiveUniformShare) {
-        u = square_to_uniform_sphere(uv);
-      } else {
-        const BSDFSample bs = bsdf_sample(*proposal.bsdf, wi_local, uv);
-        if (!bs.valid) break;
-        u = proposal.frame_value.to_world(bs.wi).normalized();
-      }
-      const double pdf_u =
-          kProjectiveUniformShare * uniform_sphere_pdf() +
-          (1 - kProjectiveUniformShare) * bsdf_pdf(*proposal.bsdf, proposal.frame_value.to_local(u), wi_local);
-      const Color f = vertex_bsdf(ctx, si, u).toward(wi);
-      if (!(pdf_u > 0) || (f == 0).all()) break;
-      const Vec3 origin = spawn_origin(si, u);
-      ++stats.rays;
-      const Hit next = ctx.tracer->intersect(origin, u, kInf, IgnoreSet{});
-      if (!next.valid()) break;
-      WalkVertex& v = walk[size_t(k + 1)];
-      v.hit = next;
-      v.si = make_interaction(pv, next, origin, u, local_origin);
-      v.wi = -u;
-      const double cos_in = std::abs(v.si.ng.dot(u));
-      if (!(cos_in > 0) || !v.si.p.allFinite()) break;
-      // Adjoint step: f_s cos at this vertex, the next one's |n_g . u| back to area, over the pdf.
-      beta = beta * f * (std::abs(si.ng.dot(u)) / (pdf_u * cos_in));
-    }
-    if (found == 0) {
-      ++stats.boundary_zero;
-      continue;
-    }
-    // ---- The jump at p for the kept connection's depth, and its Jacobian with p's velocity.
-    const SurfaceInteraction<double>& p = walk[0].si;
-    const Vec3 wo_p = kept.vertex == 0 ? kept.wo_p : Vec3(-walk[1].wi);
-    OwnFace own;
-    if (e.crossing) {
-      own.up = p.ng.dot(wo_p) < 0 ? Vec3(-p.ng) : p.ng;  // crossing_jump
-    } else if (e.shape == p.shape) {
-      own.face = face_in_plane(ctx.scene->shapes[size_t(e.shape)].mesh, e, p.triangle, p.ng, p.p);
-      if (own.face >= 0) own.up = p.ng.dot(wo_p) < 0 ? Vec3(-p.ng) : p.ng;
-    }
-    const EdgeJumpInputs in{.edge = e,
-                            .t = t,
-                            .p = p.p,
-                            .vis_origin = spawn_origin(p, own.face >= 0 ? Vec3(-own.up) : w),
-                            .through_back_faces = leaves_below(p, wo_p, w),
-                            .own = own,
-                            .segments = kept.vertex + 1};
-    const Eigen::Matrix<double, 3, N> dp = shading_point_velocity<N>(ctx, vel, walk, kept.vertex);
-    Eigen::Matrix<double, 1, N> J;
-    const std::optional<Color> jump = edge_jump_with(ctx, in, sampler, stats, [&](const Vec3& g) {
-      J = edge_point_jacobian<N>(vel, e, t, g, dp);
-      return !J.isZero(0.0);
-    });
-    if (!jump || (*jump == 0).all()) {
-      ++stats.boundary_zero;
-      continue;
-    }
-    const Color c = kept.weight * *jump * (double(found) * per_sample);
-    if (!c.allFinite() || !J.allFinite()) {
+    const std::optional<SegmentValue<N>> v = evaluate_segment<N>(sc, u, guide.density(u), sampler, walk, stats);
+    if (!v) continue;
+    const Color c = v->c * per_sample;
+    if (!c.allFinite() || !v->J.allFinite()) {
       ++nonfinite;
       continue;
     }
     for (int k = 0; k < K; ++k) {
-      for (int ch = 0; ch < 3; ++ch) out.push_back({kept.px, kept.py, layout.derivative(k, ch), c[ch] * J[k]});
-      out.push_back({kept.px, kept.py, layout.derivative_mean(k), c.mean() * J[k]});
+      for (int ch = 0; ch < 3; ++ch) out.push_back({v->px, v->py, layout.derivative(k, ch), c[ch] * v->J[k]});
+      out.push_back({v->px, v->py, layout.derivative_mean(k), c.mean() * v->J[k]});
     }
   }
   return nonfinite;
+}
+
+/// Draws `count` uniform training segments of chunk `chunk` from Sampler(kGuideSeed, chunk, 0, 6)
+/// and adds each one's |value| (summed over parameters and channels) to its cell of `sums`.
+template <int N>
+void train_chunk(const SegmentContext& sc, int resolution, long long count, long long chunk, std::vector<double>& sums,
+                 PathStats& stats) {
+  std::array<WalkVertex, kUnboundedDepthCap> walk;
+  Sampler sampler(kGuideSeed, uint64_t(chunk), 0, 6);
+  const SegmentGuide cells(resolution, std::vector<double>(size_t(resolution) * resolution * resolution, 0.0), 1.0);
+  for (long long i = 0; i < count; ++i) {
+    const double ux = next53(sampler);
+    const Vec3 u(ux, sampler.next(), sampler.next());
+    const std::optional<SegmentValue<N>> v = evaluate_segment<N>(sc, u, 1.0, sampler, walk, stats);
+    if (!v) continue;
+    const double value = v->c.abs().sum() * v->J.cwiseAbs().sum();
+    if (std::isfinite(value)) sums[size_t(cells.cell(u))] += value;
+  }
 }
 
 }  // namespace
@@ -294,19 +375,118 @@ long long projective_samples_per_index(int width, int height, double ratio) {
   return std::max(1LL, (long long)n) * kChunk;
 }
 
+BoundarySegment boundary_segment(const ProjectiveEdges& edges, const Vec3& u) {
+  BoundarySegment seg;
+  const std::vector<double>& cdf = edges.cdf;
+  const double ue = u.x() * cdf.back();
+  seg.edge = std::min(size_t(std::upper_bound(cdf.begin(), cdf.end(), ue) - cdf.begin()) - 1, edges.edges.size() - 1);
+  const double width = cdf[seg.edge + 1] - cdf[seg.edge];
+  if (!(width > 0)) return seg;
+  seg.t = std::clamp((ue - cdf[seg.edge]) / width, 0.0, std::nextafter(1.0, 0.0));
+  seg.direction = sample_edge_direction(*edges.edges[seg.edge], Vec2(u.y(), u.z()));
+  seg.pdf = edges.probability(seg.edge) * seg.direction.pdf;
+  return seg;
+}
+
+SegmentGuide::SegmentGuide(int resolution, const std::vector<double>& weights, double uniform_share)
+    : resolution_(resolution), share_(uniform_share) {
+  QSIL_CHECK(resolution > 0 && weights.size() == size_t(resolution) * resolution * resolution);
+  QSIL_CHECK(uniform_share > 0 && uniform_share <= 1);
+  cdf_.assign(1, 0.0);
+  for (double w : weights) cdf_.push_back(cdf_.back() + (std::isfinite(w) && w > 0 ? w : 0.0));
+  if (!(cdf_.back() > 0)) share_ = 1;  // nothing learnt: uniform
+}
+
+int SegmentGuide::cell(const Vec3& u) const {
+  if (uniform()) return 0;
+  auto index = [&](double x) { return std::clamp(int(x * resolution_), 0, resolution_ - 1); };
+  return index(u.x()) + resolution_ * (index(u.y()) + resolution_ * index(u.z()));
+}
+
+double SegmentGuide::density(const Vec3& u) const {
+  if (uniform() || share_ >= 1) return 1.0;
+  const size_t c = size_t(cell(u));
+  const double cells = double(cdf_.size() - 1);
+  return share_ + (1 - share_) * (cdf_[c + 1] - cdf_[c]) / cdf_.back() * cells;
+}
+
+Vec3 SegmentGuide::sample(double choose, double pick, const Vec3& within) const {
+  if (uniform() || share_ >= 1 || choose < share_) return within;
+  const double target = pick * cdf_.back();
+  const size_t c =
+      std::min(size_t(std::upper_bound(cdf_.begin(), cdf_.end(), target) - cdf_.begin()) - 1, cdf_.size() - 2);
+  const int r = resolution_;
+  const int ix = int(c % size_t(r)), iy = int((c / size_t(r)) % size_t(r)), iz = int(c / (size_t(r) * size_t(r)));
+  auto coordinate = [&](int i, double x) { return std::min((i + x) / r, std::nextafter(1.0, 0.0)); };
+  return Vec3(coordinate(ix, within.x()), coordinate(iy, within.y()), coordinate(iz, within.z()));
+}
+
+void check_projective_guiding(const ProjectiveGuiding& guiding) {
+  if (guiding.resolution < 0 || guiding.resolution > 64)
+    throw Error("projective: guiding resolution " + std::to_string(guiding.resolution) + " out of range [0, 64]");
+  if (guiding.resolution == 0) return;
+  if (!(guiding.training > 0 && guiding.training <= 1024))
+    throw Error("projective: guiding training segments per pixel " + std::to_string(guiding.training) +
+                " out of range (0, 1024]");
+  if (!(guiding.uniform_share > 0 && guiding.uniform_share <= 1))
+    throw Error("projective: guiding uniform share " + std::to_string(guiding.uniform_share) + " out of range (0, 1]");
+}
+
+SegmentGuide train_segment_guide(const PathContext& ctx, const SceneVelocities& velocities,
+                                 const ProjectiveEdges& edges, const ProjectiveGuiding& guiding, int threads,
+                                 PathStats& stats) {
+  if (guiding.resolution == 0 || edges.empty()) return {};
+  const Camera& cam = ctx.scene->camera;
+  const size_t cells = size_t(guiding.resolution) * guiding.resolution * guiding.resolution;
+  // At least kGuideTrainingPerCell segments per cell: a small image's T W H would leave most cells
+  // unvisited and give the few lucky ones all the weight.
+  const long long per_pixel = projective_samples_per_index(cam.width, cam.height, guiding.training);
+  const long long per_cell = ((long long)(kGuideTrainingPerCell * double(cells)) + ChunkPlan::kChunkSize - 1) /
+                             ChunkPlan::kChunkSize * ChunkPlan::kChunkSize;
+  const ChunkPlan plan(std::max(per_pixel, per_cell), false, 0, 1, 0, 1, "projective guiding", "training segments");
+  // In batches of chunks, each batch in parallel and merged in chunk order (the same guide for
+  // any thread count; memory: a batch's sums, not every chunk's).
+  constexpr long long kBatch = 16;
+  std::vector<std::vector<double>> sums(size_t(std::min(kBatch, plan.chunks)));
+  std::vector<PathStats> chunk_stats(sums.size());
+  std::vector<double> weights(cells, 0.0);
+  const SegmentContext sc(ctx, velocities, edges);
+  for (long long j0 = 0; j0 < plan.chunks; j0 += kBatch) {
+    const long long j1 = std::min(plan.chunks, j0 + kBatch);
+    plan.run(
+        threads,
+        [&](long long j, long long count, long long c) {
+          std::vector<double>& mine = sums[size_t(j - j0)];
+          mine.assign(cells, 0.0);
+          chunk_stats[size_t(j - j0)] = PathStats{};
+          with_dual_size(velocities.num_params, [&](auto n) {
+            train_chunk<decltype(n)::value>(sc, guiding.resolution, count, c, mine, chunk_stats[size_t(j - j0)]);
+          });
+        },
+        j0, j1);
+    for (long long j = j0; j < j1; ++j) {
+      const std::vector<double>& mine = sums[size_t(j - j0)];
+      for (size_t c = 0; c < cells; ++c) weights[c] += mine[c];
+      stats.rays += chunk_stats[size_t(j - j0)].rays;
+    }
+  }
+  return SegmentGuide(guiding.resolution, weights, guiding.uniform_share);
+}
+
 uint64_t add_projective_boundary(Film& film, const PathContext& ctx, const SceneVelocities& velocities,
-                                 const ProjectiveEdges& edges, double ratio, int first_sample, int spp, uint64_t seed,
-                                 int threads, PathStats& stats, int part, int parts, std::vector<FilmSplat>* deferred) {
+                                 const ProjectiveEdges& edges, const SegmentGuide& guide, double ratio,
+                                 int first_sample, int spp, uint64_t seed, int threads, PathStats& stats, int part,
+                                 int parts, std::vector<FilmSplat>* deferred) {
   const Camera& cam = ctx.scene->camera;
   const ChunkPlan plan(projective_samples_per_index(cam.width, cam.height, ratio), edges.empty(), first_sample, spp,
                        part, parts, "projective boundary term", "--sppi");
   std::vector<std::vector<FilmSplat>> splats{static_cast<size_t>(plan.chunks)};
   std::vector<PathStats> chunk_stats{static_cast<size_t>(plan.chunks)};
   std::vector<uint64_t> nonfinite(static_cast<size_t>(plan.chunks), 0);
-  const int K = velocities.num_params;
+  const SegmentContext sc(ctx, velocities, edges);
   plan.run(threads, [&](long long j, long long count, long long c) {
-    with_dual_size(K, [&](auto n) {
-      nonfinite[size_t(j)] = run_chunk<decltype(n)::value>(ctx, velocities, edges, count, plan.per_sample, seed, c,
+    with_dual_size(velocities.num_params, [&](auto n) {
+      nonfinite[size_t(j)] = run_chunk<decltype(n)::value>(sc, guide, count, plan.per_sample, seed, c,
                                                            splats[size_t(j)], chunk_stats[size_t(j)]);
     });
   });

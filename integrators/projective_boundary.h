@@ -1,8 +1,8 @@
 #pragma once
 /// @file projective_boundary.h
 /// Projective sampling's secondary boundary term (Zhang, Roussel, Jakob 2023, "Projective Sampling
-/// for Differentiable Rendering of Geometry", ACM TOG 42(6), §4-§5, without its guiding; the
-/// role of Mitsuba 3's `prb_projective` with guiding "none"; docs/architecture.md §16). Edge
+/// for Differentiable Rendering of Geometry", ACM TOG 42(6), §4-§5; the role of Mitsuba 3's
+/// `prb_projective` with guiding "grid" or "none"; docs/architecture.md §16). Edge
 /// samplers choose an edge per shading point; projective sampling draws *boundary segments*
 /// instead, with no shading point: a point y on an edge and a direction w, uniformly over the
 /// valid (y, w) of every edge, and finds the shading point p as the first hit from y along -w.
@@ -17,8 +17,9 @@
 /// F = f_s cos_s (bsdf_eval), W(p) the importance of p for the camera: a walk from p toward the
 /// camera (light tracing: BSDF-sampled directions, each vertex q connected to the pinhole, whose
 /// importance per unit area is We = f_x f_y / cos^3(theta) |n_g(q) . w_c| / r^2 in the pixel it
-/// projects to, pixel units as primary_boundary.h; the adjoint's shading-normal factor
-/// |n_g . u| / |n_g . u'| at each step, Veach 1997 §5.3). As in Mitsuba 3, one connection among
+/// projects to, pixel units as primary_boundary.h; a step from q along u to q' weighs
+/// F(q; wi, u) |n_g(q) . u| / (pdf(u) |n_g(q') . u|): the camera path's area measure at q' in terms
+/// of the solid angle sampled at q, with F in the frame the camera path sees). As in Mitsuba 3, one connection among
 /// the walk's visible ones is kept by reservoir sampling (its weight times their count), and the
 /// jump dL is evaluated once, for that connection's path depth.
 ///
@@ -35,6 +36,7 @@
 #include "qsil/edgetree/edge_set.h"
 #include "qsil/film.h"
 #include "qsil/integrators/path_tracer.h"
+#include "qsil/integrators/projective_sampling.h"
 #include "qsil/parameters.h"
 
 #include <cstdint>
@@ -88,6 +90,56 @@ struct ProjectiveEdges {
 /// moves (an index it does not cover: moving).
 ProjectiveEdges make_projective_edges(const edgetree::EdgeSet& edges, const std::vector<bool>& moving);
 
+/// A boundary segment from a point u of the unit cube: u.x picks the edge by the cumulative
+/// weights of `edges` and, as the remainder of its interval, t; (u.y, u.z) the direction
+/// (sample_edge_direction). A measure-preserving map up to the densities: the segment's density
+/// per unit t and steradian is edges.probability(edge) x direction pdf when u is uniform.
+struct BoundarySegment {
+  size_t edge = 0;  ///< index into ProjectiveEdges::edges
+  double t = 0;     ///< edge parameter in [0, 1)
+  EdgeDirection direction;
+  double pdf = 0;  ///< per unit t and steradian, for u uniform; 0: no segment
+};
+BoundarySegment boundary_segment(const ProjectiveEdges& edges, const Vec3& u);
+
+/// Guiding of the boundary segments (Zhang, Roussel, Jakob 2023 §5; the role of Mitsuba 3's
+/// guiding "grid"): a piecewise-constant density over a grid of resolution^3 cells of the unit
+/// cube of boundary_segment's u, each cell weighted by the mean |contribution| of uniform
+/// training segments that fell in it, mixed with the uniform density (a defensive share), so
+/// that no segment the estimator can draw unguided has density 0. Default-constructed: uniform.
+class SegmentGuide {
+ public:
+  SegmentGuide() = default;
+  /// From resolution^3 non-negative cell weights (x fastest, then y, then z) and the uniform
+  /// share in (0, 1]; all-zero weights give the uniform density. QSIL_CHECKs the sizes.
+  SegmentGuide(int resolution, const std::vector<double>& weights, double uniform_share);
+  /// True when every u has density 1.
+  bool uniform() const { return resolution_ == 0; }
+  int resolution() const { return resolution_; }
+  /// The cell of u (index as for the weights); 0 for the uniform guide.
+  int cell(const Vec3& u) const;
+  /// Density of u relative to the uniform one: uniform_share + (1 - uniform_share) x the cell's
+  /// weight / the mean weight.
+  double density(const Vec3& u) const;
+  /// A point u from five uniform numbers: `choose` picks the uniform or the guided part, `pick`
+  /// the cell by weight, `within` the position in the cell (or in the cube).
+  Vec3 sample(double choose, double pick, const Vec3& within) const;
+
+ private:
+  int resolution_ = 0;
+  double share_ = 1;
+  std::vector<double> cdf_;  ///< cumulative cell weights (size cells + 1)
+};
+
+/// Trains a SegmentGuide over `edges` (the file comment's estimator, its |value| summed over the
+/// parameters and channels per cell): guiding.training x W x H uniform segments in chunks, each
+/// from Sampler(0x9e3779b97f4a7c15, chunk, 0, 6), merged in chunk order (the same guide for any
+/// thread count). The uniform guide for resolution 0 or an empty sample space. Counts rays in
+/// `stats`.
+SegmentGuide train_segment_guide(const PathContext& ctx, const SceneVelocities& velocities,
+                                 const ProjectiveEdges& edges, const ProjectiveGuiding& guiding, int threads,
+                                 PathStats& stats);
+
 /// Boundary segments per sample index for a W x H image at `ratio` segments per pixel sample:
 /// ratio W H rounded up to a whole chunk of 1024 (at least one). Throws qsil::Error unless ratio
 /// is in (0, 1024].
@@ -96,15 +148,14 @@ long long projective_samples_per_index(int width, int height, double ratio);
 /// Adds the secondary boundary term of the sample range [first_sample, first_sample + spp) to the
 /// derivative channels of `film` (a gradient film of velocities.num_params parameters) by
 /// projective sampling (the file comment): projective_samples_per_index(W, H, ratio) boundary
-/// segments per sample index, numbered and drawn in chunks as the primary term's
-/// (sample_chunks.h), chunk c from Sampler(seed, c, 0, 5), splatted where their connection lands.
-/// Deterministic for a seed whatever the thread count. Counts rays, boundary segments (as
-/// traversals) and zero contributions in `stats`; returns the number of contributions that were
-/// not finite (replaced by zero). Part `part` of `parts` and `deferred` as for
-/// add_primary_boundary.
+/// segments per sample index, their u drawn from `guide` (its density divides their weight), numbered and drawn in
+/// chunks as the primary term's (sample_chunks.h), chunk c from Sampler(seed, c, 0, 5), splatted where their connection
+/// lands. Deterministic for a seed whatever the thread count. Counts rays, boundary segments (as traversals) and zero
+/// contributions in `stats`; returns the number of contributions that were not finite (replaced by zero). Part `part`
+/// of `parts` and `deferred` as for add_primary_boundary.
 uint64_t add_projective_boundary(Film& film, const PathContext& ctx, const SceneVelocities& velocities,
-                                 const ProjectiveEdges& edges, double ratio, int first_sample, int spp, uint64_t seed,
-                                 int threads, PathStats& stats, int part = 0, int parts = 1,
-                                 std::vector<FilmSplat>* deferred = nullptr);
+                                 const ProjectiveEdges& edges, const SegmentGuide& guide, double ratio,
+                                 int first_sample, int spp, uint64_t seed, int threads, PathStats& stats, int part = 0,
+                                 int parts = 1, std::vector<FilmSplat>* deferred = nullptr);
 
 }  // namespace qsil

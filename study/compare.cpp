@@ -84,6 +84,7 @@ EstimatorConfig method_config(const Scene& scene, Method m, const std::vector<Pa
   EstimatorConfig c = EstimatorConfig::gradient(params, m, o.sppi, o.sppp);
   if (m == Method::Regularized) c.regularization = Regularization::for_scene(scene, o.reg_width);
   c.warped_area = o.warped_area;
+  c.projective_guiding = o.projective_guiding;
   return c;
 }
 

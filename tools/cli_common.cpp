@@ -93,6 +93,7 @@ void add_boundary_flags(CLI::App& app, BoundaryFlags& flags, const std::string& 
   add_sample_rate_options(app, flags.sppi, flags.sppp);
   add_regularization_options(app, flags.reg_width, "for --boundary regularized");
   add_warped_area_options(app, flags.warped_area, "--boundary was");
+  add_projective_guiding_options(app, flags.projective_guiding, "--boundary projective");
   if (!curves_flag) return;
   bool& intersection_curves = flags.intersection_curves;
   app.add_flag_callback(
@@ -130,6 +131,25 @@ void add_warped_area_options(CLI::App& app, WarpedAreaSampling& was, const std::
       ->capture_default_str();
 }
 
+void add_projective_guiding_options(CLI::App& app, ProjectiveGuiding& guiding, const std::string& what) {
+  app.add_option("--guiding-resolution", guiding.resolution,
+                 "Projective sampling (" + what +
+                     "): cells per axis of the grid that guides its boundary segments (Zhang et al. 2023 §5, as "
+                     "Mitsuba 3's guiding=\"grid\"); 0: no guiding (guiding=\"none\")")
+      ->check(CLI::Range(0, 64))
+      ->capture_default_str();
+  app.add_option("--guiding-share", guiding.uniform_share,
+                 "Projective sampling (" + what +
+                     "): share of the uniform density in the guided mixture (a defensive share: > 0)")
+      ->check(CLI::Range(1e-3, 1.0))
+      ->capture_default_str();
+  app.add_option(
+         "--guiding-training", guiding.training,
+         "Projective sampling (" + what + "): uniform training segments per pixel of the guide, drawn once at set-up")
+      ->check(CLI::Range(1.0 / 1024, 1024.0))
+      ->capture_default_str();
+}
+
 EstimatorConfig gradient_config(const Scene& scene, std::vector<ParameterSpec> params, Method method,
                                 const BoundaryFlags& flags) {
   EstimatorConfig config = EstimatorConfig::gradient(std::move(params), method, flags.sppi, flags.sppp);
@@ -137,6 +157,7 @@ EstimatorConfig gradient_config(const Scene& scene, std::vector<ParameterSpec> p
   if (method == Method::Regularized)
     config.regularization = Regularization::for_scene(scene, flags.reg_width);
   config.warped_area = flags.warped_area;
+  config.projective_guiding = flags.projective_guiding;
   return config;
 }
 

@@ -74,11 +74,17 @@ struct BoundaryFlags {
   double reg_width = 1e-3;
   /// --was-rays, --was-kappa, --was-exponent: was's auxiliary rays (WarpedAreaSampling).
   WarpedAreaSampling warped_area;
+  /// --guiding-resolution, --guiding-share, --guiding-training: projective's guide (ProjectiveGuiding).
+  ProjectiveGuiding projective_guiding;
 };
 
 /// Adds --was-rays, --was-kappa and --was-exponent (WarpedAreaSampling) to `app`, into `was`;
 /// `what` says for which option (for the help text).
 void add_warped_area_options(CLI::App& app, WarpedAreaSampling& was, const std::string& what);
+
+/// Adds --guiding-resolution R (0: none), --guiding-share S and --guiding-training T (ProjectiveGuiding)
+/// to `app`, into `guiding`; `what` says for which option (for the help text).
+void add_projective_guiding_options(CLI::App& app, ProjectiveGuiding& guiding, const std::string& what);
 
 /// Adds --reg-width W (Regularization::for_scene) to `app`, into `width`; `what` says what it
 /// regularises (for the help text).

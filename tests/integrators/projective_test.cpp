@@ -12,6 +12,9 @@
 //   the walk has two connections to choose from (penumbra-wall: its reservoir). With the same seed the two share the
 //   interior and the primary term bit for bit, so their difference is the difference of the two secondary estimates
 //   alone;
+// - its guide (a grid over the segments' unit cube, off by default) has a normalised density,
+//   never below its uniform share, sampled as stated; the agreements hold without it and with it
+//   (penumbra-sign, plane-light, sunk-sphere, penumbra-wall);
 // - a run in parts combines to the whole run bit for bit; reverse mode and --largest-samples
 //   refuse it.
 // Confidence: agreement with finite differences is |difference| < 3 standard errors (99.7 %), with
@@ -32,7 +35,9 @@
 #include <cstdio>
 #include <cstring>
 #include <functional>
+#include <map>
 #include <string>
+#include <vector>
 
 namespace qsil {
 namespace {
@@ -40,6 +45,9 @@ namespace {
 using test::derivative_sum;
 using test::quiet;
 using test::Sum;
+
+/// The grid guide (off by default).
+const ProjectiveGuiding kGrid{.resolution = 16};
 
 /// An edge along +x whose faces have unit normals n0 and n1 (both perpendicular to +x).
 edgetree::Edge edge_with_normals(const Vec3& n0, const Vec3& n1, edgetree::EdgeClass cls, int f1 = 1) {
@@ -100,16 +108,57 @@ TEST(ProjectiveDirections, BoundaryEdgesAndCreasesTakeTheWholeSphere) {
   EXPECT_EQ(sample_edge_direction(crease, Vec2(0.3, 0.3)).pdf, 0.0);
 }
 
+// A guide's density integrates to 1 over the unit cube, is at least the uniform share everywhere
+// (cells that learnt nothing included), and its samples fall in each cell as often as the density
+// says (a chi-square test over the cells, 99.9 %).
+TEST(SegmentGuides, DensityIsNormalisedPositiveAndSampledAsStated) {
+  const int r = 4, cells = r * r * r;
+  std::vector<double> weights(size_t(cells), 0.0);
+  weights[5] = 3.0;
+  weights[17] = 1.0;
+  weights[63] = 0.5;
+  const SegmentGuide guide(r, weights, 0.2);
+  double integral = 0, smallest = 1e300;
+  for (int c = 0; c < cells; ++c) {
+    const Vec3 centre((c % r + 0.5) / r, ((c / r) % r + 0.5) / r, (c / (r * r) + 0.5) / r);
+    ASSERT_EQ(guide.cell(centre), c);
+    integral += guide.density(centre) / cells;
+    smallest = std::min(smallest, guide.density(centre));
+  }
+  EXPECT_NEAR(integral, 1.0, 1e-12);
+  EXPECT_NEAR(smallest, 0.2, 1e-12);
+  Sampler sampler(3, 0, 0);
+  const int n = 200000;
+  std::vector<int> count(size_t(cells), 0);
+  for (int i = 0; i < n; ++i) {
+    const double choose = sampler.next(), pick = sampler.next();
+    const Vec3 within(sampler.next(), sampler.next(), sampler.next());
+    const Vec3 u = guide.sample(choose, pick, within);
+    ASSERT_TRUE((u.array() >= 0).all() && (u.array() < 1).all());
+    ++count[size_t(guide.cell(u))];
+  }
+  double chi2 = 0;
+  for (int c = 0; c < cells; ++c) {
+    const Vec3 centre((c % r + 0.5) / r, ((c / r) % r + 0.5) / r, (c / (r * r) + 0.5) / r);
+    const double expected = n * guide.density(centre) / cells;
+    chi2 += (count[size_t(c)] - expected) * (count[size_t(c)] - expected) / expected;
+  }
+  EXPECT_LT(chi2, 103.4) << "chi-square, 63 degrees of freedom, 99.9 %";
+  EXPECT_TRUE(SegmentGuide(r, std::vector<double>(size_t(cells), 0.0), 0.2).density(Vec3(0.3, 0.3, 0.3)) == 1.0)
+      << "a guide that learnt nothing is uniform";
+}
+
 /// Projective sampling against central finite differences on `file` at res 8.
 void expect_agrees_with_fd(const std::string& file, const std::string& param, int spp, int fd_spp, double power,
-                           const std::map<std::string, std::string>& defines = {}) {
+                           const std::map<std::string, std::string>& defines = {}, ProjectiveGuiding guiding = {}) {
   auto d = defines;
   d["res"] = "8";
   const Scene scene = load_scene(test::data_file(file), d);
   const auto params = parse_parameters({param}, scene);
   const Sum fd = derivative_sum(Estimator(scene, EstimatorConfig::finite_differences(params)).run(quiet(fd_spp, 41)));
-  const Sum g =
-      derivative_sum(Estimator(scene, EstimatorConfig::gradient(params, Method::Projective)).run(quiet(spp, 42)));
+  EstimatorConfig config = EstimatorConfig::gradient(params, Method::Projective);
+  config.projective_guiding = guiding;
+  const Sum g = derivative_sum(Estimator(scene, config).run(quiet(spp, 42)));
   const double se = std::hypot(g.se, fd.se);
   std::printf("%s %s: projective %.4g +- %.3g, fd %.4g +- %.3g, z %.2f\n", file.c_str(), param.c_str(), g.value, g.se,
               fd.value, fd.se, (g.value - fd.value) / se);
@@ -118,7 +167,8 @@ void expect_agrees_with_fd(const std::string& file, const std::string& param, in
 }
 
 TEST(Projective, ShadowEdgesAgreeWithFiniteDifferences) {
-  expect_agrees_with_fd("tests/data/gradient/penumbra-sign.xml", "occluder:translate:0,1,0", 4096, 4096, 0.04);
+  expect_agrees_with_fd("tests/data/gradient/penumbra-sign.xml", "occluder:translate:0,1,0", 4096, 4096, 0.04, {},
+                        kGrid);
 }
 
 // The whole derivative is the static light's outline moving relative to the rising floor's
@@ -136,13 +186,16 @@ TEST(Projective, StaticEdgesSeenFromMovingPointsAgreeWithFiniteDifferences) {
 /// method's own agreement with finite differences on these scenes: gradient_vs_fd_test.cpp and
 /// intersection_curves_test.cpp.
 void expect_secondary_term_equals_quadric(const std::string& file, const std::string& param, int spp, double power,
-                                          const std::map<std::string, std::string>& defines = {}) {
+                                          const std::map<std::string, std::string>& defines = {},
+                                          ProjectiveGuiding guiding = {}) {
   auto d = defines;
   d["res"] = "8";
   const Scene scene = load_scene(test::data_file(file), d);
   const auto params = parse_parameters({param}, scene);
   const Estimator quadric(scene, EstimatorConfig::gradient(params, Method::Quadric));
-  const Estimator projective(scene, EstimatorConfig::gradient(params, Method::Projective));
+  EstimatorConfig config = EstimatorConfig::gradient(params, Method::Projective);
+  config.projective_guiding = guiding;
+  const Estimator projective(scene, config);
   const int seeds = 8;
   double diff = 0, diff2 = 0, boundary = 0;
   for (int s = 0; s < seeds; ++s) {
@@ -162,7 +215,8 @@ void expect_secondary_term_equals_quadric(const std::string& file, const std::st
 }
 
 TEST(Projective, IntersectionCurvesEqualTheQuadricMethod) {
-  expect_secondary_term_equals_quadric("tests/data/gradient/sunk-sphere.xml", "sphere:translate:0,1,0", 256, 0.05);
+  expect_secondary_term_equals_quadric("tests/data/gradient/sunk-sphere.xml", "sphere:translate:0,1,0", 256, 0.05, {},
+                                       kGrid);
 }
 
 TEST(Projective, CreasesOfARotatingFacetedCubeEqualTheQuadricMethod) {
@@ -184,10 +238,19 @@ TEST(Projective, ReservoirOfConnectionsEqualsTheQuadricMethod) {
   expect_secondary_term_equals_quadric("tests/data/gradient/penumbra-wall.xml", "occluder:translate:0,1,0", 512, 0.03);
 }
 
+// With the grid guide the estimates stay unbiased (its density divides every weight).
+TEST(Projective, GuidedAgreesWithFiniteDifferencesAndTheQuadricMethod) {
+  expect_agrees_with_fd("tests/data/gradient/plane-light.xml", "floor:translate:0,1,0", 16384, 4096, 0.04, {}, kGrid);
+  expect_secondary_term_equals_quadric("tests/data/gradient/penumbra-wall.xml", "occluder:translate:0,1,0", 512, 0.03,
+                                       {}, kGrid);
+}
+
 TEST(Projective, PartsCombineToTheWholeRunBitForBit) {
   const Scene scene = load_scene(test::data_file("tests/data/gradient/penumbra-sign.xml"), {{"res", "12"}});
   const auto params = parse_parameters({"occluder:translate:0,1,0"}, scene);
-  const Estimator e(scene, EstimatorConfig::gradient(params, Method::Projective));
+  EstimatorConfig config = EstimatorConfig::gradient(params, Method::Projective);
+  config.projective_guiding = kGrid;  // the guide too: trained once at set-up, the same in every part
+  const Estimator e(scene, config);
   RenderOptions o = quiet(5, 3);
   o.first_sample = 3;
   const RenderResult whole = e.run(o);
@@ -222,6 +285,9 @@ TEST(Projective, RefusesWhatItCannotDo) {
             "reverse mode: method projective is not supported (forward mode only: qsil grad)");
   EXPECT_EQ(message_of([&] { projective_samples_per_index(8, 8, 0.0); }),
             "projective: boundary segments per pixel sample must be in (0, 1024] (got 0.000000)");
+  EstimatorConfig c = EstimatorConfig::gradient(params, Method::Projective);
+  c.projective_guiding.resolution = 65;
+  EXPECT_EQ(message_of([&] { Estimator(scene, c); }), "projective: guiding resolution 65 out of range [0, 64]");
 }
 
 }  // namespace

@@ -21,6 +21,7 @@
 
 #include "qsil/film.h"
 #include "qsil/integrators/method.h"
+#include "qsil/integrators/projective_sampling.h"
 #include "qsil/integrators/regularized_visibility.h"
 #include "qsil/integrators/sample_trace.h"
 #include "qsil/integrators/warped_area_sampling.h"
@@ -71,6 +72,8 @@ struct EstimatorConfig {
   Regularization regularization;
   /// Method::WarpedArea: its auxiliary rays, kappa and exponent (warped_area_sampling.h).
   WarpedAreaSampling warped_area;
+  /// Method::Projective: its guide (projective_sampling.h; resolution 0: unguided).
+  ProjectiveGuiding projective_guiding;
 
   /// The primal image.
   static EstimatorConfig primal();

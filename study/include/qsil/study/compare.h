@@ -12,6 +12,7 @@
 /// (setup_seconds in the CSV and JSON, and one log line per method).
 
 #include "qsil/integrators/method.h"
+#include "qsil/integrators/projective_sampling.h"
 #include "qsil/integrators/warped_area_sampling.h"
 #include "qsil/parameters.h"
 #include "qsil/scene.h"
@@ -44,6 +45,7 @@ struct CompareOptions {
   /// (Regularization::for_scene).
   double reg_width = 1e-3;
   WarpedAreaSampling warped_area;  ///< was's auxiliary rays (EstimatorConfig::warped_area)
+  ProjectiveGuiding projective_guiding;  ///< projective's guide (EstimatorConfig::projective_guiding)
   std::filesystem::path out;  ///< output directory (created)
   uint64_t seed = 0;          ///< base seed: every method, target and the reference derive theirs
   int threads = 0;
