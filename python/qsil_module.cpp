@@ -226,7 +226,8 @@ void bind_forward(py::module_& m) {
 
   const auto grad =
       [](const Scene& scene, const std::vector<std::string>& params, int spp, uint64_t seed, int threads,
-         const std::string& boundary, double sppi, double sppp, bool intersection_curves, double reg_width) {
+         const std::string& boundary, double sppi, double sppp, bool intersection_curves, double reg_width,
+         int guiding_resolution, double guiding_share, double guiding_training) {
         const Method method = parse_method(boundary, "boundary", kBoundaryMethods);
         const std::vector<ParameterSpec> specs = parse_parameters(params, scene);
         std::optional<Estimator> e;
@@ -237,6 +238,7 @@ void bind_forward(py::module_& m) {
           config.intersection_curves = intersection_curves;
           if (method == Method::Regularized)
             config.regularization = Regularization::for_scene(scene, reg_width);
+          config.projective_guiding = {guiding_resolution, guiding_training, guiding_share};
           e.emplace(scene, std::move(config));
           r = e->run(options(spp, seed, threads));
         }
@@ -252,21 +254,23 @@ void bind_forward(py::module_& m) {
       };
   m.def("grad", grad, py::arg("scene"), py::arg("params"), py::arg("spp") = 0, py::arg("seed") = 0,
         py::arg("threads") = 0, py::arg("boundary") = "quadric", py::arg("sppi") = 0, py::arg("sppp") = kDefaultSppp,
-        py::arg("intersection_curves") = true, py::arg("reg_width") = 1e-3,
+        py::arg("intersection_curves") = true, py::arg("reg_width") = 1e-3, py::arg("guiding_resolution") = 0,
+        py::arg("guiding_share") = 0.5, py::arg("guiding_training") = 4.0,
         "Forward mode: (image (H, W, 3), derivatives (K, H, W, 3)) for 1-8 parameter specs "
         "('ID:translate:X,Y,Z', 'ID:rotate:X,Y,Z', 'ID:scale', 'ID:vertex:I:X,Y,Z'). sppi: secondary "
         "boundary-term samples per shading point on average over a pixel's samples (0: the method's default, 0.5 for "
         "quadric; for boundary='projective', boundary segments per pixel sample, default 1); sppp: primary edge "
         "samples per pixel sample (`qsil grad --help`); intersection_curves=False: do not "
         "sample the curves where surfaces cross (to measure what they add; biased where surfaces cross); reg_width: "
-        "boundary='regularized''s blur width as a fraction of the scene's bounding-box diagonal (`qsil grad --help`)");
+        "boundary='regularized''s blur width as a fraction of the scene's bounding-box diagonal (`qsil grad --help`); "
+        "guiding_resolution, guiding_share, guiding_training: boundary='projective''s grid guide (0: none; "
+        "`qsil grad --help`)");
   // The keyword names before 2026-11-25 (boundary_spp, primary_samples): the same function.
   m.def("grad", grad, py::arg("scene"), py::arg("params"), py::arg("spp") = 0, py::arg("seed") = 0,
         py::arg("threads") = 0, py::arg("boundary") = "quadric", py::arg("boundary_spp") = 0,
-        py::arg("primary_samples") = kDefaultSppp, py::arg("intersection_curves") = true,
-        py::arg("reg_width") = 1e-3,
+        py::arg("primary_samples") = kDefaultSppp, py::arg("intersection_curves") = true, py::arg("reg_width") = 1e-3,
+        py::arg("guiding_resolution") = 0, py::arg("guiding_share") = 0.5, py::arg("guiding_training") = 4.0,
         "The same, with the old keyword names boundary_spp (= sppi) and primary_samples (= sppp)");
-
 }
 
 /// The adjoint image (H, W, 3) of a reverse-mode run as the estimator takes it, row-major RGB.

@@ -286,6 +286,19 @@ def test_regularized_render_and_grad_reach_the_blur_width():
     assert "width must be positive" in str(e.value)
 
 
+def test_projective_grad_reaches_its_guide():
+    s = load(os.path.join(ROOT, "tests", "data", "gradient", "penumbra-sign.xml"), res=8, spp=1)
+    params = ["occluder:translate:0,1,0"]
+    img, plain = qsil.grad(s, params, spp=16, seed=3, boundary="projective")
+    again_img, guided = qsil.grad(s, params, spp=16, seed=3, boundary="projective", guiding_resolution=8)
+    assert np.array_equal(img, again_img)  # the guide changes the boundary term only
+    assert np.isfinite(plain).all() and np.isfinite(guided).all()
+    assert not np.array_equal(plain, guided)  # other segments: the guide reached the estimator
+    with pytest.raises(qsil.Error) as e:
+        qsil.grad(s, params, boundary="projective", guiding_resolution=65)
+    assert "guiding resolution 65 out of range" in str(e.value)
+
+
 def test_bad_input_raises_qsil_error_with_one_line():
     s = load(res=8, spp=1)
     cases = [
