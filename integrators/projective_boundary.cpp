@@ -220,20 +220,7 @@ std::optional<SegmentValue<N>> evaluate_segment(const SegmentContext& sc, const 
   // ---- The jump at p for the kept connection's depth, and its Jacobian with p's velocity.
   const SurfaceInteraction<double>& p = walk[0].si;
   const Vec3 wo_p = kept.vertex == 0 ? kept.wo_p : Vec3(-walk[1].wi);
-  OwnFace own;
-  if (e.crossing) {
-    own.up = p.ng.dot(wo_p) < 0 ? Vec3(-p.ng) : p.ng;  // crossing_jump
-  } else if (e.shape == p.shape) {
-    own.face = face_in_plane(ctx.scene->shapes[size_t(e.shape)].mesh, e, p.triangle, p.ng, p.p);
-    if (own.face >= 0) own.up = p.ng.dot(wo_p) < 0 ? Vec3(-p.ng) : p.ng;
-  }
-  const EdgeJumpInputs in{.edge = e,
-                          .t = t,
-                          .p = p.p,
-                          .vis_origin = spawn_origin(p, own.face >= 0 ? Vec3(-own.up) : w),
-                          .through_back_faces = leaves_below(p, wo_p, w),
-                          .own = own,
-                          .segments = kept.vertex + 1};
+  const EdgeJumpInputs in = vertex_edge_inputs(ctx, e, t, p, wo_p, w, kept.vertex + 1);
   const Eigen::Matrix<double, 3, N> dp = shading_point_velocity<N>(ctx, sc.vel, walk, kept.vertex);
   Eigen::Matrix<double, 1, N> J;
   const std::optional<Color> jump = edge_jump_with(ctx, in, sampler, stats, [&](const Vec3& g) {

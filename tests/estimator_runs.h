@@ -1,11 +1,15 @@
 #pragma once
 /// @file estimator_runs.h
-/// What tests that run an Estimator and compare image sums share: quiet run options and the
-/// image sum of the first derivative channel.
+/// What tests that run an Estimator and compare image sums share: quiet run options, the image
+/// sum of the first derivative channel, and the message of an expected refusal.
 
 #include "qsil/integrators/estimator.h"
 
+#include "qsil/error.h"
+
 #include <cstdint>
+#include <functional>
+#include <string>
 
 namespace qsil::test {
 
@@ -27,6 +31,14 @@ struct Sum {
 inline Sum derivative_sum(const RenderResult& r) {
   const ImageSum s = r.film.derivative_sum(0);
   return {s.sum, s.standard_error};
+}
+
+/// The message of the qsil::Error that `f` throws, or "(no error)".
+inline std::string message_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const Error& e) { return e.what(); }
+  return "(no error)";
 }
 
 }  // namespace qsil::test

@@ -2,7 +2,7 @@
 // in order with merge_part, equal the whole run bit for bit — every sum, squared sum, splat sum
 // and count of the film, and every counter — for any number of parts and threads, for the primal
 // image, the gradient with and without a boundary term (primary splats included; projective
-// sampling's boundary segments too) and finite
+// sampling's boundary segments too, guided or not) and finite
 // differences. A distributed run transports exactly these films (tests/mpi_cli_test.cpp checks
 // the program under mpirun).
 #include "qsil/integrators/distributed.h"
@@ -73,6 +73,9 @@ TEST(Distributed, PartsCombineToTheWholeRunBitForBit) {
                                   "interior " + at);
     expect_parts_combine_to_whole(Estimator(scene, EstimatorConfig::gradient(params, Method::Projective)), o,
                                   "projective " + at);
+    EstimatorConfig guided = EstimatorConfig::gradient(params, Method::Projective);
+    guided.projective_guiding.resolution = 16;  // trained once at set-up: the same guide in every part
+    expect_parts_combine_to_whole(Estimator(scene, guided), o, "projective, guided " + at);
     expect_parts_combine_to_whole(Estimator(scene, EstimatorConfig::finite_differences(params)), o, "fd " + at);
   }
 }

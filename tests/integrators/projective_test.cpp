@@ -15,15 +15,14 @@
 // - its guide (a grid over the segments' unit cube, off by default) has a normalised density,
 //   never below its uniform share, sampled as stated; the agreements hold without it and with it
 //   (penumbra-sign, plane-light, sunk-sphere, penumbra-wall);
-// - a run in parts combines to the whole run bit for bit; reverse mode and --largest-samples
-//   refuse it.
+// - reverse mode and --largest-samples refuse it (runs in parts, guided or not, combine to the
+//   whole run bit for bit: distributed_test.cpp).
 // Confidence: agreement with finite differences is |difference| < 3 standard errors (99.7 %), with
 // the quadric method a t-test over 8 seeds (99 %); fixed seeds, and a power assertion each: the
 // standard error is a few percent of the value compared.
 #include "estimator_runs.h"
 #include "integrators/projective_boundary.h"
 #include "qsil/error.h"
-#include "qsil/integrators/distributed.h"
 #include "qsil/integrators/estimator.h"
 #include "qsil/integrators/reverse.h"
 #include "qsil/sampling.h"
@@ -33,8 +32,6 @@
 
 #include <cmath>
 #include <cstdio>
-#include <cstring>
-#include <functional>
 #include <map>
 #include <string>
 #include <vector>
@@ -43,6 +40,7 @@ namespace qsil {
 namespace {
 
 using test::derivative_sum;
+using test::message_of;
 using test::quiet;
 using test::Sum;
 
@@ -243,33 +241,6 @@ TEST(Projective, GuidedAgreesWithFiniteDifferencesAndTheQuadricMethod) {
   expect_agrees_with_fd("tests/data/gradient/plane-light.xml", "floor:translate:0,1,0", 16384, 4096, 0.04, {}, kGrid);
   expect_secondary_term_equals_quadric("tests/data/gradient/penumbra-wall.xml", "occluder:translate:0,1,0", 512, 0.03,
                                        {}, kGrid);
-}
-
-TEST(Projective, PartsCombineToTheWholeRunBitForBit) {
-  const Scene scene = load_scene(test::data_file("tests/data/gradient/penumbra-sign.xml"), {{"res", "12"}});
-  const auto params = parse_parameters({"occluder:translate:0,1,0"}, scene);
-  EstimatorConfig config = EstimatorConfig::gradient(params, Method::Projective);
-  config.projective_guiding = kGrid;  // the guide too: trained once at set-up, the same in every part
-  const Estimator e(scene, config);
-  RenderOptions o = quiet(5, 3);
-  o.first_sample = 3;
-  const RenderResult whole = e.run(o);
-  for (int parts : {2, 3}) {
-    const RenderResult merged = run_in_parts(e, o, parts);
-    const std::vector<double> a = whole.film.state(), b = merged.film.state();
-    ASSERT_EQ(a.size(), b.size());
-    size_t differ = 0;
-    for (size_t i = 0; i < a.size(); ++i) differ += std::memcmp(&a[i], &b[i], sizeof(double)) != 0;
-    EXPECT_EQ(differ, 0u) << parts << " parts";
-    EXPECT_EQ(whole.rays, merged.rays) << parts << " parts";
-  }
-}
-
-std::string message_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& e) { return e.what(); }
-  return "(no error)";
 }
 
 TEST(Projective, RefusesWhatItCannotDo) {

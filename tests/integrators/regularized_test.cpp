@@ -25,7 +25,6 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <functional>
 #include <set>
 #include <tuple>
 
@@ -35,6 +34,7 @@ namespace {
 const char* kPenumbra = "tests/data/gradient/penumbra-sign.xml";
 
 using test::derivative_sum;
+using test::message_of;
 using test::quiet;
 using test::Sum;
 
@@ -172,15 +172,6 @@ TEST(Regularized, ImageTendsToTheHardImageAsTheWidthShrinks) {
 }
 
 // ---- What it refuses
-
-std::string message_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
 
 TEST(Regularized, RefusesWhatItCannotDo) {
   const Scene scene = load_scene(test::data_file(kPenumbra), {{"res", "4"}});

@@ -41,7 +41,6 @@
 
 #include <cmath>
 #include <cstdio>
-#include <functional>
 #include <tuple>
 
 namespace qsil {
@@ -51,6 +50,7 @@ const char* kPlaneLight = "tests/data/gradient/plane-light.xml";
 const char* kPenumbra = "tests/data/gradient/penumbra-sign.xml";
 
 using test::derivative_sum;
+using test::message_of;
 using test::quiet;
 using test::Sum;
 
@@ -59,13 +59,6 @@ EstimatorConfig was_config(const std::vector<ParameterSpec>& params, int rays, b
   c.warped_area.rays = rays;
   c.warped_area.unbiased = unbiased;
   return c;
-}
-
-std::string message_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& e) { return e.what(); }
-  return "(no error)";
 }
 
 // ---- Building blocks

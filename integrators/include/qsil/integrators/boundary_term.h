@@ -104,22 +104,7 @@ void for_each_boundary_sample(const PathContext& ctx, const BoundaryContext& bou
       const Color f = bsdf_eval<double>(*sp.bsdf, q.frame.to_local(w), wo_local);
       if ((f == 0).all()) continue;
       Vec3 g;
-      OwnFace own;
-      if (e.crossing) {
-        own.up = value(si.ng).dot(wo_world) < 0 ? Vec3(-value(si.ng)) : value(si.ng);  // crossing_jump
-      } else if (e.shape == si.shape) {
-        own.face = face_in_plane(ctx.scene->shapes[size_t(e.shape)].mesh, e, si.triangle, value(si.ng), q.p);
-        if (own.face >= 0) own.up = value(si.ng).dot(wo_world) < 0 ? Vec3(-value(si.ng)) : value(si.ng);
-      }
-      // An edge in p's plane takes its rays below that plane (edge_jump_with): its origin there.
-      const Vec3 vis_origin = spawn_origin(si, own.face >= 0 ? Vec3(-own.up) : w);
-      const EdgeJumpInputs in{.edge = e,
-                              .t = s.t,
-                              .p = q.p,
-                              .vis_origin = vis_origin,
-                              .through_back_faces = leaves_below(si, wo_world, w),
-                              .own = own,
-                              .segments = vertex.segments};
+      const EdgeJumpInputs in = vertex_edge_inputs(ctx, e, s.t, si, wo_world, w, vertex.segments);
       const std::optional<Color> jump = edge_jump_with(ctx, in, sampler, stats, [&](const Vec3& gv) {
         g = gv;
         return accept(e, s.t, gv);

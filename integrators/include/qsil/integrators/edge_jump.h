@@ -50,6 +50,35 @@ inline int face_in_plane(const TriangleMesh& mesh, const edgetree::Edge& e, int 
   return -1;
 }
 
+/// The inputs of edge point (e, t) seen from path vertex `si` (world; `wo_world` the unit direction
+/// toward its viewer, `w` the unit direction from si.p to the edge point) after `segments`
+/// segments: the edge's face in si's plane (OwnFace: for an edge of si's shape in that plane,
+/// face_in_plane and the viewer's side; for a segment of an intersection curve the viewer's side
+/// alone, crossing_jump), the visibility ray's origin (below that plane for such an edge,
+/// edge_jump_with) and whether its rays pass back faces (leaves_below). Shared by the per-vertex
+/// boundary term (boundary_term.h) and projective sampling (integrators/projective_boundary.h).
+template <class T>
+EdgeJumpInputs vertex_edge_inputs(const PathContext& ctx, const edgetree::Edge& e, double t,
+                                  const SurfaceInteraction<T>& si, const Vec3& wo_world, const Vec3& w, int segments) {
+  const Vec3 p = value(si.p), ng = value(si.ng);
+  const Vec3 up = ng.dot(wo_world) < 0 ? Vec3(-ng) : ng;
+  OwnFace own;
+  if (e.crossing) {
+    own.up = up;  // crossing_jump
+  } else if (e.shape == si.shape) {
+    own.face = face_in_plane(ctx.scene->shapes[size_t(e.shape)].mesh, e, si.triangle, ng, p);
+    if (own.face >= 0) own.up = up;
+  }
+  // An edge in p's plane takes its rays below that plane (edge_jump_with): its origin there.
+  return EdgeJumpInputs{.edge = e,
+                        .t = t,
+                        .p = p,
+                        .vis_origin = spawn_origin(si, own.face >= 0 ? Vec3(-own.up) : w),
+                        .through_back_faces = leaves_below(si, wo_world, w),
+                        .own = own,
+                        .segments = segments};
+}
+
 /// The rays of the boundary term ignore the sampled edge's own two faces (an Embree filter on
 /// their primitive ids: no absolute epsilon). `through_back_faces` as for every ray of the path
 /// tracer (leaves_below).
