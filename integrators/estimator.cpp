@@ -146,8 +146,18 @@ class GradientEstimator final : public Estimator::Impl, private RenderSetup {
         projective = make_projective_edges(*boundary.edges, boundary_ctx.moving);
         const auto t0 = Clock::now();
         PathStats training;
-        guide = train_segment_guide(ctx, vel, *projective, config.projective_guiding, 0, training);
-        if (!guide.uniform()) {
+        if (config.projective_guiding.octree) {
+          long long seeds = 0;
+          guide = train_projected_guide(ctx, vel, *projective, config.projective_guiding, 0, training, &seeds);
+          char buf[192];
+          std::snprintf(buf, sizeof buf,
+                        " + octree guide (%d leaves from %lld projected seeds, %g seed paths per pixel, %.3f s)",
+                        guide.cells(), seeds, config.projective_guiding.seeds, seconds_since(t0));
+          setup.structure += buf;
+        } else {
+          guide = train_segment_guide(ctx, vel, *projective, config.projective_guiding, 0, training);
+        }
+        if (guide.resolution() > 0) {
           char buf[160];
           std::snprintf(buf, sizeof buf, " + grid guide (%d^3 cells, %g training segments per pixel, %.3f s)",
                         guide.resolution(), config.projective_guiding.training, seconds_since(t0));

@@ -10,10 +10,12 @@
 #include "qsil/integrators/geometry_view.h"
 #include "qsil/sampling.h"
 #include "sample_chunks.h"
+#include "silhouette_projection.h"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <optional>
 #include <string>
 
@@ -289,6 +291,60 @@ void train_chunk(const SegmentContext& sc, int resolution, long long count, long
   }
 }
 
+/// The seeds of `count` camera paths of chunk `chunk` from Sampler(kGuideSeed, chunk, 0, 7)
+/// (train_projected_guide): each projected seed's u and the estimator's |value| there, appended
+/// to `out` in order.
+template <int N>
+void seed_chunk(const SegmentContext& sc, const TriangleEdges& tri, long long count, long long chunk,
+                std::vector<std::pair<Vec3, double>>& out, PathStats& stats) {
+  const PathContext& ctx = sc.ctx;
+  const Camera& cam = ctx.scene->camera;
+  const PrimalView pv{ctx.scene};
+  const Vec3& local_origin = ctx.tracer->local_origin();
+  std::array<WalkVertex, kUnboundedDepthCap> walk;
+  Sampler sampler(kGuideSeed, uint64_t(chunk), 0, 7);
+  auto seed = [&](const Vec3& x, const Hit& hit) {
+    const std::optional<Vec3> u = project_seed(ctx, sc.edges, tri, x, hit, sampler, stats);
+    if (!u) return;
+    const std::optional<SegmentValue<N>> v = evaluate_segment<N>(sc, *u, 1.0, sampler, walk, stats);
+    const double value = v ? v->c.abs().sum() * v->J.cwiseAbs().sum() : 0.0;
+    if (std::isfinite(value)) out.push_back({*u, value});
+  };
+  for (long long i = 0; i < count; ++i) {
+    const Vec2 film(sampler.next() * cam.width, sampler.next() * cam.height);
+    const Vec3 d = cam.direction(film.x(), film.y());
+    ++stats.rays;
+    const Hit first = ctx.tracer->intersect(sc.o, d);
+    if (!first.valid()) continue;
+    SurfaceInteraction<double> si = make_interaction(pv, first, sc.o, d, local_origin);
+    Vec3 wo = -d;
+    // Vertex k of the path (k = 1: the camera ray's hit) is a shading point while a segment is left.
+    for (int k = 1; k < ctx.max_depth; ++k) {
+      const Vec3 x = si.p;
+      const LightDirection ld = sample_light_direction(ctx, x, sampler);
+      if (ld.valid) {
+        const Vec3 origin = spawn_origin(si, ld.wi);
+        ++stats.rays;
+        const Hit occluder =
+            ctx.tracer->intersect(origin, ld.wi, ld.environment ? kInf : ld.dist * (1.0 - 1.0 / 4096.0));
+        if (occluder.valid()) seed(x, occluder);
+      }
+      const ShadingPoint<double> sp = make_shading_point(ctx, si, wo);
+      const BSDFSample bs = bsdf_sample(*sp.bsdf, sp.frame_value.to_local(wo), sampler.next2());
+      if (!(bs.pdf > 0)) break;
+      const Vec3 wi = sp.frame_value.to_world(bs.wi).normalized();
+      const Vec3 origin = spawn_origin(si, wi);
+      ++stats.rays;
+      const Hit next = ctx.tracer->intersect(origin, wi);
+      if (!next.valid()) break;
+      seed(x, next);
+      si = make_interaction(pv, next, origin, wi, local_origin);
+      wo = -wi;
+      if (!si.p.allFinite()) break;
+    }
+  }
+}
+
 }  // namespace
 
 double edge_direction_measure(const edgetree::Edge& e) {
@@ -384,7 +440,73 @@ SegmentGuide::SegmentGuide(int resolution, const std::vector<double>& weights, d
   if (!(cdf_.back() > 0)) share_ = 1;  // nothing learnt: uniform
 }
 
+SegmentGuide SegmentGuide::octree(const std::vector<Vec3>& points, const std::vector<double>& values, int max_depth,
+                                  int max_leaf, double uniform_share) {
+  QSIL_CHECK(points.size() == values.size() && points.size() < size_t(std::numeric_limits<int>::max()) &&
+             max_depth >= 0 && max_depth <= 20 && max_leaf >= 1);
+  QSIL_CHECK(uniform_share > 0 && uniform_share <= 1);
+  SegmentGuide g;
+  g.share_ = uniform_share;
+  g.cdf_.assign(1, 0.0);
+  g.nodes_.emplace_back();
+  // Depth first; a node's children are appended together, so octant o of node n is first + o.
+  struct Pending {
+    int node;
+    std::vector<int> idx;
+    Vec3 lo;
+    double size;
+    int depth;
+  };
+  std::vector<int> all(points.size());
+  for (size_t i = 0; i < points.size(); ++i) all[i] = int(i);
+  std::vector<Pending> stack;
+  stack.push_back({0, std::move(all), Vec3::Zero(), 1.0, 0});
+  while (!stack.empty()) {
+    Pending n = std::move(stack.back());
+    stack.pop_back();
+    if (int(n.idx.size()) > max_leaf && n.depth < max_depth) {
+      const double half = 0.5 * n.size;
+      const Vec3 mid = n.lo + Vec3::Constant(half);
+      std::array<std::vector<int>, 8> part;
+      for (int i : n.idx) {
+        const Vec3& p = points[size_t(i)];
+        part[size_t((p.x() >= mid.x()) + 2 * (p.y() >= mid.y()) + 4 * (p.z() >= mid.z()))].push_back(i);
+      }
+      const int first = int(g.nodes_.size());
+      g.nodes_[size_t(n.node)].first = first;
+      g.nodes_.resize(g.nodes_.size() + 8);
+      for (int o = 7; o >= 0; --o) {  // pushed in reverse: octant 0 is handled first
+        const Vec3 lo(o & 1 ? mid.x() : n.lo.x(), o & 2 ? mid.y() : n.lo.y(), o & 4 ? mid.z() : n.lo.z());
+        stack.push_back({first + o, std::move(part[size_t(o)]), lo, half, n.depth + 1});
+      }
+      continue;
+    }
+    double sum = 0;
+    for (int i : n.idx) sum += std::isfinite(values[size_t(i)]) && values[size_t(i)] > 0 ? values[size_t(i)] : 0.0;
+    const double mean = n.idx.empty() ? 0.0 : sum / double(n.idx.size());
+    g.nodes_[size_t(n.node)].cell = int(g.lo_.size());
+    g.lo_.push_back(n.lo);
+    g.size_.push_back(n.size);
+    g.cdf_.push_back(g.cdf_.back() + mean * n.size * n.size * n.size);
+  }
+  if (!(g.cdf_.back() > 0)) g.share_ = 1;  // nothing learnt: uniform
+  return g;
+}
+
 int SegmentGuide::cell(const Vec3& u) const {
+  if (!nodes_.empty()) {
+    int n = 0;
+    Vec3 lo = Vec3::Zero();
+    double size = 1.0;
+    while (nodes_[size_t(n)].first >= 0) {
+      size *= 0.5;
+      const Vec3 mid = lo + Vec3::Constant(size);
+      const int ox = u.x() >= mid.x(), oy = u.y() >= mid.y(), oz = u.z() >= mid.z();
+      lo = Vec3(ox ? mid.x() : lo.x(), oy ? mid.y() : lo.y(), oz ? mid.z() : lo.z());
+      n = nodes_[size_t(n)].first + ox + 2 * oy + 4 * oz;
+    }
+    return nodes_[size_t(n)].cell;
+  }
   if (uniform()) return 0;
   auto index = [&](double x) { return std::clamp(int(x * resolution_), 0, resolution_ - 1); };
   return index(u.x()) + resolution_ * (index(u.y()) + resolution_ * index(u.z()));
@@ -393,8 +515,9 @@ int SegmentGuide::cell(const Vec3& u) const {
 double SegmentGuide::density(const Vec3& u) const {
   if (uniform() || share_ >= 1) return 1.0;
   const size_t c = size_t(cell(u));
-  const double cells = double(cdf_.size() - 1);
-  return share_ + (1 - share_) * (cdf_[c + 1] - cdf_[c]) / cdf_.back() * cells;
+  if (nodes_.empty()) return share_ + (1 - share_) * (cdf_[c + 1] - cdf_[c]) / cdf_.back() * double(cdf_.size() - 1);
+  const double volume = size_[c] * size_[c] * size_[c];  // >= 2^-48: no underflow
+  return share_ + (1 - share_) * ((cdf_[c + 1] - cdf_[c]) / cdf_.back()) / volume;
 }
 
 Vec3 SegmentGuide::sample(double choose, double pick, const Vec3& within) const {
@@ -402,6 +525,14 @@ Vec3 SegmentGuide::sample(double choose, double pick, const Vec3& within) const 
   const double target = pick * cdf_.back();
   const size_t c =
       std::min(size_t(std::upper_bound(cdf_.begin(), cdf_.end(), target) - cdf_.begin()) - 1, cdf_.size() - 2);
+  if (!nodes_.empty()) {
+    // lo + size is exact (dyadic); rounding of lo + x size must not carry u into the next leaf.
+    auto coordinate = [&](double lo, double x) {
+      return std::min(lo + x * size_[c], std::nextafter(lo + size_[c], lo));
+    };
+    return Vec3(coordinate(lo_[c].x(), within.x()), coordinate(lo_[c].y(), within.y()),
+                coordinate(lo_[c].z(), within.z()));
+  }
   const int r = resolution_;
   const int ix = int(c % size_t(r)), iy = int((c / size_t(r)) % size_t(r)), iz = int(c / (size_t(r) * size_t(r)));
   auto coordinate = [&](int i, double x) { return std::min((i + x) / r, std::nextafter(1.0, 0.0)); };
@@ -411,9 +542,14 @@ Vec3 SegmentGuide::sample(double choose, double pick, const Vec3& within) const 
 void check_projective_guiding(const ProjectiveGuiding& guiding) {
   if (guiding.resolution < 0 || guiding.resolution > 64)
     throw Error("projective: guiding resolution " + std::to_string(guiding.resolution) + " out of range [0, 64]");
-  if (guiding.resolution == 0) return;
-  if (!(guiding.training > 0 && guiding.training <= 1024))
+  if (guiding.resolution > 0 && guiding.octree)
+    throw Error("projective: a guiding resolution and the octree guide exclude each other");
+  if (guiding.resolution == 0 && !guiding.octree) return;
+  if (guiding.resolution > 0 && !(guiding.training > 0 && guiding.training <= 1024))
     throw Error("projective: guiding training segments per pixel " + std::to_string(guiding.training) +
+                " out of range (0, 1024]");
+  if (guiding.octree && !(guiding.seeds > 0 && guiding.seeds <= 1024))
+    throw Error("projective: guiding seed paths per pixel " + std::to_string(guiding.seeds) +
                 " out of range (0, 1024]");
   if (!(guiding.uniform_share > 0 && guiding.uniform_share <= 1))
     throw Error("projective: guiding uniform share " + std::to_string(guiding.uniform_share) + " out of range (0, 1]");
@@ -458,6 +594,46 @@ SegmentGuide train_segment_guide(const PathContext& ctx, const SceneVelocities& 
     }
   }
   return SegmentGuide(guiding.resolution, weights, guiding.uniform_share);
+}
+
+SegmentGuide train_projected_guide(const PathContext& ctx, const SceneVelocities& velocities,
+                                   const ProjectiveEdges& edges, const ProjectiveGuiding& guiding, int threads,
+                                   PathStats& stats, long long* seeds) {
+  if (seeds) *seeds = 0;
+  if (!guiding.octree || edges.empty()) return {};
+  const Camera& cam = ctx.scene->camera;
+  const TriangleEdges tri = triangle_edges(*ctx.scene, edges);
+  const long long paths = projective_samples_per_index(cam.width, cam.height, guiding.seeds);
+  if (paths > kMaxSeedPaths)
+    throw Error("projective: " + std::to_string(guiding.seeds) + " guiding seed paths per pixel at " +
+                std::to_string(cam.width) + "x" + std::to_string(cam.height) + " are " + std::to_string(paths) +
+                " paths, more than " + std::to_string(kMaxSeedPaths) + "; lower --guiding-seeds");
+  const ChunkPlan plan(paths, false, 0, 1, 0, 1, "projective guiding", "seed paths");
+  std::vector<std::vector<std::pair<Vec3, double>>> found{size_t(plan.chunks)};
+  std::vector<PathStats> chunk_stats{size_t(plan.chunks)};
+  const SegmentContext sc(ctx, velocities, edges);
+  plan.run(threads, [&](long long j, long long count, long long c) {
+    with_dual_size(velocities.num_params, [&](auto n) {
+      seed_chunk<decltype(n)::value>(sc, tri, count, c, found[size_t(j)], chunk_stats[size_t(j)]);
+    });
+  });
+  size_t total = 0;
+  for (const auto& f : found) total += f.size();
+  std::vector<Vec3> points;
+  std::vector<double> values;
+  points.reserve(total);
+  values.reserve(total);
+  for (size_t j = 0; j < found.size(); ++j) {
+    for (const auto& [u, v] : found[j]) {
+      points.push_back(u);
+      values.push_back(v);
+    }
+    std::vector<std::pair<Vec3, double>>().swap(found[j]);  // freed as it is copied
+    stats.rays += chunk_stats[j].rays;
+  }
+  if (seeds) *seeds = (long long)points.size();
+  if (points.empty()) return {};
+  return SegmentGuide::octree(points, values, kOctreeMaxDepth, kOctreeMaxLeaf, guiding.uniform_share);
 }
 
 uint64_t add_projective_boundary(Film& film, const PathContext& ctx, const SceneVelocities& velocities,

@@ -102,43 +102,92 @@ struct BoundarySegment {
 };
 BoundarySegment boundary_segment(const ProjectiveEdges& edges, const Vec3& u);
 
-/// Guiding of the boundary segments (Zhang, Roussel, Jakob 2023 §5; the role of Mitsuba 3's
-/// guiding "grid"): a piecewise-constant density over a grid of resolution^3 cells of the unit
-/// cube of boundary_segment's u, each cell weighted by the mean |contribution| of uniform
-/// training segments that fell in it, mixed with the uniform density (a defensive share), so
-/// that no segment the estimator can draw unguided has density 0. Default-constructed: uniform.
+/// Guiding of the boundary segments (Zhang, Roussel, Jakob 2023 §5): a piecewise-constant density
+/// over cells of the unit cube of boundary_segment's u, mixed with the uniform density (a
+/// defensive share), so that no segment the estimator can draw unguided has density 0.
+/// Default-constructed: uniform. Two kinds of cells:
+/// - a grid of resolution^3 equal cells, each weighted by the summed |contribution| of uniform
+///   training segments that fell in it (the role of Mitsuba 3's guiding "grid");
+/// - an octree, each leaf weighted by the mean |contribution| at the projected seeds that fell in
+///   it times its volume (the role of Mitsuba 3's guiding "octree" with projection; octree()).
 class SegmentGuide {
  public:
   SegmentGuide() = default;
-  /// From resolution^3 non-negative cell weights (x fastest, then y, then z) and the uniform
-  /// share in (0, 1]; all-zero weights give the uniform density. QSIL_CHECKs the sizes.
+  /// A grid from resolution^3 non-negative cell weights (x fastest, then y, then z) and the
+  /// uniform share in (0, 1]; all-zero weights give the uniform density. QSIL_CHECKs the sizes.
   SegmentGuide(int resolution, const std::vector<double>& weights, double uniform_share);
-  /// True when every u has density 1.
-  bool uniform() const { return resolution_ == 0; }
+  /// An octree over `points` (in the unit cube) with their non-negative `values`: a node is split
+  /// into its eight octants while it holds more than `max_leaf` points and is shallower than
+  /// `max_depth` (the root is depth 0; at most 20); each leaf's weight is the mean value of its points times
+  /// its volume (0 for a leaf without points). The uniform share as for the grid. Deterministic:
+  /// the same points in the same order give the same guide. QSIL_CHECKs matching sizes.
+  static SegmentGuide octree(const std::vector<Vec3>& points, const std::vector<double>& values, int max_depth,
+                             int max_leaf, double uniform_share);
+  /// True when every u has density 1 by construction (no grid, no octree).
+  bool uniform() const { return resolution_ == 0 && nodes_.empty(); }
+  /// The grid's resolution (0 for the uniform guide and the octree).
   int resolution() const { return resolution_; }
-  /// The cell of u (index as for the weights); 0 for the uniform guide.
+  /// The number of cells (grid cells or octree leaves; 0 for the uniform guide).
+  int cells() const { return int(cdf_.empty() ? 0 : cdf_.size() - 1); }
+  /// The cell of u (index as for the weights, or the octree leaf); 0 for the uniform guide.
   int cell(const Vec3& u) const;
   /// Density of u relative to the uniform one: uniform_share + (1 - uniform_share) x the cell's
-  /// weight / the mean weight.
+  /// weight / (the total weight x the cell's volume).
   double density(const Vec3& u) const;
   /// A point u from five uniform numbers: `choose` picks the uniform or the guided part, `pick`
   /// the cell by weight, `within` the position in the cell (or in the cube).
   Vec3 sample(double choose, double pick, const Vec3& within) const;
 
  private:
+  /// An octree node: its first child (8 consecutive, octant x + 2 y + 4 z) or, for a leaf (-1),
+  /// its cell.
+  struct Node {
+    int first = -1;
+    int cell = -1;
+  };
   int resolution_ = 0;
   double share_ = 1;
-  std::vector<double> cdf_;  ///< cumulative cell weights (size cells + 1)
+  std::vector<double> cdf_;   ///< cumulative cell weights (size cells + 1)
+  std::vector<Node> nodes_;   ///< the octree (empty for a grid)
+  std::vector<Vec3> lo_;      ///< octree: each leaf's lower corner
+  std::vector<double> size_;  ///< octree: each leaf's side
 };
 
-/// Trains a SegmentGuide over `edges` (the file comment's estimator, its |value| summed over the
-/// parameters and channels per cell): guiding.training x W x H uniform segments in chunks, each
-/// from Sampler(0x9e3779b97f4a7c15, chunk, 0, 6), merged in chunk order (the same guide for any
-/// thread count). The uniform guide for resolution 0 or an empty sample space. Counts rays in
-/// `stats`.
+/// Trains a grid SegmentGuide over `edges` (the file comment's estimator, its |value| summed over
+/// the parameters and channels per cell): guiding.training x W x H uniform segments in chunks,
+/// each from Sampler(0x9e3779b97f4a7c15, chunk, 0, 6), merged in chunk order (the same guide for
+/// any thread count). The uniform guide for resolution 0 or an empty sample space. Counts rays
+/// in `stats`.
 SegmentGuide train_segment_guide(const PathContext& ctx, const SceneVelocities& velocities,
                                  const ProjectiveEdges& edges, const ProjectiveGuiding& guiding, int threads,
                                  PathStats& stats);
+
+/// Octree limits of the projected guide (train_projected_guide): a leaf holds at most
+/// kOctreeMaxLeaf seeds unless it is at depth kOctreeMaxDepth (65 536 cells per axis: finer than
+/// the edges of u.x on a 10^4-edge scene). Each seed's value is one sample of the estimator, so
+/// a leaf's mean over few seeds is noisy: 16 per leaf guided worse than 64 and 256 on
+/// shadow-quad and sphere-light (docs/experiments/2026-11-26-projective-sampling.md §4).
+inline constexpr int kOctreeMaxDepth = 16;
+inline constexpr int kOctreeMaxLeaf = 64;
+
+/// Most camera paths train_projected_guide draws (2^24: about 10^7 seeds of 32 bytes at most).
+inline constexpr long long kMaxSeedPaths = 1LL << 24;
+
+/// Trains an octree SegmentGuide over `edges` from projected seeds (Zhang, Roussel, Jakob 2023
+/// §5.2; silhouette_projection.h): guiding.seeds x W x H camera paths rounded up to a whole chunk
+/// of 1024 (a random pixel each), each
+/// vertex with a segment left giving two seeds, the hit of a light sample's ray (an occluder
+/// between the vertex and the light) and the hit of the BSDF-sampled ray the path continues
+/// with; each seed projected onto a boundary segment (project_seed) and the estimator's |value|
+/// there (as train_segment_guide's) recorded; then SegmentGuide::octree over them
+/// (kOctreeMaxDepth, kOctreeMaxLeaf). Paths in chunks, each from Sampler(0x9e3779b97f4a7c15,
+/// chunk, 0, 7), merged in chunk order (the same guide for any thread count). The uniform guide
+/// when guiding.octree is false, the sample space is empty or no seed projects. Throws
+/// qsil::Error when the paths would be more than kMaxSeedPaths. Counts rays in `stats`; `seeds`
+/// (optional) receives the number of projected seeds.
+SegmentGuide train_projected_guide(const PathContext& ctx, const SceneVelocities& velocities,
+                                   const ProjectiveEdges& edges, const ProjectiveGuiding& guiding, int threads,
+                                   PathStats& stats, long long* seeds = nullptr);
 
 /// Boundary segments per sample index for a W x H image at `ratio` segments per pixel sample:
 /// ratio W H rounded up to a whole chunk of 1024 (at least one). Throws qsil::Error unless ratio

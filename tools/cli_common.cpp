@@ -148,6 +148,17 @@ void add_projective_guiding_options(CLI::App& app, ProjectiveGuiding& guiding, c
          "Projective sampling (" + what + "): uniform training segments per pixel of the guide, drawn once at set-up")
       ->check(CLI::Range(1.0 / 1024, 1024.0))
       ->capture_default_str();
+  app.add_flag("--guiding-octree", guiding.octree,
+               "Projective sampling (" + what +
+                   "): guide its boundary segments by an octree learnt from camera paths projected onto nearby "
+                   "silhouettes (Zhang et al. 2023 §5.2, as Mitsuba 3's guiding=\"octree\"); excludes "
+                   "--guiding-resolution");
+  app.add_option("--guiding-seeds", guiding.seeds,
+                 "Projective sampling (" + what +
+                     "): camera paths per pixel whose projected segments train the octree guide, drawn once at "
+                     "set-up (Mitsuba 3's proj_seed_spp; its set-up time grows with the image)")
+      ->check(CLI::Range(1.0 / 1024, 1024.0))
+      ->capture_default_str();
 }
 
 EstimatorConfig gradient_config(const Scene& scene, std::vector<ParameterSpec> params, Method method,

@@ -74,7 +74,8 @@ struct BoundaryFlags {
   double reg_width = 1e-3;
   /// --was-rays, --was-kappa, --was-exponent: was's auxiliary rays (WarpedAreaSampling).
   WarpedAreaSampling warped_area;
-  /// --guiding-resolution, --guiding-share, --guiding-training: projective's guide (ProjectiveGuiding).
+  /// --guiding-resolution, --guiding-share, --guiding-training, --guiding-octree, --guiding-seeds:
+  /// projective's guide (ProjectiveGuiding).
   ProjectiveGuiding projective_guiding;
 };
 
@@ -82,7 +83,8 @@ struct BoundaryFlags {
 /// `what` says for which option (for the help text).
 void add_warped_area_options(CLI::App& app, WarpedAreaSampling& was, const std::string& what);
 
-/// Adds --guiding-resolution R (0: none), --guiding-share S and --guiding-training T (ProjectiveGuiding)
+/// Adds --guiding-resolution R (0: none), --guiding-share S, --guiding-training T, --guiding-octree and
+/// --guiding-seeds S (ProjectiveGuiding)
 /// to `app`, into `guiding`; `what` says for which option (for the help text).
 void add_projective_guiding_options(CLI::App& app, ProjectiveGuiding& guiding, const std::string& what);
 

@@ -76,6 +76,9 @@ TEST(Distributed, PartsCombineToTheWholeRunBitForBit) {
     EstimatorConfig guided = EstimatorConfig::gradient(params, Method::Projective);
     guided.projective_guiding.resolution = 16;  // trained once at set-up: the same guide in every part
     expect_parts_combine_to_whole(Estimator(scene, guided), o, "projective, guided " + at);
+    EstimatorConfig octree = EstimatorConfig::gradient(params, Method::Projective);
+    octree.projective_guiding.octree = true;  // its seeds drawn once at set-up too
+    expect_parts_combine_to_whole(Estimator(scene, octree), o, "projective, octree guide " + at);
     expect_parts_combine_to_whole(Estimator(scene, EstimatorConfig::finite_differences(params)), o, "fd " + at);
   }
 }
