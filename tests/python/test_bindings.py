@@ -297,6 +297,22 @@ def test_projective_grad_reaches_its_guide():
     with pytest.raises(qsil.Error) as e:
         qsil.grad(s, params, boundary="projective", guiding_resolution=65)
     assert "guiding resolution 65 out of range" in str(e.value)
+    _, octree = qsil.grad(s, params, spp=16, seed=3, boundary="projective", guiding_octree=True, guiding_seeds=8)
+    assert np.isfinite(octree).all() and not np.array_equal(plain, octree) and not np.array_equal(guided, octree)
+    with pytest.raises(qsil.Error) as e:
+        qsil.grad(s, params, boundary="projective", guiding_octree=True, guiding_resolution=8)
+    assert "exclude each other" in str(e.value)
+
+
+def test_was_grad_reaches_its_auxiliary_rays():
+    s = load(os.path.join(ROOT, "tests", "data", "gradient", "penumbra-sign.xml"), res=8, spp=1)
+    params = ["occluder:translate:0,1,0"]
+    _, eight = qsil.grad(s, params, spp=4, seed=3, boundary="was")
+    _, two = qsil.grad(s, params, spp=4, seed=3, boundary="was", was_rays=2, was_kappa=1e3)
+    assert np.isfinite(eight).all() and np.isfinite(two).all() and not np.array_equal(eight, two)
+    with pytest.raises(qsil.Error) as e:
+        qsil.grad(s, params, boundary="was", was_rays=0)
+    assert "rays" in str(e.value)
 
 
 def test_bad_input_raises_qsil_error_with_one_line():
