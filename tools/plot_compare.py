@@ -21,9 +21,10 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 COLORS = {"quadric": "#d62728", "quadric-box": "#ff7f0e", "vsphere": "#1f77b4", "vsphere-solid": "#17becf",
-          "uniform": "#2ca02c", "fd": "#7f7f7f", "none": "#9467bd"}
+          "uniform": "#2ca02c", "fd": "#7f7f7f", "none": "#9467bd", "projective": "#8c564b", "was": "#e377c2",
+          "regularized": "#bcbd22"}
 MARKERS = {"quadric": "o", "quadric-box": "s", "vsphere": "^", "vsphere-solid": "v", "uniform": "D", "fd": "x",
-           "none": "+"}
+           "none": "+", "projective": "P", "was": "*", "regularized": "h"}
 
 
 def load(directory):
