@@ -50,6 +50,28 @@ double face_angle(const edgetree::Edge& e) {
   return std::atan2(n0.cross(n1).norm(), n0.dot(n1));
 }
 
+/// The frame about a lune edge e (lune_edge) in which its silhouette directions are azimuth
+/// ranges: `a` along n0 (perpendicular to the edge), b = axis x a turned so that n1 lies at
+/// azimuth psi1 in [0, pi]. (n0 . w)(n1 . w) < 0 exactly for azimuths in (pi/2, pi/2 + psi1) and
+/// that wedge turned by pi.
+struct LuneFrame {
+  Vec3 axis, a, b;
+  double psi1 = 0;
+};
+LuneFrame lune_frame(const edgetree::Edge& e) {
+  LuneFrame f;
+  f.axis = (e.p1 - e.p0).normalized();
+  const Vec3 n0 = e.q0.head<3>(), n1 = e.q1.head<3>();
+  f.a = (n0 - n0.dot(f.axis) * f.axis).normalized();
+  f.b = f.axis.cross(f.a);
+  f.psi1 = std::atan2(n1.dot(f.b), n1.dot(f.a));
+  if (f.psi1 < 0) {
+    f.b = -f.b;
+    f.psi1 = -f.psi1;
+  }
+  return f;
+}
+
 /// A vertex of the walk from p toward the camera: its hit, its interaction (detached) and the
 /// direction (unit, world) light arrives from: the edge point for p, the previous vertex after.
 struct WalkVertex {
@@ -361,18 +383,9 @@ EdgeDirection sample_edge_direction(const edgetree::Edge& e, const Vec2& u) {
     out.pdf = 1.0 / measure;
     return out;
   }
-  // Frame about the edge: a along n0 (perpendicular to the edge), b = edge x a, turned so that
-  // n1 lies at azimuth psi1 in [0, pi]. (n0 . w)(n1 . w) < 0 exactly for azimuths in
-  // (pi/2, pi/2 + psi1) and that wedge turned by pi.
-  const Vec3 axis = (e.p1 - e.p0).normalized();
-  const Vec3 n0 = e.q0.head<3>(), n1 = e.q1.head<3>();
-  const Vec3 a = (n0 - n0.dot(axis) * axis).normalized();
-  Vec3 b = axis.cross(a);
-  double psi1 = std::atan2(n1.dot(b), n1.dot(a));
-  if (psi1 < 0) {
-    b = -b;
-    psi1 = -psi1;
-  }
+  const LuneFrame f = lune_frame(e);
+  const Vec3 &axis = f.axis, &a = f.a, &b = f.b;
+  const double psi1 = f.psi1;
   const bool second = u.x() >= 0.5;
   const double v = second ? 2.0 * u.x() - 1.0 : 2.0 * u.x();
   const double psi = 0.5 * kPi + v * psi1 + (second ? kPi : 0.0);
@@ -429,6 +442,41 @@ BoundarySegment boundary_segment(const ProjectiveEdges& edges, const Vec3& u) {
   seg.direction = sample_edge_direction(*edges.edges[seg.edge], Vec2(u.y(), u.z()));
   seg.pdf = edges.probability(seg.edge) * seg.direction.pdf;
   return seg;
+}
+
+std::optional<Vec3> invert_boundary_segment(const ProjectiveEdges& edges, size_t edge, double t, const Vec3& w) {
+  if (edge >= edges.edges.size()) return std::nullopt;
+  const double width = edges.cdf[edge + 1] - edges.cdf[edge];
+  if (!(width > 0)) return std::nullopt;
+  const double ux =
+      std::min((edges.cdf[edge] + std::clamp(t, 0.0, 1.0) * width) / edges.cdf.back(), std::nextafter(1.0, 0.0));
+  const edgetree::Edge& e = *edges.edges[edge];
+  if (!lune_edge(e)) {  // inverse of square_to_uniform_sphere
+    double phi = std::atan2(w.y(), w.x());
+    if (phi < 0) phi += 2.0 * kPi;
+    return Vec3(ux, std::clamp(0.5 * (1.0 - w.z()), 0.0, std::nextafter(1.0, 0.0)),
+                std::min(phi / (2.0 * kPi), std::nextafter(1.0, 0.0)));
+  }
+  // Inverse of sample_edge_direction's lune: the same frame about the edge.
+  const LuneFrame f = lune_frame(e);
+  const Vec3 &axis = f.axis, &a = f.a, &b = f.b;
+  const double psi1 = f.psi1;
+  if (!(psi1 > 0)) return std::nullopt;
+  double psi = std::atan2(w.dot(b), w.dot(a)) - 0.5 * kPi;  // the first wedge is (0, psi1)
+  if (psi < 0) psi += 2.0 * kPi;
+  double v;
+  bool second = false;
+  if (psi < psi1) {
+    v = psi / psi1;
+  } else if (psi >= kPi && psi < kPi + psi1) {
+    v = (psi - kPi) / psi1;
+    second = true;
+  } else {
+    return std::nullopt;
+  }
+  const double uy = std::clamp(0.5 * (w.dot(axis) + 1.0), 0.0, std::nextafter(1.0, 0.0));
+  const double uv = std::min(second ? 0.5 * (v + 1.0) : 0.5 * v, std::nextafter(1.0, 0.0));
+  return Vec3(ux, uv, uy);
 }
 
 SegmentGuide::SegmentGuide(int resolution, const std::vector<double>& weights, double uniform_share)

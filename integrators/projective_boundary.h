@@ -40,6 +40,7 @@
 #include "qsil/parameters.h"
 
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 namespace qsil {
@@ -101,6 +102,11 @@ struct BoundarySegment {
   double pdf = 0;  ///< per unit t and steradian, for u uniform; 0: no segment
 };
 BoundarySegment boundary_segment(const ProjectiveEdges& edges, const Vec3& u);
+
+/// The inverse of boundary_segment: the point u of the unit cube that gives edge `edge` (an index
+/// into edges.edges), parameter t in [0, 1) and unit direction w. None when w is not among the
+/// edge's directions (outside its silhouette lune) or the edge has no measure.
+std::optional<Vec3> invert_boundary_segment(const ProjectiveEdges& edges, size_t edge, double t, const Vec3& w);
 
 /// Guiding of the boundary segments (Zhang, Roussel, Jakob 2023 §5): a piecewise-constant density
 /// over cells of the unit cube of boundary_segment's u, mixed with the uniform density (a

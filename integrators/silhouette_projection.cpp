@@ -12,12 +12,6 @@ namespace qsil {
 
 namespace {
 
-/// Whether edge e's directions are its silhouette lune (as projective_boundary.cpp's sampling).
-bool lune_edge(const edgetree::Edge& e) {
-  return e.f1 >= 0 && !e.crease && !e.crossing &&
-         (e.cls == edgetree::EdgeClass::Convex || e.cls == edgetree::EdgeClass::Concave);
-}
-
 /// |cos| of the angle under which x sees triangle f of `mesh` (its geometric normal against the
 /// direction to its centroid); 1 for a degenerate triangle (the walk takes it only when no other
 /// neighbour is left).
@@ -109,47 +103,6 @@ TriangleEdges triangle_edges(const Scene& scene, const ProjectiveEdges& edges) {
     }
   }
   return out;
-}
-
-std::optional<Vec3> invert_boundary_segment(const ProjectiveEdges& edges, size_t edge, double t, const Vec3& w) {
-  if (edge >= edges.edges.size()) return std::nullopt;
-  const double width = edges.cdf[edge + 1] - edges.cdf[edge];
-  if (!(width > 0)) return std::nullopt;
-  const double ux =
-      std::min((edges.cdf[edge] + std::clamp(t, 0.0, 1.0) * width) / edges.cdf.back(), std::nextafter(1.0, 0.0));
-  const edgetree::Edge& e = *edges.edges[edge];
-  if (!lune_edge(e)) {  // inverse of square_to_uniform_sphere
-    double phi = std::atan2(w.y(), w.x());
-    if (phi < 0) phi += 2.0 * kPi;
-    return Vec3(ux, std::clamp(0.5 * (1.0 - w.z()), 0.0, std::nextafter(1.0, 0.0)),
-                std::min(phi / (2.0 * kPi), std::nextafter(1.0, 0.0)));
-  }
-  // Inverse of sample_edge_direction's lune: the same frame about the edge.
-  const Vec3 axis = (e.p1 - e.p0).normalized();
-  const Vec3 n0 = e.q0.head<3>(), n1 = e.q1.head<3>();
-  const Vec3 a = (n0 - n0.dot(axis) * axis).normalized();
-  Vec3 b = axis.cross(a);
-  double psi1 = std::atan2(n1.dot(b), n1.dot(a));
-  if (psi1 < 0) {
-    b = -b;
-    psi1 = -psi1;
-  }
-  if (!(psi1 > 0)) return std::nullopt;
-  double psi = std::atan2(w.dot(b), w.dot(a)) - 0.5 * kPi;  // the first wedge is (0, psi1)
-  if (psi < 0) psi += 2.0 * kPi;
-  double v;
-  bool second = false;
-  if (psi < psi1) {
-    v = psi / psi1;
-  } else if (psi >= kPi && psi < kPi + psi1) {
-    v = (psi - kPi) / psi1;
-    second = true;
-  } else {
-    return std::nullopt;
-  }
-  const double uy = std::clamp(0.5 * (w.dot(axis) + 1.0), 0.0, std::nextafter(1.0, 0.0));
-  const double uv = std::min(second ? 0.5 * (v + 1.0) : 0.5 * v, std::nextafter(1.0, 0.0));
-  return Vec3(ux, uv, uy);
 }
 
 std::optional<Vec3> project_seed(const PathContext& ctx, const ProjectiveEdges& edges, const TriangleEdges& tri,

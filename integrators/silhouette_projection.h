@@ -37,11 +37,6 @@ struct TriangleEdges {
 /// The triangles' edges of `scene`'s shapes in `edges`.
 TriangleEdges triangle_edges(const Scene& scene, const ProjectiveEdges& edges);
 
-/// The inverse of boundary_segment: the point u of the unit cube that gives edge `edge` (an index
-/// into edges.edges), parameter t in [0, 1) and unit direction w. None when w is not among the
-/// edge's directions (outside its silhouette lune) or the edge has no measure.
-std::optional<Vec3> invert_boundary_segment(const ProjectiveEdges& edges, size_t edge, double t, const Vec3& w);
-
 /// Steps of the projection's walk across the mesh before its Newton jump (Mitsuba 3's
 /// proj_mesh_max_walk has the same role).
 inline constexpr int kProjectionMaxWalk = 8;
