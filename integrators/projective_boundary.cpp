@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <optional>
 #include <string>
@@ -652,10 +653,14 @@ SegmentGuide train_projected_guide(const PathContext& ctx, const SceneVelocities
   const Camera& cam = ctx.scene->camera;
   const TriangleEdges tri = triangle_edges(*ctx.scene, edges);
   const long long paths = projective_samples_per_index(cam.width, cam.height, guiding.seeds);
-  if (paths > kMaxSeedPaths)
-    throw Error("projective: " + std::to_string(guiding.seeds) + " guiding seed paths per pixel at " +
-                std::to_string(cam.width) + "x" + std::to_string(cam.height) + " are " + std::to_string(paths) +
-                " paths, more than " + std::to_string(kMaxSeedPaths) + "; lower --guiding-seeds");
+  if (paths > kMaxSeedPaths) {
+    char buf[200];
+    std::snprintf(buf, sizeof buf,
+                  "projective: %g guiding seed paths per pixel at %dx%d are %lld paths, more than %lld; lower "
+                  "--guiding-seeds",
+                  guiding.seeds, cam.width, cam.height, paths, kMaxSeedPaths);
+    throw Error(buf);
+  }
   const ChunkPlan plan(paths, false, 0, 1, 0, 1, "projective guiding", "seed paths");
   std::vector<std::vector<std::pair<Vec3, double>>> found{size_t(plan.chunks)};
   std::vector<PathStats> chunk_stats{size_t(plan.chunks)};

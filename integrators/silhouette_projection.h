@@ -8,10 +8,11 @@
 ///
 /// A seed is a viewpoint x (a vertex of a camera path) and the hit of a ray from x on a mesh. The
 /// projection looks for an edge of the hit's mesh near the hit that is a silhouette seen from x
-/// (or a crease of a flat-shaded shape); it returns the boundary segment through a point y on it with direction
-/// w = (y - x) / |y - x|, whose shading point is then x again wherever nothing lies between. The
-/// segment is a guess: the guide only weighs the sample space by the integrand found at the
-/// projected points and keeps a uniform share, so a poor projection costs variance, never bias.
+/// (or a crease of a flat-shaded shape); it returns the boundary segment through a point y on it
+/// with direction w = (y - x) / |y - x|, whose shading point is then x again wherever nothing lies
+/// between. The segment is a guess: the guide only weighs the sample space by the integrand found
+/// at the projected points and keeps a uniform share, so a poor projection costs variance, never
+/// bias.
 
 #include "projective_boundary.h"
 
@@ -45,11 +46,11 @@ inline constexpr int kProjectionMaxWalk = 8;
 /// segment, as the point u of boundary_segment's unit cube (the file comment): the hit's triangle
 /// and then up to kProjectionMaxWalk neighbours, each across the edge whose far face is seen most
 /// nearly edge-on from x (never straight back), are searched for a silhouette seen from x (or a
-/// crease of a flat-shaded shape); where none is found, one Newton
-/// step from a random point of the last triangle moves toward where the interpolated shading
-/// normal is perpendicular to the view from x (n_s . (x - p) = 0, to first order in its
-/// barycentrics) and the triangle below that point is searched. The edge among those found and
-/// t on it are drawn uniformly from `sampler`. None when no edge is found. Counts rays in `stats`.
+/// crease of a flat-shaded shape); where none is found, one Newton step from a random point of the
+/// last triangle moves toward where the interpolated shading normal is perpendicular to the view
+/// from x (n_s . (x - p) = 0, to first order in its barycentrics) and the triangle below that
+/// point is searched. The edge among those found and t on it are drawn uniformly from `sampler`.
+/// None when no edge is found. Counts rays in `stats`.
 std::optional<Vec3> project_seed(const PathContext& ctx, const ProjectiveEdges& edges, const TriangleEdges& tri,
                                  const Vec3& x, const Hit& hit, Sampler& sampler, PathStats& stats);
 

@@ -457,6 +457,11 @@ TEST(Projective, RefusesWhatItCannotDo) {
   c.projective_guiding.seeds = 0;
   EXPECT_EQ(message_of([&] { Estimator(scene, c); }),
             "projective: guiding seed paths per pixel 0.000000 out of range (0, 1024]");
+  c.projective_guiding.seeds = 64;  // 1024^2 x 64 paths: too many
+  const Scene large = load_scene(test::data_file("tests/data/gradient/plane-light.xml"), {{"res", "1024"}});
+  EXPECT_EQ(message_of([&] { Estimator(large, c); }),
+            "projective: 64 guiding seed paths per pixel at 1024x1024 are 67108864 paths, more than 16777216; lower "
+            "--guiding-seeds");
 }
 
 }  // namespace
