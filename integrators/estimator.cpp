@@ -154,14 +154,12 @@ class GradientEstimator final : public Estimator::Impl, private RenderSetup {
                         " + octree guide (%d leaves from %lld projected seeds, %g seed paths per pixel, %.3f s)",
                         guide.cells(), seeds, config.projective_guiding.seeds, seconds_since(t0));
           setup.structure += buf;
-        } else {
+        } else if (config.projective_guiding.resolution > 0) {
           guide = train_segment_guide(ctx, vel, *projective, config.projective_guiding, 0, training);
-        }
-        if (guide.resolution() > 0) {
           char buf[160];
           std::snprintf(buf, sizeof buf, " + grid guide (%d^3 cells, %g training segments per pixel, %.3f s)",
                         guide.resolution(), config.projective_guiding.training, seconds_since(t0));
-          setup.structure += buf;
+          if (guide.resolution() > 0) setup.structure += buf;  // none for an empty sample space
         }
       }
     }

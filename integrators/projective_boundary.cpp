@@ -134,6 +134,9 @@ struct SegmentValue {
   int px = 0, py = 0;
   Color c = Color::Zero();
   Eigen::Matrix<double, 1, N> J;
+  /// What a guide learns from the segment: |c| summed over the channels times |J| summed over the
+  /// parameters.
+  double magnitude() const { return c.abs().sum() * J.cwiseAbs().sum(); }
 };
 
 /// The boundary segment of u (boundary_segment), drawn with density pdf x `density`, evaluated:
@@ -274,11 +277,15 @@ uint64_t run_chunk(const SegmentContext& sc, const SegmentGuide& guide, long lon
     Vec3 u;
     if (guide.uniform()) {
       const double ux = next53(sampler);
-      u = Vec3(ux, sampler.next(), sampler.next());
+      // Sequenced draws, z before y: the order GCC gave the unsequenced constructor arguments
+      // these were first drawn as, so that outputs stay as they were, now on any compiler.
+      const double uz = sampler.next(), uy = sampler.next();
+      u = Vec3(ux, uy, uz);
     } else {
       const double choose = sampler.next(), pick = sampler.next();
       const double wx = next53(sampler);
-      const Vec3 within(wx, sampler.next(), sampler.next());
+      const double wz = sampler.next(), wy = sampler.next();  // as above
+      const Vec3 within(wx, wy, wz);
       u = guide.sample(choose, pick, within);
     }
     const std::optional<SegmentValue<N>> v = evaluate_segment<N>(sc, u, guide.density(u), sampler, walk, stats);
@@ -306,10 +313,11 @@ void train_chunk(const SegmentContext& sc, int resolution, long long count, long
   const SegmentGuide cells(resolution, std::vector<double>(size_t(resolution) * resolution * resolution, 0.0), 1.0);
   for (long long i = 0; i < count; ++i) {
     const double ux = next53(sampler);
-    const Vec3 u(ux, sampler.next(), sampler.next());
+    const double uz = sampler.next(), uy = sampler.next();  // z before y, as run_chunk
+    const Vec3 u(ux, uy, uz);
     const std::optional<SegmentValue<N>> v = evaluate_segment<N>(sc, u, 1.0, sampler, walk, stats);
     if (!v) continue;
-    const double value = v->c.abs().sum() * v->J.cwiseAbs().sum();
+    const double value = v->magnitude();
     if (std::isfinite(value)) sums[size_t(cells.cell(u))] += value;
   }
 }
@@ -330,16 +338,17 @@ void seed_chunk(const SegmentContext& sc, const TriangleEdges& tri, long long co
     const std::optional<Vec3> u = project_seed(ctx, sc.edges, tri, x, hit, sampler, stats);
     if (!u) return;
     const std::optional<SegmentValue<N>> v = evaluate_segment<N>(sc, *u, 1.0, sampler, walk, stats);
-    const double value = v ? v->c.abs().sum() * v->J.cwiseAbs().sum() : 0.0;
+    const double value = v ? v->magnitude() : 0.0;
     if (std::isfinite(value)) out.push_back({*u, value});
   };
   for (long long i = 0; i < count; ++i) {
-    const Vec2 film(sampler.next() * cam.width, sampler.next() * cam.height);
-    const Vec3 d = cam.direction(film.x(), film.y());
-    ++stats.rays;
-    const Hit first = ctx.tracer->intersect(sc.o, d);
-    if (!first.valid()) continue;
-    SurfaceInteraction<double> si = make_interaction(pv, first, sc.o, d, local_origin);
+    // A film position uniform over the image, as a pixel and the offset in it (both exact).
+    const double fy = sampler.next() * cam.height, fx = sampler.next() * cam.width;  // y first, as run_chunk
+    const int x = int(fx), y = int(fy);
+    const CameraRay ray = trace_camera_ray(ctx, x, y, Vec2(fx - x, fy - y), stats);
+    if (!ray.hit.valid()) continue;
+    const Vec3& d = ray.dir;
+    SurfaceInteraction<double> si = make_interaction(pv, ray.hit, sc.o, d, local_origin);
     Vec3 wo = -d;
     // Vertex k of the path (k = 1: the camera ray's hit) is a shading point while a segment is left.
     for (int k = 1; k < ctx.max_depth; ++k) {
