@@ -59,6 +59,8 @@ struct PreparedQuery {
   std::span<const LocalLight> lights;
   bool cosine_lobe;  ///< q.ltc is the clamped cosine (M_inv = I): far boxes use cone_fbar, far edges far_total
   ForestBuffers& buffers;
+  /// The guide's values in the cell of q.p (ForestGuide::cell_values), or null: unguided.
+  const double* guide_values = nullptr;
 };
 
 /// The query's constants, in buffers of q.scratch, or of `fallback` where q has none.
@@ -166,6 +168,60 @@ void level_probabilities(const std::array<Candidate, 4>& cand, int k, std::array
   else
     choice_probabilities(cand, k, prob.data());
 }
+
+/// The guided slot of candidate c (ForestGuide): a node's, or a loose always-candidate edge's;
+/// -1 for any other candidate or without a guide.
+int candidate_slot(const EdgeForest& f, const PreparedQuery& prepared, const Candidate& c) {
+  const ForestGuide* g = prepared.q.guide;
+  if (!g) return -1;
+  if (!c.edge) return g->node_slot(c.node);
+  const std::vector<Edge>& always = f.always_edges();
+  if (always.empty() || c.edge < always.data() || c.edge >= always.data() + always.size()) return -1;
+  return g->loose_edge_slot(int(c.edge - always.data()));
+}
+
+/// The guided strategy's probabilities gprob[0..k) of a choice among candidates cand[0..k) whose
+/// unguided probabilities are prob[0..k): the guide's (ForestGuide::guided) where every candidate
+/// is a guided slot and the cell learnt something of them, else prob's. Returns whether the
+/// choice is a guided one (a guide, k >= 2, every candidate a slot; learnt or not): the choices
+/// a sample's training records are made of.
+template <class Range>
+bool guide_choice(const EdgeForest& f, const PreparedQuery& prepared, const Range& cand, int k, const double* prob,
+                  double* gprob, std::vector<int>& slots) {
+  std::copy(prob, prob + k, gprob);
+  if (!prepared.q.guide || k < 2) return false;
+  slots.resize(size_t(k));
+  for (int i = 0; i < k; ++i) {
+    slots[size_t(i)] = candidate_slot(f, prepared, cand[size_t(i)]);
+    if (slots[size_t(i)] < 0) return false;
+  }
+  if (prepared.guide_values) prepared.q.guide->guided(prepared.guide_values, slots.data(), k, prob, gprob);
+  return true;
+}
+
+/// The guided choices of one traversal (SilhouetteSample::guide_slots, guide_pu).
+struct GuideTrail {
+  std::array<int, kMaxGuideLevels> slots{};
+  std::array<double, kMaxGuideLevels> pu{};
+  int levels = 0;
+  void add(int slot, double p) {
+    if (levels == kMaxGuideLevels) return;
+    slots[size_t(levels)] = slot;
+    pu[size_t(levels++)] = p;
+  }
+};
+
+/// The probability of a choice of path through the forest: the unguided strategy's product pu and
+/// the guided strategy's pg, mixed (ForestGuide: the defensive share s of the unguided strategy)
+/// as s pu + (1 - s) pg; pu alone without a guide in the query's cell.
+struct PathProbability {
+  double pu = 1, pg = 1;
+  double mixed(const PreparedQuery& prepared) const {
+    if (!prepared.guide_values) return pu;
+    const double share = prepared.q.guide->share();
+    return share * pu + (1 - share) * pg;
+  }
+};
 
 SilhouetteSample sample_on_edge(const Edge& e, double pmf, const PreparedQuery& prepared, double u, int rejection_tests);
 
@@ -428,6 +484,8 @@ namespace {
 struct TopLevel {
   std::vector<Candidate> cand;
   std::vector<double> prob;
+  std::vector<double> gprob;  ///< the guided strategy's (guide_choice)
+  bool guided = false;        ///< a guided choice (guide_choice)
   int n = 0;
   int tests = 0;
 };
@@ -440,12 +498,14 @@ struct ForestBuffers {
   std::vector<double> rest_prob, flat_prob, contour_prob;
   TopLevel top_sample, top_set;                   ///< sample_silhouette, sample_silhouette_set
   std::vector<const Edge*> contour;               ///< sample_silhouette_set
+  std::vector<int> slots;                         ///< guide_choice
+  std::vector<double> rest_gprob;                 ///< remove_split (the guided strategy's)
 };
 
 PreparedQuery prepare(const SilhouetteQuery& q, EdgeChoiceScratch& fallback) {
   ForestBuffers& b = scratch_buffer<ForestBuffers>(q.scratch, fallback);
   local_lights(q, b.lights);
-  return {q, b.lights, is_cosine_lobe(q.ltc), b};
+  return {q, b.lights, is_cosine_lobe(q.ltc), b, q.guide ? q.guide->cell_values(q.p) : nullptr};
 }
 
 void top_level(const EdgeForest& forest, const PreparedQuery& prepared, NodeTest test, TopLevel& top) {
@@ -453,6 +513,9 @@ void top_level(const EdgeForest& forest, const PreparedQuery& prepared, NodeTest
   top.n = top_candidates(forest, prepared, test, top.cand, top.tests);
   top.prob.resize(size_t(std::max(top.n, 1)));
   if (top.n > 0) choice_probabilities(top.cand, top.n, top.prob.data());
+  top.gprob.resize(top.prob.size());
+  top.guided =
+      guide_choice(forest, prepared, top.cand, top.n, top.prob.data(), top.gprob.data(), prepared.buffers.slots);
 }
 
 /// Indices (into top.cand) of the split edges: loose edges with probability >= kSplitShare, the
@@ -480,7 +543,9 @@ int split_indices(const TopLevel& top, std::array<int, kMaxSplitEdges>& idx) {
 /// part at its old size while the split edges had taken most of the importance part: on the
 /// teapot's self-shadows the rest's choice was then up to ~40 % defensive (docs/architecture.md §5
 /// "Splitting"). Returns false when no candidate is left.
-bool remove_split(TopLevel& top, const std::array<int, kMaxSplitEdges>& idx, int n_split, ForestBuffers& b) {
+bool remove_split(const EdgeForest& forest, const PreparedQuery& prepared, TopLevel& top,
+                  const std::array<int, kMaxSplitEdges>& idx, int n_split) {
+  ForestBuffers& b = prepared.buffers;
   auto is_split = [&](int i) { return std::find(idx.begin(), idx.begin() + n_split, i) != idx.begin() + n_split; };
   std::vector<Candidate>& rest = b.rest;
   std::vector<int>& where = b.rest_index;
@@ -493,19 +558,41 @@ bool remove_split(TopLevel& top, const std::array<int, kMaxSplitEdges>& idx, int
     where.push_back(i);
   }
   std::fill(top.prob.begin(), top.prob.begin() + top.n, 0.0);
+  std::fill(top.gprob.begin(), top.gprob.begin() + top.n, 0.0);
   const int m = int(rest.size());
   if (m == 0) return false;
   prob.resize(size_t(m));
+  b.rest_gprob.resize(size_t(m));
   choice_probabilities(rest, m, prob.data());
-  for (int j = 0; j < m; ++j) top.prob[size_t(where[size_t(j)])] = prob[size_t(j)];
+  top.guided = guide_choice(forest, prepared, rest, m, prob.data(), b.rest_gprob.data(), b.slots);
+  for (int j = 0; j < m; ++j) {
+    top.prob[size_t(where[size_t(j)])] = prob[size_t(j)];
+    top.gprob[size_t(where[size_t(j)])] = b.rest_gprob[size_t(j)];
+  }
   return true;
 }
 
-/// From the top-level candidate `cur` (chosen with probability pmf) down to an edge and a point.
+/// The guided choices of a traversal that chose top-level candidate i: that choice where it is a
+/// guided one.
+GuideTrail top_trail(const EdgeForest& forest, const PreparedQuery& prepared, const TopLevel& top, int i) {
+  GuideTrail trail;
+  if (top.guided) trail.add(candidate_slot(forest, prepared, top.cand[size_t(i)]), top.prob[size_t(i)]);
+  return trail;
+}
+
+/// Whether this traversal follows the guided strategy: with probability 1 - s (ForestGuide::share)
+/// where the query's cell has a guide (one random number), never (no number drawn) elsewhere.
+bool guided_strategy(const PreparedQuery& prepared, const std::function<double()>& next) {
+  return prepared.guide_values && next() >= prepared.q.guide->share();
+}
+
+/// From the top-level candidate `cur` (chosen with the probabilities `path` so far) down to an
+/// edge and a point, by the guided strategy's choices (`guided`) or the unguided ones; the pdf is
+/// the mixture of both (PathProbability).
 SilhouetteSample descend(const EdgeForest& forest, const PreparedQuery& prepared, const std::function<double()>& next,
-                         NodeTest test, Candidate cur, double pmf, int tests) {
+                         NodeTest test, Candidate cur, PathProbability path, bool guided, GuideTrail trail, int tests) {
   std::array<Candidate, 4> cand;
-  std::array<double, 4> p4;
+  std::array<double, 4> p4, g4;
   // ---- Descend: inner nodes choose among accepted children, leaves among silhouette edges,
   // small nodes among all the discontinuity edges below them.
   while (!cur.edge) {
@@ -520,7 +607,8 @@ SilhouetteSample descend(const EdgeForest& forest, const PreparedQuery& prepared
         none.rejection_tests = tests;
         return none;
       }
-      pmf *= prob[size_t(i)];
+      path.pu *= prob[size_t(i)];
+      path.pg *= prob[size_t(i)];
       cur = flat[size_t(i)];
       break;
     }
@@ -532,12 +620,23 @@ SilhouetteSample descend(const EdgeForest& forest, const PreparedQuery& prepared
       return none;
     }
     level_probabilities(cand, k, p4);
-    const int i = choose(p4.data(), k, next());
-    pmf *= p4[size_t(i)];
+    const bool guided_level =
+        !node.is_leaf() && guide_choice(forest, prepared, cand, k, p4.data(), g4.data(), prepared.buffers.slots);
+    if (node.is_leaf()) g4 = p4;
+    const int i = choose(guided ? g4.data() : p4.data(), k, next());
+    path.pu *= p4[size_t(i)];
+    path.pg *= g4[size_t(i)];
     cur = cand[size_t(i)];
+    if (guided_level) trail.add(candidate_slot(forest, prepared, cur), p4[size_t(i)]);
   }
   // ---- The point on the edge.
-  return sample_on_edge(*cur.edge, pmf, prepared, next(), tests);
+  SilhouetteSample out = sample_on_edge(*cur.edge, path.mixed(prepared), prepared, next(), tests);
+  if (out.edge) {
+    out.guide_slots = trail.slots;
+    out.guide_pu = trail.pu;
+    out.guide_levels = trail.levels;
+  }
+  return out;
 }
 
 }  // namespace
@@ -551,9 +650,11 @@ SilhouetteSample sample_silhouette(const EdgeForest& forest, const SilhouetteQue
   SilhouetteSample s;
   s.rejection_tests = top.tests;
   if (top.n == 0) return s;
-  const int i = choose(top.prob.data(), top.n, next());
+  const bool guided = guided_strategy(prepared, next);
+  const int i = choose(guided ? top.gprob.data() : top.prob.data(), top.n, next());
   if (i < 0) return s;
-  return descend(forest, prepared, next, test, top.cand[size_t(i)], top.prob[size_t(i)], top.tests);
+  return descend(forest, prepared, next, test, top.cand[size_t(i)], {top.prob[size_t(i)], top.gprob[size_t(i)]}, guided,
+                 top_trail(forest, prepared, top, i), top.tests);
 }
 
 namespace {
@@ -619,10 +720,12 @@ void sample_silhouette_set(const EdgeForest& forest, const SilhouetteQuery& quer
     if (s.edge) out.push(s);
   }
   // The traversal chooses among the rest.
-  if (n_split > 0 && !remove_split(top, idx, n_split, prepared.buffers)) return;
-  const int i = choose(top.prob.data(), top.n, next());
+  if (n_split > 0 && !remove_split(forest, prepared, top, idx, n_split)) return;
+  const bool guided = guided_strategy(prepared, next);
+  const int i = choose(guided ? top.gprob.data() : top.prob.data(), top.n, next());
   if (i < 0) return;
-  push(descend(forest, prepared, next, test, top.cand[size_t(i)], top.prob[size_t(i)], top.tests));
+  push(descend(forest, prepared, next, test, top.cand[size_t(i)], {top.prob[size_t(i)], top.gprob[size_t(i)]}, guided,
+               top_trail(forest, prepared, top, i), top.tests));
 }
 
 std::vector<const Edge*> split_edges(const EdgeForest& forest, const SilhouetteQuery& query, NodeTest test,
@@ -677,16 +780,16 @@ double walk_probability(const EdgeForest& forest, const PreparedQuery& prepared,
     return edge >= below.data() && edge < below.data() + below.size();
   };
   int tests = top.tests;
-  double pmf = 0;
+  PathProbability path{0, 0};
   Candidate cur;
   for (int i = 0; i < top.n; ++i)
     if (leads_to(top.cand[size_t(i)])) {
-      pmf = top.prob[size_t(i)];
+      path = {top.prob[size_t(i)], top.gprob[size_t(i)]};
       cur = top.cand[size_t(i)];
     }
-  if (pmf == 0) return 0;
+  if (path.pu == 0) return 0;
   std::array<Candidate, 4> cand;
-  std::array<double, 4> p4;
+  std::array<double, 4> p4, g4;
   while (!cur.edge) {
     const ForestNode& node = forest.node(cur.node);
     if (is_flat(node, test, prepared.q.p)) {
@@ -694,24 +797,30 @@ double walk_probability(const EdgeForest& forest, const PreparedQuery& prepared,
       std::vector<double> prob;
       const int k = flat_candidates(forest, cur.node, prepared, flat, prob);
       for (int i = 0; i < k; ++i)
-        if (flat[size_t(i)].edge == edge) return pmf * prob[size_t(i)];
+        if (flat[size_t(i)].edge == edge)
+          return PathProbability{path.pu * prob[size_t(i)], path.pg * prob[size_t(i)]}.mixed(prepared);
       return 0;
     }
     const int k = node.is_leaf() ? leaf_candidates(forest, cur.node, prepared, cand)
                                  : child_candidates(forest, cur.node, prepared, test, cand, tests);
     if (k == 0) return 0;
     level_probabilities(cand, k, p4);
+    if (node.is_leaf())
+      g4 = p4;
+    else
+      guide_choice(forest, prepared, cand, k, p4.data(), g4.data(), prepared.buffers.slots);
     bool found = false;
     for (int i = 0; i < k && !found; ++i) {
       if (leads_to(cand[size_t(i)])) {
-        pmf *= p4[size_t(i)];
+        path.pu *= p4[size_t(i)];
+        path.pg *= g4[size_t(i)];
         cur = cand[size_t(i)];
         found = true;
       }
     }
     if (!found) return 0;
   }
-  return pmf;
+  return path.mixed(prepared);
 }
 
 }  // namespace
@@ -729,7 +838,7 @@ double edge_probability(const EdgeForest& forest, const SilhouetteQuery& query, 
   if (without_split) {
     std::array<int, kMaxSplitEdges> idx;
     const int n_split = top.n > 0 ? split_indices(top, idx) : 0;
-    if (n_split > 0 && !remove_split(top, idx, n_split, prepared.buffers)) return 0;
+    if (n_split > 0 && !remove_split(forest, prepared, top, idx, n_split)) return 0;
   }
   return walk_probability(forest, prepared, test, top, edge);
 }

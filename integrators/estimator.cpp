@@ -4,6 +4,7 @@
 
 #include "qsil/integrators/estimator.h"
 
+#include "forest_guide_training.h"
 #include "pixel_loop.h"
 #include "projective_boundary.h"
 #include "render_setup.h"
@@ -163,6 +164,7 @@ class GradientEstimator final : public Estimator::Impl, private RenderSetup {
         }
       }
     }
+    if (config.forest_guiding.training > 0 && boundary.forest && boundary.sampler) train_forest_guide();
     if (config.method == Method::WarpedArea && vel.any_moving()) {
       warped = true;  // no structure: every direction is warped (warp_field.h)
       setup.structure = "warped-area sampling (" + std::to_string(config.warped_area.rays) + " auxiliary rays)";
@@ -262,6 +264,31 @@ class GradientEstimator final : public Estimator::Impl, private RenderSetup {
   }
 
  private:
+  /// The forest guide of the edge choice (forest_guiding.h): config.forest_guiding.rounds
+  /// training passes (forest_guide_pass), the guide retrained on all records after each; its
+  /// size and time appended to setup.structure.
+  void train_forest_guide() {
+    const ForestGuiding& fg = config.forest_guiding;
+    const auto t0 = Clock::now();
+    forest_guide = std::make_unique<edgetree::ForestGuide>(*boundary.forest, fg.guide);
+    boundary_ctx.guide = forest_guide.get();
+    std::vector<edgetree::GuideRecord> records;
+    PathStats training;
+    for (int round = 0; round < fg.rounds; ++round) {
+      const std::vector<edgetree::GuideRecord> pass =
+          forest_guide_pass<N>(ctx, boundary_ctx, vel, fg.training, round, 0, training);
+      records.insert(records.end(), pass.begin(), pass.end());
+      forest_guide->train(records);
+    }
+    char buf[224];
+    std::snprintf(buf, sizeof buf,
+                  " + forest guide (%d slots to depth %d, %d cells of %d^3 learnt from %zu records, %d x %d "
+                  "training spp, %.3f s)",
+                  forest_guide->slots(), fg.guide.depth, forest_guide->occupied_cells(), fg.guide.resolution,
+                  records.size(), fg.rounds, fg.training, seconds_since(t0));
+    setup.structure += buf;
+  }
+
   /// The samples kept by the threads' `largest`, largest first, each retraced without the
   /// boundary term from its own stream (qsil/integrators/sample_trace.h), into r.largest.
   void trace_largest(const RenderOptions& options, const tbb::enumerable_thread_specific<TopSamples>& largest,
@@ -285,6 +312,8 @@ class GradientEstimator final : public Estimator::Impl, private RenderSetup {
   bool warped = false;            ///< Method::WarpedArea with something moving
   std::optional<ProjectiveEdges> projective;  ///< Method::Projective with something moving
   SegmentGuide guide;                         ///< ...and its guide (uniform: unguided)
+  /// The quadric methods' forest guide (boundary_ctx.guide points to it), or null: unguided.
+  std::unique_ptr<edgetree::ForestGuide> forest_guide;
 };
 
 /// Central finite differences with common random numbers (`qsil fd`): the primal scene and, per
@@ -433,6 +462,11 @@ Estimator::Estimator(const Scene& scene, EstimatorConfig config) {
     throw Error("method " + std::string(method_name(config.method)) + " cannot estimate derivatives");
   if (config.method == Method::WarpedArea) check_warped_area_sampling(config.warped_area);
   if (config.method == Method::Projective) check_projective_guiding(config.projective_guiding);
+  check_forest_guiding(config.forest_guiding);
+  if (config.forest_guiding.training > 0 && !config.params.empty() && config.method != Method::Quadric &&
+      config.method != Method::QuadricBox)
+    throw Error("forest guide: method " + std::string(method_name(config.method)) +
+                " has no edge forest to guide (quadric, quadric-box)");
   check_sample_rates(scene.camera, config.sppi, config.sppp);
   const auto t0 = Clock::now();
   impl_ = make_impl(scene, std::move(config));

@@ -85,6 +85,7 @@ EstimatorConfig method_config(const Scene& scene, Method m, const std::vector<Pa
   if (m == Method::Regularized) c.regularization = Regularization::for_scene(scene, o.reg_width);
   c.warped_area = o.warped_area;
   c.projective_guiding = o.projective_guiding;
+  if (m == Method::Quadric || m == Method::QuadricBox) c.forest_guiding = o.forest_guiding;
   return c;
 }
 

@@ -94,6 +94,7 @@ void add_boundary_flags(CLI::App& app, BoundaryFlags& flags, const std::string& 
   add_regularization_options(app, flags.reg_width, "for --boundary regularized");
   add_warped_area_options(app, flags.warped_area, "--boundary was");
   add_projective_guiding_options(app, flags.projective_guiding, "--boundary projective");
+  add_forest_guiding_options(app, flags.forest_guiding, "--boundary quadric, quadric-box");
   if (!curves_flag) return;
   bool& intersection_curves = flags.intersection_curves;
   app.add_flag_callback(
@@ -161,6 +162,33 @@ void add_projective_guiding_options(CLI::App& app, ProjectiveGuiding& guiding, c
       ->capture_default_str();
 }
 
+void add_forest_guiding_options(CLI::App& app, ForestGuiding& guiding, const std::string& what) {
+  app.add_option("--forest-guide-training", guiding.training,
+                 "Guided edge choice (" + what +
+                     "): samples per pixel of each training pass of a guide learnt over the edge forest's upper "
+                     "levels per region of shading points, drawn at set-up ([QSS] 5.2's future work; "
+                     "docs/architecture.md §17); 0: unguided")
+      ->check(CLI::Range(0, 1024))
+      ->capture_default_str();
+  app.add_option("--forest-guide-rounds", guiding.rounds,
+                 "Guided edge choice (" + what + "): training passes, each guided by those before it")
+      ->check(CLI::Range(1, 16))
+      ->capture_default_str();
+  app.add_option("--forest-guide-resolution", guiding.guide.resolution,
+                 "Guided edge choice (" + what + "): cells per axis of the grid over the training shading points")
+      ->check(CLI::Range(1, 64))
+      ->capture_default_str();
+  app.add_option("--forest-guide-depth", guiding.guide.depth,
+                 "Guided edge choice (" + what + "): forest levels below the roots the guide chooses among")
+      ->check(CLI::Range(0, 8))
+      ->capture_default_str();
+  app.add_option("--forest-guide-share", guiding.guide.share,
+                 "Guided edge choice (" + what +
+                     "): share of the unguided choice in the guided mixture (a defensive share: > 0)")
+      ->check(CLI::Range(1e-3, 1.0))
+      ->capture_default_str();
+}
+
 EstimatorConfig gradient_config(const Scene& scene, std::vector<ParameterSpec> params, Method method,
                                 const BoundaryFlags& flags) {
   EstimatorConfig config = EstimatorConfig::gradient(std::move(params), method, flags.sppi, flags.sppp);
@@ -169,6 +197,7 @@ EstimatorConfig gradient_config(const Scene& scene, std::vector<ParameterSpec> p
     config.regularization = Regularization::for_scene(scene, flags.reg_width);
   config.warped_area = flags.warped_area;
   config.projective_guiding = flags.projective_guiding;
+  config.forest_guiding = flags.forest_guiding;
   return config;
 }
 

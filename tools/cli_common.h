@@ -77,6 +77,9 @@ struct BoundaryFlags {
   /// --guiding-resolution, --guiding-share, --guiding-training, --guiding-octree, --guiding-seeds:
   /// projective's guide (ProjectiveGuiding).
   ProjectiveGuiding projective_guiding;
+  /// --forest-guide-training, --forest-guide-rounds, --forest-guide-resolution,
+  /// --forest-guide-depth, --forest-guide-share: the quadric methods' forest guide (ForestGuiding).
+  ForestGuiding forest_guiding;
 };
 
 /// Adds --was-rays, --was-kappa and --was-exponent (WarpedAreaSampling) to `app`, into `was`;
@@ -87,6 +90,11 @@ void add_warped_area_options(CLI::App& app, WarpedAreaSampling& was, const std::
 /// --guiding-seeds S (ProjectiveGuiding)
 /// to `app`, into `guiding`; `what` says for which option (for the help text).
 void add_projective_guiding_options(CLI::App& app, ProjectiveGuiding& guiding, const std::string& what);
+
+/// Adds --forest-guide-training SPP (0: none), --forest-guide-rounds N, --forest-guide-resolution R,
+/// --forest-guide-depth D and --forest-guide-share S (ForestGuiding) to `app`, into `guiding`;
+/// `what` says for which option (for the help text).
+void add_forest_guiding_options(CLI::App& app, ForestGuiding& guiding, const std::string& what);
 
 /// Adds --reg-width W (Regularization::for_scene) to `app`, into `width`; `what` says what it
 /// regularises (for the help text).

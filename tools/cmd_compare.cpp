@@ -30,6 +30,7 @@ struct Flags {
   double reg_width = 1e-3;
   WarpedAreaSampling warped_area;
   ProjectiveGuiding projective_guiding;
+  ForestGuiding forest_guiding;
   std::string out;
   double reference_factor = 8;
   uint64_t seed = 0;
@@ -68,6 +69,7 @@ void add_options(CLI::App& app, Flags& f) {
   add_regularization_options(app, f.reg_width, "for --methods regularized");
   add_warped_area_options(app, f.warped_area, "--methods was");
   add_projective_guiding_options(app, f.projective_guiding, "--methods projective");
+  add_forest_guiding_options(app, f.forest_guiding, "--methods quadric, quadric-box");
   app.add_option("--out", f.out, "Output directory")->required();
   app.add_flag("--no-plot", f.no_plot, "Do not call plot_compare.py (the charts)");
   add_scripts_dir_option(app, f.scripts_dir);
@@ -89,6 +91,7 @@ CompareOptions compare_options(const Flags& f) {
   o.reg_width = f.reg_width;
   o.warped_area = f.warped_area;
   o.projective_guiding = f.projective_guiding;
+  o.forest_guiding = f.forest_guiding;
   o.out = f.out;
   o.seed = f.seed;
   o.threads = f.threads;

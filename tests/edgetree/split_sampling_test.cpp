@@ -25,6 +25,7 @@
 #include "qsil/edgetree/quadric_sampler.h"
 #include "qsil/edgetree/silhouette_sampler.h"
 #include "qsil/rng.h"
+#include "spot_sheet_world.h"
 
 #include <gtest/gtest.h>
 
@@ -40,25 +41,11 @@ namespace {
 using namespace qsil::baselines_test;
 using namespace qsil::test;
 
-struct World {
-  std::vector<TriangleMesh> meshes;
-  EdgeForest forest;
-  std::vector<double> emission{0.0, 40.0};
-  std::vector<bool> eligible{true, true};
-};
+using World = test::SpotSheetWorld;
 
-/// Spot with its creases as `spot_creases` says (CreaseSet::Concave: as the renderer builds a
-/// one-sided smooth shape, its 2602 concave edges creases in an always-candidate tree) and the sheet.
+/// Spot with its creases as `spot_creases` says and the sheet above it (spot_sheet_world.h).
 std::unique_ptr<World> make_world(CreaseSet spot_creases = CreaseSet::None) {
-  auto w = std::make_unique<World>();
-  w->meshes.push_back(test_mesh("spot.obj"));
-  TriangleMesh sheet;  // above spot, facing down: a light's outline
-  sheet.positions = {{-0.4, 1.2, -0.4}, {0.4, 1.2, -0.4}, {0.4, 1.2, 0.4}, {-0.4, 1.2, 0.4}};
-  sheet.triangles = {{0, 1, 2}, {0, 2, 3}};
-  w->meshes.push_back(sheet);
-  const std::vector<ForestShapeInput> in{{&w->meshes[0], 0, /*face_normals=*/false, spot_creases}, {&w->meshes[1], 1}};
-  w->forest = EdgeForest::build(in);
-  return w;
+  return test::make_spot_sheet_world(spot_creases, 0.4, 1.2);
 }
 
 std::vector<SilhouetteQuery> queries(const World& w, int n, unsigned seed) {

@@ -18,11 +18,15 @@
 ///   chooses among all its edges at once by their leaf weights (a box spreads a narrow lobe's or a
 ///   light's weight over every box it overlaps, and cannot follow 1/distance² near p);
 /// - splitting and contour sets (sample_silhouette_set): fixed per query, each edge estimated by
-///   exactly one strategy. Measured: docs/experiments/2026-11-25-edge-choice.md, -header-notes.md.
+///   exactly one strategy. Measured: docs/experiments/2026-11-25-edge-choice.md, -header-notes.md;
+/// - guiding (SilhouetteQuery::guide, forest_guide.h; off unless a guide is given): the choices at
+///   the upper levels follow, with probability 1 - s, a learnt correction of those above, and the
+///   pdf is the mixture of both strategies over the whole path (>= s x the unguided one).
 
 #include "qsil/edgetree/contour_set.h"
 #include "qsil/edgetree/edge_choice_scratch.h"
 #include "qsil/edgetree/edge_forest.h"
+#include "qsil/edgetree/forest_guide.h"
 #include "qsil/edgetree/ltc.h"
 #include "qsil/edgetree/node_rejection.h"
 #include "qsil/math.h"
@@ -92,6 +96,9 @@ struct SilhouetteQuery {
   /// Scratch memory of this thread for the edge choice (edge_choice_scratch.h); null: each call
   /// makes its own.
   EdgeChoiceScratch* scratch = nullptr;
+  /// A learnt distribution over the forest's upper levels (forest_guide.h) mixed into the choices
+  /// among its slots, or null (unguided). Made for the forest the traversal walks.
+  const ForestGuide* guide = nullptr;
 
   /// True when edges of shape (or crossing group) `shape` may contribute (see `eligible`).
   bool is_eligible(int shape) const {
@@ -157,6 +164,13 @@ struct SilhouetteSample {
   double t = 0;                      ///< point x0 + t (x1 - x0) on the edge
   double pdf = 0;                    ///< discrete probability of the edge times the density of t
   int rejection_tests = 0;           ///< number of node tests performed
+  /// With a guide (SilhouetteQuery::guide): the guided choices of the traversal that made this
+  /// sample, the keys of its training records (ForestGuide::train): at each of `guide_levels`
+  /// levels among two or more guided slots, the slot chosen and its unguided probability there.
+  /// None for a split edge's and the contour set's points (chosen by no traversal).
+  std::array<int, kMaxGuideLevels> guide_slots{};
+  std::array<double, kMaxGuideLevels> guide_pu{};
+  int guide_levels = 0;
 };
 
 /// Loose always-candidate edges at or above this top-level probability are split

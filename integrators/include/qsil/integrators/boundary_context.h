@@ -40,6 +40,9 @@ struct BoundaryContext {
   /// Per parameter: 1 / the largest |dx/dtheta_k| over all vertices (0: unused parameter), so that
   /// the leaves' normal-velocity factor weighs parameters of different units alike.
   std::array<double, kMaxParameters> velocity_scale{};
+  /// The forest guide of the quadric methods (edgetree::ForestGuide; SilhouetteQuery::guide), or
+  /// null: unguided.
+  const edgetree::ForestGuide* guide = nullptr;
 };
 
 }  // namespace qsil

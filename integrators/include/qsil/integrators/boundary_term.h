@@ -43,7 +43,28 @@ struct BoundaryVertex {
   Color throughput = Color::Zero();  ///< T: the detached throughput from the camera to the vertex
   int segments = 0;                  ///< segments of the path before the vertex (trace_path's `segments`)
   int traversals = 0;                ///< boundary traversals at the vertex (boundary_traversals; <= 0: none)
+  /// Training a forest guide (edgetree::ForestGuide): each contributing edge point that a
+  /// traversal chose appends here one record per guided choice it made (its slot, value
+  /// guide_record_value / the choice's unguided probability); null: none.
+  std::vector<edgetree::GuideRecord>* guide_records = nullptr;
 };
+
+/// The training value of an edge point of the boundary term (edgetree::GuideRecord::value): the
+/// magnitude of its contribution, mean |weight| over the colour channels (weight as
+/// for_each_boundary_sample hands to `visit`) times sum_k |g . v_t,k| velocity_scale[k], v_t the
+/// edge point's velocity relative to p (q.velocities, q.dp; without velocities, reverse mode:
+/// |g|): the boundary term's magnitude per parameter, parameters of different units weighed alike
+/// as in the edge choice (edgetree::velocity_factor).
+inline double guide_record_value(const edgetree::SilhouetteQuery& q, const edgetree::Edge& e, double t,
+                                 const Color& weight, const Vec3& g) {
+  const double w = weight.abs().mean();
+  if (!q.velocities) return w * g.norm();
+  const SceneVelocities::Block v = (1 - t) * edgetree::edge_end_velocity(e, 0, *q.velocities) +
+                                   t * edgetree::edge_end_velocity(e, 1, *q.velocities) - q.dp;
+  double m = 0;
+  for (int k = 0; k < q.velocities->num_params; ++k) m += std::abs(g.dot(v.col(k))) * q.velocity_scale[size_t(k)];
+  return w * m;
+}
 
 /// The contour set of a vertex's query, in its edge-choice scratch (for_each_boundary_sample).
 struct ContourEdgesBuffer {
@@ -111,7 +132,13 @@ void for_each_boundary_sample(const PathContext& ctx, const BoundaryContext& bou
       });
       if (!jump || (*jump == 0).all()) continue;
       contributed = true;
-      visit(e, s.t, Color(throughput * f * *jump / (s.pdf * rate)), g);
+      const Color weight = throughput * f * *jump / (s.pdf * rate);
+      if (vertex.guide_records && s.guide_levels > 0) {
+        const double v = guide_record_value(q, e, s.t, weight, g);
+        for (int l = 0; l < s.guide_levels; ++l)
+          vertex.guide_records->push_back({q.p, s.guide_slots[size_t(l)], v / s.guide_pu[size_t(l)]});
+      }
+      visit(e, s.t, weight, g);
     }
     stats.boundary_zero += !contributed;
   }
@@ -134,6 +161,7 @@ edgetree::SilhouetteQuery boundary_query(const BoundaryContext& boundary_ctx, co
   q.light_spheres = &boundary_ctx.light_spheres;
   q.env_weight = boundary_ctx.env_weight + edgetree::enclosing_light_weight(q.light_spheres, q.p);
   q.emission = &boundary_ctx.emission;
+  q.guide = boundary_ctx.guide;
   return q;
 }
 
@@ -145,6 +173,9 @@ struct BoundaryHookBase {
   Sampler* sampler;  ///< a stream of its own, so the hook leaves the path's own decisions unchanged
   int traversals;    ///< at every vertex (boundary_traversals of the sample)
   edgetree::EdgeChoiceScratch* scratch;  ///< this thread's edge-choice scratch
+  /// Training a forest guide: the records of this hook's vertices (BoundaryVertex::guide_records);
+  /// null: none.
+  std::vector<edgetree::GuideRecord>* guide_records = nullptr;
 
   /// The path vertex (si, sp, viewer direction wo_local, throughput beta after `seg` segments)
   /// for query q, with this hook's traversals.
@@ -158,7 +189,8 @@ struct BoundaryHookBase {
             .wo_local = wo_local,
             .throughput = value(beta),
             .segments = seg,
-            .traversals = traversals};
+            .traversals = traversals,
+            .guide_records = guide_records};
   }
 };
 

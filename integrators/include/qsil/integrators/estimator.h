@@ -20,6 +20,7 @@
 ///   the merged film equals its film up to the rounding of the sums.
 
 #include "qsil/film.h"
+#include "qsil/integrators/forest_guiding.h"
 #include "qsil/integrators/method.h"
 #include "qsil/integrators/projective_sampling.h"
 #include "qsil/integrators/regularized_visibility.h"
@@ -74,6 +75,9 @@ struct EstimatorConfig {
   WarpedAreaSampling warped_area;
   /// Method::Projective: its guide (projective_sampling.h; resolution 0: unguided).
   ProjectiveGuiding projective_guiding;
+  /// Method::Quadric and Method::QuadricBox: the forest guide of their edge choice
+  /// (forest_guiding.h; training 0: unguided).
+  ForestGuiding forest_guiding;
 
   /// The primal image.
   static EstimatorConfig primal();

@@ -46,6 +46,7 @@ struct CompareOptions {
   double reg_width = 1e-3;
   WarpedAreaSampling warped_area;  ///< was's auxiliary rays (EstimatorConfig::warped_area)
   ProjectiveGuiding projective_guiding;  ///< projective's guide (EstimatorConfig::projective_guiding)
+  ForestGuiding forest_guiding;          ///< the quadric methods' guide (EstimatorConfig::forest_guiding)
   std::filesystem::path out;  ///< output directory (created)
   uint64_t seed = 0;          ///< base seed: every method, target and the reference derive theirs
   int threads = 0;
