@@ -228,7 +228,9 @@ void bind_forward(py::module_& m) {
       [](const Scene& scene, const std::vector<std::string>& params, int spp, uint64_t seed, int threads,
          const std::string& boundary, double sppi, double sppp, bool intersection_curves, double reg_width,
          int guiding_resolution, double guiding_share, double guiding_training, bool guiding_octree,
-         double guiding_seeds, int was_rays, double was_kappa, double was_exponent, bool was_unbiased) {
+         double guiding_seeds, int was_rays, double was_kappa, double was_exponent, bool was_unbiased,
+         int forest_guide_training, int forest_guide_rounds, int forest_guide_resolution, int forest_guide_depth,
+         double forest_guide_share) {
         const Method method = parse_method(boundary, "boundary", kBoundaryMethods);
         const std::vector<ParameterSpec> specs = parse_parameters(params, scene);
         std::optional<Estimator> e;
@@ -242,6 +244,9 @@ void bind_forward(py::module_& m) {
           config.projective_guiding = {guiding_resolution, guiding_training, guiding_share, guiding_octree,
                                        guiding_seeds};
           config.warped_area = {was_rays, was_kappa, was_exponent, was_unbiased};
+          config.forest_guiding = {forest_guide_training,
+                                   forest_guide_rounds,
+                                   {forest_guide_resolution, forest_guide_depth, forest_guide_share}};
           e.emplace(scene, std::move(config));
           r = e->run(options(spp, seed, threads));
         }
@@ -260,7 +265,9 @@ void bind_forward(py::module_& m) {
         py::arg("intersection_curves") = true, py::arg("reg_width") = 1e-3, py::arg("guiding_resolution") = 0,
         py::arg("guiding_share") = 0.5, py::arg("guiding_training") = 4.0, py::arg("guiding_octree") = false,
         py::arg("guiding_seeds") = 64.0, py::arg("was_rays") = 8, py::arg("was_kappa") = 1e5,
-        py::arg("was_exponent") = 3.0, py::arg("was_unbiased") = false,
+        py::arg("was_exponent") = 3.0, py::arg("was_unbiased") = false, py::arg("forest_guide_training") = 0,
+        py::arg("forest_guide_rounds") = 2, py::arg("forest_guide_resolution") = 8, py::arg("forest_guide_depth") = 3,
+        py::arg("forest_guide_share") = 0.5,
         "Forward mode: (image (H, W, 3), derivatives (K, H, W, 3)) for 1-8 parameter specs "
         "('ID:translate:X,Y,Z', 'ID:rotate:X,Y,Z', 'ID:scale', 'ID:vertex:I:X,Y,Z'). sppi: secondary "
         "boundary-term samples per shading point on average over a pixel's samples (0: the method's default, 0.5 for "
@@ -270,7 +277,9 @@ void bind_forward(py::module_& m) {
         "boundary='regularized''s blur width as a fraction of the scene's bounding-box diagonal (`qsil grad --help`); "
         "guiding_resolution, guiding_share, guiding_training: boundary='projective''s grid guide (0: none); "
         "guiding_octree, guiding_seeds: its octree guide from projected seeds (excludes a grid); was_rays, "
-        "was_kappa, was_exponent, was_unbiased: boundary='was''s auxiliary rays (`qsil grad --help`)");
+        "was_kappa, was_exponent, was_unbiased: boundary='was''s auxiliary rays; forest_guide_training (0: none), "
+        "forest_guide_rounds, forest_guide_resolution, forest_guide_depth, forest_guide_share: the quadric methods' "
+        "guided edge choice (`qsil grad --help`)");
   // The keyword names before 2026-11-25 (boundary_spp, primary_samples): the same function.
   m.def("grad", grad, py::arg("scene"), py::arg("params"), py::arg("spp") = 0, py::arg("seed") = 0,
         py::arg("threads") = 0, py::arg("boundary") = "quadric", py::arg("boundary_spp") = 0,
@@ -278,6 +287,8 @@ void bind_forward(py::module_& m) {
         py::arg("guiding_resolution") = 0, py::arg("guiding_share") = 0.5, py::arg("guiding_training") = 4.0,
         py::arg("guiding_octree") = false, py::arg("guiding_seeds") = 64.0, py::arg("was_rays") = 8,
         py::arg("was_kappa") = 1e5, py::arg("was_exponent") = 3.0, py::arg("was_unbiased") = false,
+        py::arg("forest_guide_training") = 0, py::arg("forest_guide_rounds") = 2,
+        py::arg("forest_guide_resolution") = 8, py::arg("forest_guide_depth") = 3, py::arg("forest_guide_share") = 0.5,
         "The same, with the old keyword names boundary_spp (= sppi) and primary_samples (= sppp)");
 }
 

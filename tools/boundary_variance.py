@@ -13,7 +13,7 @@ stream of its own, so both runs trace the same paths and their difference is the
 Two builds compare side by side by running this with each one's module (--module), same seeds.
 
 Usage: /usr/bin/python3 tools/boundary_variance.py SCENE --param P [--module build/python]
-       [--boundary quadric] [--spp 64] [--res 48] [--seeds 16] [--first-seed 100] [--threads 2]
+       [--boundary quadric] [--sppi 0] [--forest-guide-training 0] [--spp 64] [--res 48] [--seeds 16] [--first-seed 100] [--threads 2]
 """
 import argparse
 import os
@@ -46,6 +46,10 @@ def main():
     ap.add_argument("--seeds", type=int, default=16)
     ap.add_argument("--first-seed", type=int, default=100)
     ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--sppi", type=float, default=0,
+                    help="secondary boundary-term traversals per shading point (0: the method's default)")
+    ap.add_argument("--forest-guide-training", type=int, default=0,
+                    help="the quadric methods' guided edge choice: training spp per pass (0: none; qsil grad --help)")
     args = ap.parse_args()
     if args.seeds < 2:
         sys.exit("boundary_variance: --seeds must be at least 2 (a variance needs two runs)")
@@ -59,12 +63,15 @@ def main():
     boundary, interior, seconds = [], [], 0.0
     for seed in range(args.first_seed, args.first_seed + args.seeds):
         t0 = time.time()
-        _, g = qsil.grad(scene, [args.param], spp=args.spp, seed=seed, threads=args.threads, boundary=args.boundary)
+        _, g = qsil.grad(scene, [args.param], spp=args.spp, seed=seed, threads=args.threads, boundary=args.boundary,
+                         sppi=args.sppi, forest_guide_training=args.forest_guide_training)
         seconds += time.time() - t0
         _, n = qsil.grad(scene, [args.param], spp=args.spp, seed=seed, threads=args.threads, boundary="none")
         boundary.append((g[0] - n[0]).mean(axis=-1))
         interior.append(n[0].mean(axis=-1))
-    print(f"{args.scene} {args.param} {args.boundary}, {args.spp} spp, {args.res}^2, seeds "
+    guide = f" guided ({args.forest_guide_training} training spp)" if args.forest_guide_training else ""
+    guide += f", sppi {args.sppi:g}" if args.sppi else ""
+    print(f"{args.scene} {args.param} {args.boundary}{guide}, {args.spp} spp, {args.res}^2, seeds "
           f"{args.first_seed}..{args.first_seed + args.seeds - 1}")
     print(summary("boundary", np.array(boundary)))
     print(summary("interior", np.array(interior)))

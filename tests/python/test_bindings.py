@@ -315,6 +315,18 @@ def test_was_grad_reaches_its_auxiliary_rays():
     assert "rays" in str(e.value)
 
 
+def test_quadric_grad_reaches_its_forest_guide():
+    s = load(os.path.join(ROOT, "tests", "data", "gradient", "spot-selfshadow.xml"), res=8, spp=1)
+    params = ["spot:translate:1,0,0"]
+    _, plain = qsil.grad(s, params, spp=8, seed=3)
+    _, guided = qsil.grad(s, params, spp=8, seed=3, forest_guide_training=4, forest_guide_rounds=1,
+                          forest_guide_resolution=4, forest_guide_depth=2, forest_guide_share=0.3)
+    assert np.isfinite(guided).all() and not np.array_equal(plain, guided)
+    with pytest.raises(qsil.Error) as e:
+        qsil.grad(s, params, forest_guide_training=4, forest_guide_depth=9)
+    assert "forest guide: depth 9 out of range [0, 8]" in str(e.value)
+
+
 def test_bad_input_raises_qsil_error_with_one_line():
     s = load(res=8, spp=1)
     cases = [
