@@ -58,8 +58,9 @@ int ForestGuide::cell_index(const Vec3& p) const {
   for (int a = 0; a < 3; ++a) {
     const double extent = box_.hi[a] - box_.lo[a];
     const double u = extent > 0 ? (p[a] - box_.lo[a]) / extent : 0.0;
-    // NaN lands in cell 0 (the comparison is false): a valid cell whatever p is.
-    const int i = u > 0 ? std::min(R - 1, int(u * R)) : 0;
+    // Clamped before the cast (a box thin on one axis makes u huge off it); NaN lands in cell 0
+    // (the comparison is false): a valid cell whatever p is.
+    const int i = u > 0 ? std::min(R - 1, int(std::min(u, 1.0) * R)) : 0;
     idx = idx * R + i;
   }
   return idx;
@@ -76,6 +77,9 @@ void ForestGuide::train(const std::vector<GuideRecord>& records) {
   for (const GuideRecord& r : records) {
     if (!(r.slot >= 0 && r.slot < slots_ && r.value > 0 && std::isfinite(r.value) && r.p.allFinite())) continue;
     int& block = cell_of_[size_t(cell_index(r.p))];
+    if (block < 0 && cell_values_.size() + 2 * size_t(slots_) > kMaxGuideValues)
+      throw Error("forest guide: more than " + std::to_string(kMaxGuideValues) + " values (" + std::to_string(slots_) +
+                  " slots per cell); lower --forest-guide-resolution or --forest-guide-depth");
     if (block < 0) {
       block = occupied_cells();
       cell_values_.resize(cell_values_.size() + 2 * size_t(slots_), 0.0);

@@ -106,6 +106,8 @@ const CommandRegistrar registrar{
        return [flags]() {
          if (process_group().size() > 1) throw Error("reverse: runs in one process (no MPI launcher)");
          if (flags->adjoint.empty() && flags->target.empty()) throw Error("reverse: give --adjoint or --target");
+         if (flags->boundary.forest_guiding.training > 0)
+           throw Error("reverse: --forest-guide-training is forward mode's only (qsil grad)");
          const Method method = parse_method(flags->boundary.method, "--boundary", kBoundaryMethods);
          const Scene scene = load_scene_with_flags(flags->scene, flags->defines);
          const Camera& cam = scene.camera;

@@ -28,6 +28,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <map>
 #include <memory>
 #include <random>
@@ -119,6 +121,13 @@ TEST(ForestGuide, TrainingAddsToTheSlotInItsCell) {
   EXPECT_EQ(g.cell_values(Vec3(5, 5, 5)), g.cell_values(b));
   EXPECT_EQ(g.cell_values(b)[slot], 1.0);
   EXPECT_EQ(g.cell_values(Vec3(1, 0, 0)), nullptr) << "a cell without records guides nothing";
+  // Records on a plane one ulp thick: a point far off it lands in the nearest cell (no overflow).
+  const double y0 = 0.1, y1 = std::nextafter(0.1, 1.0);
+  g.train({{Vec3(0, y0, 0), slot, 1.0}, {Vec3(1, y1, 1), slot, 3.0}});
+  ASSERT_NE(g.cell_values(Vec3(1, y1, 1)), nullptr);
+  EXPECT_EQ(g.cell_values(Vec3(1, 1e6, 1)), g.cell_values(Vec3(1, y1, 1)));
+  EXPECT_EQ(g.cell_values(Vec3(0, -1e300, 0)), g.cell_values(Vec3(0, y0, 0)));
+  EXPECT_EQ(g.cell_values(Vec3(1, std::numeric_limits<double>::infinity(), 1)), g.cell_values(Vec3(1, y1, 1)));
 }
 
 TEST(ForestGuide, GuidedChoicesMatchThePathMixture) {

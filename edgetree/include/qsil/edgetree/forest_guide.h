@@ -25,15 +25,15 @@
 /// n the candidates' records in the cell (guided), and everywhere else (and where the products
 /// sum to 0) as the unguided one. A distribution learnt on its own (P_g ∝ the summed
 /// contributions, path guiding's target) raised the boundary term's variance 1.1-2.6× on 8 of 10
-/// scenes: it ignores where in the cell p is. Neither pays
+/// scenes at 4 training spp, about as much as this correction did there. Neither pays
 /// (docs/experiments/2026-11-26-forest-guiding.md): guiding is off by default.
 ///
 /// A traversal follows the unguided strategy with probability s (the defensive share, > 0) and
 /// the guided one otherwise, and the probability of a path to an edge is the one-sample mixture
 ///   P = s prod P_u + (1 - s) prod P_g
 /// over the levels of the path, not a mixture per level: a per-level mixture bounds 1 / P by
-/// s^-(levels) times the unguided one, which on the wing nut and shadow-quad made tails worse
-/// than no guide at all; the path mixture bounds it by 1 / s. Every edge keeps P >= s P_u > 0
+/// s^-(levels) times the unguided one, which on the wing nut made tails worse than no guide at
+/// all; the path mixture bounds it by 1 / s. Every edge keeps P >= s P_u > 0
 /// wherever the unguided traversal can reach it, so guiding never makes a false reject:
 /// unbiased for any learnt values.
 
@@ -49,9 +49,14 @@ inline constexpr int kMaxGuideLevels = 9;
 
 /// Records of a choice's candidates in a cell at which the guided strategy's choice is half the
 /// learnt one and half the unguided one (ForestGuide::guided): a prior of that many records that
-/// the unguided choice is right. One value tried (docs/experiments/2026-11-26-forest-guiding.md:
-/// it tempers the sparse cells of short training, 5.5× the variance at worst without it).
+/// the unguided choice is right, against the sparse cells of short training (5.5× the variance at
+/// worst without it, at 4 training spp). One value tried, at 16 training spp only
+/// (docs/experiments/2026-11-26-forest-guiding.md).
 inline constexpr double kGuidePriorRecords = 32;
+
+/// Values (sums and record counts, 8 bytes each) a guide holds at most: 2^27, 1 GiB. Each cell that
+/// learns something holds 2 per slot, and slots grow as 4^depth per root.
+inline constexpr size_t kMaxGuideValues = size_t(1) << 27;
 
 /// One training sample of the boundary term at one guided choice, for ForestGuide::train.
 struct GuideRecord {
@@ -87,12 +92,13 @@ class ForestGuide {
   /// Learns from `records` (replacing what was learnt): the grid's box becomes the bounds of
   /// their points, and each record adds its value to its slot in its point's cell. Records with
   /// a slot < 0 or a value not finite and positive are skipped. The result depends on the
-  /// records' order only through the rounding of the sums.
+  /// records' order only through the rounding of the sums. Throws qsil::Error when the cells
+  /// that learn would hold more than kMaxGuideValues values.
   void train(const std::vector<GuideRecord>& records);
 
   bool empty() const { return slots_ == 0; }
   int slots() const { return slots_; }
-  int occupied_cells() const { return int(cell_values_.size()) / std::max(2 * slots_, 1); }
+  int occupied_cells() const { return int(cell_values_.size() / size_t(std::max(2 * slots_, 1))); }
   double share() const { return options_.share; }
   const ForestGuideOptions& options() const { return options_; }
 
