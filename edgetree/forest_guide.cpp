@@ -28,15 +28,11 @@ ForestGuide::ForestGuide(const EdgeForest& forest, const ForestGuideOptions& opt
   std::vector<int> level;
   auto add_root = [&](int r) {
     node_slot_[size_t(r)] = slots_++;
-    parent_.push_back(-1);
     level.push_back(r);
   };
   for (int r : forest.roots()) add_root(r);
   for (int r : forest.always_roots()) add_root(r);
-  for (int i : forest.loose_always_edges()) {
-    loose_slot_[size_t(i)] = slots_++;
-    parent_.push_back(-1);
-  }
+  for (int i : forest.loose_always_edges()) loose_slot_[size_t(i)] = slots_++;
   for (int d = 0; d < options.depth && !level.empty(); ++d) {
     std::vector<int> next;
     for (int n : level) {
@@ -44,7 +40,6 @@ ForestGuide::ForestGuide(const EdgeForest& forest, const ForestGuideOptions& opt
       if (node.is_leaf()) continue;
       for (int c = node.first; c < node.first + node.count; ++c) {
         node_slot_[size_t(c)] = slots_++;
-        parent_.push_back(node_slot_[size_t(n)]);
         next.push_back(c);
       }
     }
@@ -67,15 +62,18 @@ int ForestGuide::cell_index(const Vec3& p) const {
 }
 
 void ForestGuide::train(const std::vector<GuideRecord>& records) {
+  auto valid = [&](const GuideRecord& r) {
+    return r.slot >= 0 && r.slot < slots_ && r.value > 0 && std::isfinite(r.value) && r.p.allFinite();
+  };
   box_ = Box3();
   for (const GuideRecord& r : records)
-    if (r.slot >= 0 && r.slot < slots_ && r.value > 0 && std::isfinite(r.value) && r.p.allFinite()) box_.expand(r.p);
+    if (valid(r)) box_.expand(r.p);
   const int R = options_.resolution;
   cell_of_.assign(size_t(R) * R * R, -1);
   cell_values_.clear();
   if (box_.empty()) return;
   for (const GuideRecord& r : records) {
-    if (!(r.slot >= 0 && r.slot < slots_ && r.value > 0 && std::isfinite(r.value) && r.p.allFinite())) continue;
+    if (!valid(r)) continue;
     int& block = cell_of_[size_t(cell_index(r.p))];
     if (block < 0 && cell_values_.size() + 2 * size_t(slots_) > kMaxGuideValues)
       throw Error("forest guide: more than " + std::to_string(kMaxGuideValues) + " values (" + std::to_string(slots_) +

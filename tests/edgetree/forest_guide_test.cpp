@@ -3,7 +3,7 @@
 /// of spot (its concave edges creases in an always-candidate tree) and an emitting open square
 /// sheet (its outline loose always-candidate edges):
 /// - the slots are exactly the roots, the always-candidate roots, the loose edges and the nodes to
-///   the guide's depth below the roots, each child's parent its node's slot;
+///   the guide's depth below the roots, each with a slot of its own in [0, slots);
 /// - training adds each record's value to its slot in its point's cell, skips invalid records,
 ///   and bins a point outside the box in the nearest cell;
 /// - with a guide trained on random records, the traversal's edge choices match the probabilities
@@ -71,20 +71,21 @@ TEST(ForestGuide, SlotsAreTheUpperLevels) {
   for (int D : {0, 2, 3}) {
     const ForestGuide g(f, {8, D, 0.5});
     int expected = int(f.loose_always_edges().size());
+    std::vector<int> seen;  // every slot handed out, once each
     for (int n = 0; n < int(f.nodes().size()); ++n) {
       const bool guided = depth[size_t(n)] >= 0 && depth[size_t(n)] <= D;
       expected += guided;
       ASSERT_EQ(g.node_slot(n) >= 0, guided) << "node " << n << " at depth " << depth[size_t(n)] << ", D " << D;
-      if (!guided || f.node(n).is_leaf() || depth[size_t(n)] == D) continue;
-      for (int c = f.node(n).first; c < f.node(n).first + f.node(n).count; ++c)
-        EXPECT_EQ(g.parent(g.node_slot(c)), g.node_slot(n)) << "node " << c;
+      if (guided) seen.push_back(g.node_slot(n));
     }
-    for (int r : f.roots()) EXPECT_EQ(g.parent(g.node_slot(r)), -1);
     for (int i : f.loose_always_edges()) {
       ASSERT_GE(g.loose_edge_slot(i), 0);
-      EXPECT_EQ(g.parent(g.loose_edge_slot(i)), -1);
+      seen.push_back(g.loose_edge_slot(i));
     }
     EXPECT_EQ(g.slots(), expected) << "D " << D;
+    std::sort(seen.begin(), seen.end());
+    ASSERT_EQ(int(seen.size()), g.slots());
+    for (int s = 0; s < g.slots(); ++s) EXPECT_EQ(seen[size_t(s)], s) << "slots not distinct in [0, slots), D " << D;
   }
   EXPECT_THROW(ForestGuide(f, {0, 3, 0.5}), Error);
   EXPECT_THROW(ForestGuide(f, {8, 9, 0.5}), Error);
@@ -95,10 +96,11 @@ TEST(ForestGuide, TrainingAddsToTheSlotInItsCell) {
   const auto w = make_world();
   ForestGuide g(w->forest, {4, 3, 0.5});
   EXPECT_EQ(g.cell_values(Vec3::Zero()), nullptr) << "an untrained guide guides nothing";
-  // A slot at depth 2 (its parent's parent a root).
+  // The slot of a node at depth 2.
+  const std::vector<int> depth = node_depths(w->forest);
   int slot = -1;
-  for (int s = 0; s < g.slots() && slot < 0; ++s)
-    if (g.parent(s) >= 0 && g.parent(g.parent(s)) >= 0) slot = s;
+  for (int n = 0; n < int(depth.size()) && slot < 0; ++n)
+    if (depth[size_t(n)] == 2) slot = g.node_slot(n);
   ASSERT_GE(slot, 0);
   const Vec3 a(0, 0, 0), b(1, 1, 1);
   const double nan = std::nan("");

@@ -6,8 +6,8 @@
 /// where the integrand's mass lies, mix what was learnt with the unguided choice).
 ///
 /// Layout: the guided *slots* are the forest's nodes of depth <= `depth` below every root and
-/// always-candidate root (depth 0: the roots), and its loose always-candidate edges; each slot
-/// knows its parent slot (-1 at the top level). Shading points are binned by a uniform grid of
+/// always-candidate root (depth 0: the roots), and its loose always-candidate edges, each with an
+/// index of its own in [0, slots()). Shading points are binned by a uniform grid of
 /// `resolution` cells per axis over a box (the training points' bounds; a point outside is binned
 /// in the nearest cell).
 ///
@@ -109,8 +109,6 @@ class ForestGuide {
   int loose_edge_slot(int index) const {
     return index >= 0 && index < int(loose_slot_.size()) ? loose_slot_[size_t(index)] : -1;
   }
-  /// The parent slot of `slot` (-1 at the top level).
-  int parent(int slot) const { return parent_[size_t(slot)]; }
 
   /// The values of the cell that holds `p`, one per slot, then the number of records of each
   /// slot, or null where that cell learnt nothing (and for an empty or untrained guide): the
@@ -128,7 +126,7 @@ class ForestGuide {
  private:
   ForestGuideOptions options_;
   int slots_ = 0;
-  std::vector<int> node_slot_, loose_slot_, parent_;
+  std::vector<int> node_slot_, loose_slot_;
   Box3 box_;
   std::vector<int> cell_of_;         ///< grid cell -> block of cell_values_ (-1: nothing learnt)
   std::vector<double> cell_values_;  ///< blocks of slots_ values
