@@ -83,11 +83,26 @@ EdgeMixture::EdgeMixture(const Edge& e, const SilhouetteQuery& q, std::span<cons
   eps_ = total_ > 0 ? kEdgeDefensiveShare : 1.0;
 }
 
+LtcMap::LtcMap(const SilhouetteQuery& q) : normal(q.frame.n), scale(q.ltc.norm * std::abs(q.ltc.det_M_inv) * kInvPi) {
+  Mat3 to_local;
+  to_local.row(0) = q.frame.s.transpose();
+  to_local.row(1) = q.frame.t.transpose();
+  to_local.row(2) = q.frame.n.transpose();
+  to_cosine = q.ltc.M_inv * to_local;
+}
+
 double EdgeMixture::total(const Edge& e, const SilhouetteQuery& q, std::span<const LocalLight> lights) {
-  const Vec3 w0 = q.frame.to_local(e.p0 - q.p), w1 = q.frame.to_local(e.p1 - q.p);
+  return total(e, q, lights, LtcMap(q), EdgeGeometry(e, q.p));
+}
+
+double EdgeMixture::total(const Edge& e, const SilhouetteQuery& q, std::span<const LocalLight> lights,
+                          const LtcMap& map, const EdgeGeometry& g) {
+  const Vec3 u0 = map.to_cosine * g.w0, u1 = map.to_cosine * g.w1;
+  const double z0 = map.normal.dot(g.w0), z1 = map.normal.dot(g.w1);
   double total = 0;
-  for_each_component(e, q, lights, w0, w1, [&](double lo, double hi, double radiance) {
-    total += component_weight(radiance, EdgePointSampler::ltc_integral(w0, w1, q.ltc, lo, hi));
+  for_each_component<true>(e, q, lights, g.w0, g.w1, [&](double lo, double hi, double radiance) {
+    total += component_weight(radiance,
+                              EdgePointSampler::ltc_integral_mapped(u0, u1, z0, z1, g.normal_len, map.scale, lo, hi));
   });
   return total;
 }

@@ -28,6 +28,17 @@ struct EdgeGeometry {
         mid2((0.5 * (w0 + w1)).squaredNorm()) {}
 };
 
+/// The per-query constants of an edge's importance (EdgeMixture::total): the map of world offsets
+/// from p into the LTC's cosine domain (M_inv times the world-to-local rotation of q.frame), the
+/// shading normal (world; w.z = normal . w) and norm |det M_inv| / pi. Built once per query, so
+/// that an edge's importance maps each endpoint with one matrix product.
+struct LtcMap {
+  Mat3 to_cosine;
+  Vec3 normal;
+  double scale;
+  explicit LtcMap(const SilhouetteQuery& q);
+};
+
 /// The density of t on edge e seen from the query point: the [QSS Eq. 4] × LTC target (f_s cos
 /// over the edge, EdgePointSampler's LTC part) weighted by the radiance that can jump there,
 ///   p(t) = (1 − ε) Σ_i (W_i / W) p_i(t) + ε p_angle(t),   W_i = radiance_i × ∫ p_i's target,
@@ -54,8 +65,15 @@ class EdgeMixture {
   double total() const { return total_; }
   /// EdgeMixture(e, q, lights).total() without building the mixture (no component samplers, no
   /// angle-uniform part): an edge's importance, computed for every candidate of a leaf or a flat
-  /// choice, of which one is sampled. Bit-identical to total().
+  /// choice, of which one is sampled (EdgePointSampler::ltc_integral_mapped per component, in the
+  /// world frame). Equal to total() up to rounding, and zero where it is zero up to rounding at
+  /// the ends of an interval: an importance needs consistency between a choice and its
+  /// probability, which the traversal and its probability walk get by calling this one function.
   static double total(const Edge& e, const SilhouetteQuery& q, std::span<const LocalLight> lights);
+  /// total(e, q, lights) with the per-query map and the edge's geometry relative to p already
+  /// computed (leaf_edge_weight: once per query and once per edge).
+  static double total(const Edge& e, const SilhouetteQuery& q, std::span<const LocalLight> lights, const LtcMap& map,
+                      const EdgeGeometry& g);
   /// total() for the cosine lobe (q.ltc's M_inv = I) with |w_t| taken as the distance d of the
   /// edge's midpoint from p: per component, radiance × |w0 × w1| / d⁴ × norm/π × ∫ max(0, w_t.z) dt
   /// over its interval of t (closed form, no angles). The traversal's importance for edges far

@@ -68,13 +68,37 @@ EdgePointSampler::EdgePointSampler(const Vec3& w0, const Vec3& w1, const LTC& lt
   if (target_integral_ > 0.0) eps_ = std::clamp(defensive, 1e-3, 1.0);
 }
 
-double EdgePointSampler::ltc_integral(const Vec3& w0, const Vec3& w1, const LTC& ltc, double t_lo, double t_hi) {
-  EdgePointSampler s;
-  s.w0_ = w0;
-  s.w1_ = w1;
-  s.ltc_ = ltc;
-  s.setup_ltc(w0.cross(w1).norm(), t_lo, t_hi);
-  return s.target_integral_;
+double EdgePointSampler::ltc_integral_mapped(const Vec3& u0, const Vec3& u1, double z0, double z1, double cross01,
+                                             double scale, double t_lo, double t_hi) {
+  if (!(scale > 0.0) || !(cross01 > 0.0) || !std::isfinite(cross01)) return 0.0;
+  double lo = std::max(0.0, t_lo), hi = std::min(1.0, t_hi);
+  restrict_positive(z0, z1, lo, hi);
+  restrict_positive(u0.z(), u1.z(), lo, hi);
+  if (!(hi > lo)) return 0.0;
+  // setup_ltc's quantities, with its unit vectors folded into dot products: e1 = ua / la,
+  // n = cu / cun, e2 = n x e1, m = (d x n) / |d| (the unit normal of the edge's line toward it,
+  // m . ua = h), so z1 = ua.z / la, z2 = (cu x ua).z / (cun la), m1 = h / la,
+  // m2 = -(d . ua) / (la |d|), and |u0 x u1| = cun / (hi - lo).
+  const Vec3 du = u1 - u0;
+  const Vec3 ua = u0 + lo * du, ub = u0 + hi * du;
+  const double la = ua.norm(), lb = ub.norm();
+  const Vec3 cu = ua.cross(ub);
+  const double cun = cu.norm(), dot_ab = ua.dot(ub);
+  const double psi_max = std::atan2(cun, dot_ab);
+  if (!(cun > 0.0) || !(psi_max > 0.0) || !(la > 0.0)) return 0.0;
+  const Vec3 d = ub - ua;
+  const double dn = d.norm();
+  const double h = cun / dn;
+  const double zz1 = ua.z() / la, zz2 = cu.cross(ua).z() / (cun * la);
+  const double mm1 = h / la, mm2 = -d.dot(ua) / (la * dn);
+  const double lab = la * lb;
+  const double sp = cun / lab, cp = dot_ab / lab;
+  const double F = zz1 * mm1 * int_cos2(psi_max, sp, cp) + (zz1 * mm2 + zz2 * mm1) * 0.5 * sp * sp +
+                   zz2 * mm2 * int_sin2(psi_max, sp, cp);
+  if (!(F > 0.0) || !std::isfinite(F)) return 0.0;
+  // target_integral = norm |w0 x w1| |det| / pi / (|u0 x u1| h) F, |u0 x u1| h = cun^2 / ((hi - lo) dn).
+  const double integral = scale * cross01 * (hi - lo) * dn / (cun * cun) * F;
+  return std::isfinite(integral) && integral > 0.0 ? integral : 0.0;
 }
 
 void EdgePointSampler::setup_ltc(double cross01, double t_lo, double t_hi) {

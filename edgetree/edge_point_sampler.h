@@ -72,9 +72,14 @@ class EdgePointSampler {
   double target_integral() const { return target_integral_; }
 
   /// target_integral() of EdgePointSampler(w0, w1, ltc, ·, t_lo, t_hi) without building the
-  /// sampler (no angle-uniform part, no copy): what an edge's importance needs. Bit-identical to
-  /// the member (the same code computes both).
-  static double ltc_integral(const Vec3& w0, const Vec3& w1, const LTC& ltc, double t_lo = 0.0, double t_hi = 1.0);
+  /// sampler, from what an edge's importance has at hand per query and per edge: the endpoints
+  /// mapped to the LTC's cosine domain (u0 = M_inv w0, u1 = M_inv w1), their heights above the
+  /// shading horizon (z0 = w0.z, z1 = w1.z), cross01 = |w0 x w1| and scale = norm |det M_inv| /
+  /// pi. The same closed form with only the constants the integral needs (no sampler state, no
+  /// LTC copy, 4 square roots instead of 6); equal to target_integral() up to rounding and zero
+  /// where it is zero (tests/edgetree/edge_mixture_test.cpp).
+  static double ltc_integral_mapped(const Vec3& u0, const Vec3& u1, double z0, double z1, double cross01, double scale,
+                                    double t_lo = 0.0, double t_hi = 1.0);
 
   /// The defensive share actually used (1 when the LTC part vanishes).
   double defensive_share() const { return eps_; }
@@ -92,7 +97,6 @@ class EdgePointSampler {
   /// Fills the LTC part (ta_ .. target_integral_) for the interval [t_lo, t_hi]; cross01 = |w0 x w1|.
   /// Leaves target_integral_ = 0 when the LTC part vanishes.
   void setup_ltc(double cross01, double t_lo, double t_hi);
-  EdgePointSampler() = default;  // for ltc_integral
 
   Vec3 w0_, w1_;
   LTC ltc_;

@@ -34,9 +34,6 @@ void choice_probabilities(const Range& c, int n, double* prob) {
 /// G_e = length / d2, d2 the squared distance of the edge's midpoint from p (length where p is at
 /// the midpoint).
 double edge_defensive(double length, double d2) { return d2 > 0 ? length / d2 : length; }
-double edge_defensive(const Edge& e, const Vec3& p) {
-  return edge_defensive(e.length, (0.5 * (e.p0 + e.p1) - p).squaredNorm());
-}
 
 /// Inner nodes of the quadric method with at most this many edges are tested edge by edge
 /// (node_has_silhouette) instead of by their bound: exact (no false accept, so no traversal dies
@@ -61,6 +58,8 @@ struct PreparedQuery {
   ForestBuffers& buffers;
   /// The guide's values in the cell of q.p (ForestGuide::cell_values), or null: unguided.
   const double* guide_values = nullptr;
+  /// The query's map into the LTC's cosine domain (edge importances, EdgeMixture::total).
+  LtcMap ltc_map;
 };
 
 /// The query's constants, in buffers of q.scratch, or of `fallback` where q has none.
@@ -233,15 +232,20 @@ namespace {
 double velocity_factor(const Edge& e, const SilhouetteQuery& q, const EdgeGeometry& g) {
   if (!q.velocities) return 1.0;
   if (!(g.normal_len > 0)) return 0.0;  // p on the edge's line: no plane, J = 0
-  const SceneVelocities::Block v0 = edge_end_velocity(e, 0, *q.velocities);
-  const SceneVelocities::Block v1 = edge_end_velocity(e, 1, *q.velocities);
-  double f = 0;
-  for (int k = 0; k < q.velocities->num_params; ++k) {
-    const double n_dp = g.normal.dot(q.dp.col(k));
-    f += 0.5 * (std::abs(g.normal.dot(v0.col(k)) - n_dp) + std::abs(g.normal.dot(v1.col(k)) - n_dp)) *
-         q.velocity_scale[size_t(k)];
-  }
-  return f / g.normal_len;
+  auto factor = [&](const SceneVelocities::Block& v0, const SceneVelocities::Block& v1) {
+    double f = 0;
+    for (int k = 0; k < q.velocities->num_params; ++k) {
+      const double n_dp = g.normal.dot(q.dp.col(k));
+      f += 0.5 * (std::abs(g.normal.dot(v0.col(k)) - n_dp) + std::abs(g.normal.dot(v1.col(k)) - n_dp)) *
+           q.velocity_scale[size_t(k)];
+    }
+    return f / g.normal_len;
+  };
+  // A mesh edge's end velocities by reference (a Block is 3 x kMaxParameters doubles, and this runs
+  // for every weighed candidate edge), a crossing's computed.
+  if (e.crossing) return factor(edge_end_velocity(e, 0, *q.velocities), edge_end_velocity(e, 1, *q.velocities));
+  const std::vector<SceneVelocities::Block>& position = q.velocities->position[size_t(e.shape)];
+  return factor(position[size_t(e.v0)], position[size_t(e.v1)]);
 }
 
 }  // namespace
@@ -328,7 +332,8 @@ NodeWeight leaf_edge_weight(const Edge& e, const PreparedQuery& prepared) {
   const EdgeGeometry g(e, q.p);  // once for the importance, its velocity factor and the defensive weight
   const double half = 0.5 * e.length;
   const bool far = prepared.cosine_lobe && half * half < kConeImportanceSin * kConeImportanceSin * g.mid2;
-  const double total = far ? EdgeMixture::far_total(e, q, prepared.lights, g) : EdgeMixture::total(e, q, prepared.lights);
+  const double total = far ? EdgeMixture::far_total(e, q, prepared.lights, g)
+                           : EdgeMixture::total(e, q, prepared.lights, prepared.ltc_map, g);
   // velocity_factor is finite, so a zero total needs no factor (below the horizon, outside every light).
   const double c = crease_factor(e, prepared);
   return {total > 0 ? c * total * velocity_factor(e, q, g) : 0.0, c * edge_defensive(e.length, g.mid2)};
@@ -336,7 +341,9 @@ NodeWeight leaf_edge_weight(const Edge& e, const PreparedQuery& prepared) {
 
 NodeWeight loose_edge_weight(const Edge& e, const PreparedQuery& prepared) {
   const double c = kPi * crease_factor(e, prepared);
-  return {c * EdgeMixture::total(e, prepared.q, prepared.lights), c * edge_defensive(e, prepared.q.p)};
+  const EdgeGeometry g(e, prepared.q.p);
+  return {c * EdgeMixture::total(e, prepared.q, prepared.lights, prepared.ltc_map, g),
+          c * edge_defensive(e.length, g.mid2)};
 }
 
 /// The range [lo, hi] of n . w over the cone of unit directions w at angle at most alpha from a
@@ -414,11 +421,13 @@ double glossy_cone_fbar(const PreparedQuery& prepared, const Vec3& axis, double 
   const Vec3 t = axis.unitOrthogonal(), b = axis.cross(t);
   const Mat3& M = q.ltc.M_inv;
   const Vec3 ma = M * (co * axis), mt = M * (s * t), mb = M * (s * b);
-  const Vec3 r0 = (ma + mt).normalized(), r1 = (ma - mt).normalized(), r2 = (ma + mb).normalized(),
-             r3 = (ma - mb).normalized();
+  // Unit vectors by one reciprocal square root each (normalized() divides every component).
+  auto unit = [](const Vec3& v) -> Vec3 { return v * (1.0 / std::sqrt(v.squaredNorm())); };
+  const Vec3 r0 = unit(ma + mt), r1 = unit(ma - mt), r2 = unit(ma + mb), r3 = unit(ma - mb);
   const Vec3 dt = 0.5 * (r0 - r1), db = 0.5 * (r2 - r3);
   if (!(dt.squaredNorm() + db.squaredNorm() < kGlossyConeImage)) return -1.0;
-  const double cz = (r0 + r1 + r2 + r3).normalized().z();
+  const Vec3 sum = r0 + r1 + r2 + r3;
+  const double cz = sum.z() / std::sqrt(sum.squaredNorm());
   const double h = std::sqrt(dt.z() * dt.z() + db.z() * db.z());
   if (!(cz + h > 0)) return 0.0;
   const double mass = std::min(1.0, dt.cross(db).norm() * mean_positive_part(cz - h, cz + h));
@@ -437,9 +446,11 @@ NodeWeight node_weight(const ForestNode& node, const PreparedQuery& prepared) {
   const double lw = prepared.cosine_lobe ? node.lw - (1.0 - kSmoothCreaseWeight) * node.lw_smooth : node.lw;
   w.defensive = h2 > 0 ? lw / h2 : lw;
   if (half_diag * half_diag < kConeImportanceSin * kConeImportanceSin * d2) {
-    const double d = std::sqrt(d2);
-    const Vec3 axis = q.frame.to_local((c - q.p) / d);
-    const double fbar = prepared.cosine_lobe ? cone_fbar(prepared, axis, half_diag / d) : glossy_cone_fbar(prepared, axis, half_diag / d);
+    const double inv_d = 1.0 / std::sqrt(d2);
+    const Vec3 axis = q.frame.to_local((c - q.p) * inv_d);
+    const double sin_alpha = half_diag * inv_d;
+    const double fbar =
+        prepared.cosine_lobe ? cone_fbar(prepared, axis, sin_alpha) : glossy_cone_fbar(prepared, axis, sin_alpha);
     if (fbar >= 0) {
       w.importance = w.defensive * fbar;
       return w;
@@ -505,7 +516,7 @@ struct ForestBuffers {
 PreparedQuery prepare(const SilhouetteQuery& q, EdgeChoiceScratch& fallback) {
   ForestBuffers& b = scratch_buffer<ForestBuffers>(q.scratch, fallback);
   local_lights(q, b.lights);
-  return {q, b.lights, is_cosine_lobe(q.ltc), b, q.guide ? q.guide->cell_values(q.p) : nullptr};
+  return {q, b.lights, is_cosine_lobe(q.ltc), b, q.guide ? q.guide->cell_values(q.p) : nullptr, LtcMap(q)};
 }
 
 void top_level(const EdgeForest& forest, const PreparedQuery& prepared, NodeTest test, TopLevel& top) {

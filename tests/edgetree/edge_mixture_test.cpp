@@ -98,12 +98,16 @@ TEST(EdgeMixtureTest, TotalIsTheRadianceWeightedIntegral) {
 }
 
 // The importance the traversal computes for every candidate edge (EdgeMixture::total without a
-// mixture) is the sampled mixture's total exactly, or the probability the traversal chooses an
-// edge with would differ from the one silhouette_edge_probability reports for it: over shading
-// frames, roughnesses, lights crossed or missed, emission on and off.
-TEST(EdgeMixtureTest, ImportanceWithoutTheMixtureIsItsTotalExactly) {
+// mixture, from the endpoints mapped once into the LTC's cosine domain: ltc_integral_mapped) is
+// the sampled mixture's total up to rounding, over shading frames, roughnesses, edges crossing
+// the shading horizon, lights crossed or missed, emission on and off; and zero only where the
+// sampler's integral is (a zero importance where the integral is not would leave the edge to the
+// defensive share alone). The relative tolerance 1e-9 is far above the rounding of either form
+// (about 1e-14 here) and far below any error of the closed form: dropping one term of F, or the
+// |d| of h, fails it.
+TEST(EdgeMixtureTest, ImportanceWithoutTheMixtureIsItsTotal) {
   TestRng rng(17);
-  int lit = 0;
+  int lit = 0, clipped = 0;
   for (int i = 0; i < 500; ++i) {
     LitEdge s(rng.uniform(), 40.0 * rng.uniform());
     const Vec3 n = Vec3(rng.uniform() - 0.5, rng.uniform() - 0.5, rng.uniform()).normalized();
@@ -112,15 +116,26 @@ TEST(EdgeMixtureTest, ImportanceWithoutTheMixtureIsItsTotalExactly) {
     s.q.ltc = i % 3 == 0 ? ltc_diffuse() : ltc_ggx(0.01 + rng.uniform(), wo);
     s.emission[1] = i % 2 ? 2.0 : 0.0;
     s.e.p1 += Vec3(rng.uniform() - 0.5, rng.uniform() - 0.5, rng.uniform() - 0.5);
+    if (i % 4 == 1) s.e.p0 = Vec3(rng.uniform() - 0.5, rng.uniform() - 0.5, -2.0 * rng.uniform());  // below
     std::vector<LocalLight> lights;
     local_lights(s.q, lights);
     const EdgeMixture m(s.e, s.q, lights);
-    ASSERT_EQ(EdgeMixture::total(s.e, s.q, lights), m.total()) << "case " << i;
-    const EdgePointSampler plain(s.w(0), s.w(1), s.q.ltc, kEdgeDefensiveShare, 0.2, 0.7);
-    ASSERT_EQ(EdgePointSampler::ltc_integral(s.w(0), s.w(1), s.q.ltc, 0.2, 0.7), plain.target_integral()) << i;
+    const double total = EdgeMixture::total(s.e, s.q, lights);
+    ASSERT_NEAR(total, m.total(), 1e-9 * m.total()) << "case " << i;
+    ASSERT_EQ(total > 0, m.total() > 0) << "case " << i;
+    const double exact = EdgePointSampler(s.w(0), s.w(1), s.q.ltc, kEdgeDefensiveShare, 0.2, 0.7).target_integral();
+    const LtcMap map(s.q);
+    const EdgeGeometry g(s.e, s.q.p);
+    const double mapped =
+        EdgePointSampler::ltc_integral_mapped(map.to_cosine * g.w0, map.to_cosine * g.w1, map.normal.dot(g.w0),
+                                              map.normal.dot(g.w1), g.normal_len, map.scale, 0.2, 0.7);
+    ASSERT_NEAR(mapped, exact, 1e-9 * exact) << "case " << i;
+    ASSERT_EQ(mapped > 0, exact > 0) << "case " << i;
     const double unlit = (s.q.env_weight + s.emission[1]) * EdgePointSampler(s.w(0), s.w(1), s.q.ltc).target_integral();
     lit += m.total() > 1.001 * unlit;
+    clipped += s.w(0).z() < 0 && m.total() > 0;
   }
+  EXPECT_GT(clipped, 20);  // edges cut by the shading horizon are exercised
   EXPECT_GT(lit, 50);  // the light's component is exercised
 }
 
