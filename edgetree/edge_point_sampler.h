@@ -76,8 +76,8 @@ class EdgePointSampler {
   /// mapped to the LTC's cosine domain (u0 = M_inv w0, u1 = M_inv w1), their heights above the
   /// shading horizon (z0 = w0.z, z1 = w1.z), cross01 = |w0 x w1| and scale = norm |det M_inv| /
   /// pi. The same closed form with only the constants the integral needs (no sampler state, no
-  /// LTC copy, 4 square roots instead of 6); equal to target_integral() up to rounding and zero
-  /// where it is zero (tests/edgetree/edge_mixture_test.cpp).
+  /// LTC copy, 4 square roots instead of 6); equal to target_integral() up to rounding, and zero
+  /// where it is zero up to rounding at the ends of an interval (tests/edgetree/edge_mixture_test.cpp).
   static double ltc_integral_mapped(const Vec3& u0, const Vec3& u1, double z0, double z1, double cross01, double scale,
                                     double t_lo = 0.0, double t_hi = 1.0);
 
