@@ -355,17 +355,20 @@ void EdgeSet::refit_edges(std::span<const ForestShapeInput> shapes, RefitReport&
     if (e.cls == EdgeClass::Convex || e.cls == EdgeClass::Concave || e.cls == EdgeClass::Flat)
       e.cls = classify_interior_edge(mesh, e);
   };
+  std::vector<std::uint8_t> retired(edges_.size());  // the flags again, a byte each: scanned below
   tbb::parallel_for(size_t(0), edges_.size(), [&](size_t k) {
     Edge& e = edges_[k];
     move_edge(e, &e.p0, &e.p1);
     e.retired = is_crease_class(e.cls, crease_rule(*input[size_t(e.shape)]));
+    retired[k] = e.retired;
   });
   tbb::parallel_for(size_t(0), always_.size(), [&](size_t k) { move_edge(always_[k], &always_[k].p0, &always_[k].p1); });
   report.edges = int(edges_.size() + always_.size());
   // ---- the promoted creases, per shape in input order (deterministic: array order)
   std::vector<std::vector<Edge>> promoted(shapes.size());
-  for (const Edge& e : edges_)
-    if (e.retired) {
+  for (size_t k = 0; k < edges_.size(); ++k)
+    if (retired[k]) {
+      const Edge& e = edges_[k];
       Edge c = e;
       c.retired = false;
       c.crease = true;
@@ -406,13 +409,15 @@ void EdgeSet::refit_edges(std::span<const ForestShapeInput> shapes, RefitReport&
     }
   }
   // ---- B_p and L_w of the shapes' nodes (the promoted trees have theirs from build_topology),
-  // bottom-up: a leaf from its edges, an inner node from its children (larger indices)
+  // bottom-up: the leaves from their edges (in parallel: they read their own edges only), then an
+  // inner node from its children (larger indices)
+  tbb::parallel_for(size_t(0), shapes_nodes_end_, [&](size_t i) {
+    ForestNode& n = nodes_[i];
+    if (n.is_leaf()) node_extent(n, n.always() ? always_ : edges_);
+  });
   for (size_t i = shapes_nodes_end_; i-- > 0;) {
     ForestNode& n = nodes_[i];
-    if (n.is_leaf()) {
-      node_extent(n, n.always() ? always_ : edges_);
-      continue;
-    }
+    if (n.is_leaf()) continue;
     n.bp = Box3();
     n.lw = n.lw_smooth = 0.0;
     for (int c = n.first; c < n.first + n.count; ++c) {

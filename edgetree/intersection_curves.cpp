@@ -307,12 +307,10 @@ struct NarrowResults {
   long long edge_sharing = 0;                  ///< pairs sharing an edge by index (not kept)
 };
 
-/// The narrow phase of one candidate pair p: its segment into out.found when both triangles
-/// cross the other's plane, or into out.pending when one lies on the other's plane with an edge.
-void narrow_phase(std::span<const CurveMesh> meshes, const TrianglePair& p, NarrowResults& out) {
-  ++out.pairs;
-  if (p.mesh0 == p.mesh1 && shares_an_edge(*meshes[size_t(p.mesh0)].mesh, p.triangle0, p.triangle1)) return;
-  const Tri A = triangle(meshes, p.mesh0, p.triangle0), B = triangle(meshes, p.mesh1, p.triangle1);
+/// The narrow phase of candidate pair p, triangles A and B (see narrow_phase), pairs that share
+/// an edge by index already set aside.
+void narrow_phase_of(std::span<const CurveMesh> meshes, const TrianglePair& p, const Tri& A, const Tri& B,
+                     NarrowResults& out) {
   const Sharing sh = sharing(A, B);
   if (sh.count >= 2) return;  // an edge (or the triangle) in common: no crossing
   const Sides sd = sides(A, B, sh);
@@ -329,6 +327,14 @@ void narrow_phase(std::span<const CurveMesh> meshes, const TrianglePair& p, Narr
         out.pending.push_back({p, t, (k + 1) % 3, (k + 2) % 3});
       }
   }
+}
+
+/// The narrow phase of one candidate pair p: its segment into out.found when both triangles
+/// cross the other's plane, or into out.pending when one lies on the other's plane with an edge.
+void narrow_phase(std::span<const CurveMesh> meshes, const TrianglePair& p, NarrowResults& out) {
+  ++out.pairs;
+  if (p.mesh0 == p.mesh1 && shares_an_edge(*meshes[size_t(p.mesh0)].mesh, p.triangle0, p.triangle1)) return;
+  narrow_phase_of(meshes, p, triangle(meshes, p.mesh0, p.triangle0), triangle(meshes, p.mesh1, p.triangle1), out);
 }
 
 /// The segment of a pending pair, if it crosses: a triangle with an edge in the other's plane
@@ -365,6 +371,28 @@ std::optional<CrossingSegment> pending_segment(std::span<const CurveMesh> meshes
 bool boxes_overlap(std::span<const CurveMesh> meshes, const TrianglePair& p) {
   const Box3 a = meshes[size_t(p.mesh0)].mesh->triangle_bounds(p.triangle0);
   return a.within(meshes[size_t(p.mesh1)].mesh->triangle_bounds(p.triangle1));
+}
+
+/// boxes_overlap of two triangles already read: the same boxes (a coordinate's min and max do not
+/// depend on the order), hence the same answer.
+bool boxes_overlap(const Tri& A, const Tri& B) {
+  Box3 a, b;
+  for (int k = 0; k < 3; ++k) {
+    a.expand(A.x[size_t(k)]);
+    b.expand(B.x[size_t(k)]);
+  }
+  return a.within(b);
+}
+
+/// True iff triangles f and g of one mesh share a vertex index. Their boxes then overlap, for both
+/// hold that vertex's position. In a closed mesh that is more than half of a cache's pairs
+/// (CandidatePairCache): a triangle among valence-6 vertices has 9 neighbours by a vertex alone.
+bool shares_a_vertex(const TriangleMesh& mesh, int f, int g) {
+  const auto& a = mesh.triangles[size_t(f)];
+  const auto& b = mesh.triangles[size_t(g)];
+  for (int i = 0; i < 3; ++i)
+    if (a[i] == b[0] || a[i] == b[1] || a[i] == b[2]) return true;
+  return false;
 }
 
 /// FNV-1a over every mesh's triangle count and vertex indices.
@@ -514,7 +542,14 @@ std::vector<CrossingSegment> find_intersection_curves(std::span<const CurveMesh>
         TrianglePair p;
         unpack(pairs[i].a, p.mesh0, p.triangle0);
         unpack(pairs[i].b, p.mesh1, p.triangle1);
-        if (boxes_overlap(meshes, p)) narrow_phase(meshes, p, out);
+        // The broad phase's exact box test where the pair shares no vertex, on the triangles the
+        // narrow phase reads; no pair here shares an edge by index (the fill set those aside).
+        const Tri A = triangle(meshes, p.mesh0, p.triangle0), B = triangle(meshes, p.mesh1, p.triangle1);
+        if (!(p.mesh0 == p.mesh1 && shares_a_vertex(*meshes[size_t(p.mesh0)].mesh, p.triangle0, p.triangle1)) &&
+            !boxes_overlap(A, B))
+          continue;
+        ++out.pairs;
+        narrow_phase_of(meshes, p, A, B, out);
       }
     });
     local.local().pairs += cache->edge_sharing_pairs;  // they overlap wherever coordinates are finite

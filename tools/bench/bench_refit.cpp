@@ -20,6 +20,10 @@
 ///   the refit's and the build's time, and where the refit's curve search took its pairs
 ///   (its cache, or the broad phase); and both times' means over the trajectory.
 /// Fixed seeds: the same table for the same build, timings aside.
+/// With `--refits-only N` (a workload for `perf` and for side-by-side runs of two builds): per mesh,
+/// one build, one refit that fills the pair cache, then N refits of the unmoved mesh from it, and
+/// one line with their mean time, their curve search's, and the last refit's bound counts;
+/// `--without-curves` builds and refits that forest without intersection curves.
 
 #include "cli_parse.h"
 #include "qsil/edgetree/edge_forest.h"
@@ -131,13 +135,20 @@ void smooth_step(TriangleMesh& m, double amp, std::mt19937_64& rng) {
 
 int main(int argc, char** argv) {
   std::vector<std::string> meshes;
-  int steps = 10, points = 400;
+  int steps = 10, points = 400, refits_only = 0;
+  bool refits_without_curves = false;
   double amplitude = 0.002;
   CLI::App app{"bench_refit: edge-forest refit against rebuild, time and quality along a trajectory"};
   app.add_option("meshes", meshes, "OBJ files (default: spot, bunny, teapot; paths relative to the repository root)");
   app.add_option("--steps", steps, "steps of the trajectory")->check(CLI::Range(1, 1000));
   app.add_option("--amplitude", amplitude, "displacement per step, fraction of the diagonal")->check(CLI::Range(0.0, 1.0));
   app.add_option("--points", points, "shading points of the false-accept share")->check(CLI::Range(10, 1000000));
+  app.add_option("--refits-only", refits_only,
+                 "build once, then refit the unmoved mesh this many times (from the pair cache) and print "
+                 "only their mean time: a workload for a profiler")
+      ->check(CLI::Range(1, 100000));
+  app.add_flag("--without-curves", refits_without_curves,
+               "with --refits-only: a forest built and refitted without intersection curves");
   if (const auto code = qsil::cli::parse_arguments(app, argc, argv)) return *code;
   if (meshes.empty())
     meshes = {"scenes/meshes/spot.obj", "scenes/meshes/bunny.obj", "scenes/stability/meshes/teapot.obj"};
@@ -153,6 +164,25 @@ int main(int argc, char** argv) {
     const std::string name = std::filesystem::path(path).stem().string();
     ForestShapeInput in{&mesh, 0, false, CreaseSet::Concave};
     const auto span = std::span(&in, 1);
+    if (refits_only > 0) {
+      ForestOptions options;
+      options.intersection_curves = !refits_without_curves;
+      EdgeForest f = EdgeForest::build(span, options);
+      f.refit(span);  // fills the pair cache
+      double total = 0, curves = 0;
+      RefitReport rr;
+      for (int r = 0; r < refits_only; ++r) {
+        rr = f.refit(span);
+        if (!rr.refitted) return 1;
+        total += rr.seconds;
+        curves += rr.crossing_seconds;
+      }
+      std::printf(
+          "%s: %d refits from the pair cache, mean %.4f s (their curves' search %.4f s); the last refitted "
+          "%d bounds, %d of them fitted anew\n",
+          name.c_str(), refits_only, total / refits_only, curves / refits_only, rr.bounds, rr.refitted_fully);
+      continue;
+    }
     // ---- set-up time on the unmoved mesh
     EdgeForest forest;
     const auto [build, build_cross] = best_of(3, [&] {
