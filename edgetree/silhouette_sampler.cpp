@@ -244,8 +244,7 @@ double velocity_factor(const Edge& e, const SilhouetteQuery& q, const EdgeGeomet
   // A mesh edge's end velocities by reference (a Block is 3 x kMaxParameters doubles, and this runs
   // for every weighed candidate edge), a crossing's computed.
   if (e.crossing) return factor(edge_end_velocity(e, 0, *q.velocities), edge_end_velocity(e, 1, *q.velocities));
-  const std::vector<SceneVelocities::Block>& position = q.velocities->position[size_t(e.shape)];
-  return factor(position[size_t(e.v0)], position[size_t(e.v1)]);
+  return factor(mesh_edge_end_velocity(e, 0, *q.velocities), mesh_edge_end_velocity(e, 1, *q.velocities));
 }
 
 }  // namespace

@@ -63,13 +63,19 @@ struct Edge : MeshEdge {
   const CrossingSegment* crossing = nullptr;
 };
 
+/// The velocities of end `end` (0: p0, 1: p1) of mesh edge e (e.crossing null), by reference: its
+/// vertex's (v0, v1), 3 x kMaxParameters, world units per unit theta (see edge_end_velocity).
+inline const SceneVelocities::Block& mesh_edge_end_velocity(const Edge& e, int end, const SceneVelocities& velocities) {
+  return velocities.position[size_t(e.shape)][size_t(end ? e.v1 : e.v0)];
+}
+
 /// The velocity of end `end` (0: p0, 1: p1) of edge e for every parameter (3 x kMaxParameters,
 /// world units per unit theta): its vertex's (v0, v1) for a mesh edge, crossing_end_velocity for
 /// a segment of an intersection curve. The velocity of the edge point at t is (1 - t) times that
 /// of end 0 plus t times that of end 1.
 inline SceneVelocities::Block edge_end_velocity(const Edge& e, int end, const SceneVelocities& velocities) {
   if (e.crossing) return crossing_end_velocity(e.crossing->ends[size_t(end)], velocities);
-  return velocities.position[size_t(e.shape)][size_t(end ? e.v1 : e.v0)];
+  return mesh_edge_end_velocity(e, end, velocities);
 }
 
 /// True iff the radiance seen from p can jump across edge e: a silhouette or boundary edge
