@@ -51,6 +51,21 @@ void node_extent(ForestNode& n, const std::vector<Edge>& edges) {
   }
 }
 
+/// B_p, L_w and L_w's smooth-crease part of inner node n from its children's, in child order
+/// (the children come after n in `nodes` and have theirs already). Build and refit both take an
+/// inner node's from its children, so a refit of unmoved vertices gives the build's numbers.
+void node_extent_from_children(ForestNode& n, const std::vector<ForestNode>& nodes) {
+  n.bp = Box3();
+  n.lw = 0.0;
+  n.lw_smooth = 0.0;
+  for (int c = n.first; c < n.first + n.count; ++c) {
+    const ForestNode& child = nodes[size_t(c)];
+    n.bp.expand(child.bp);
+    n.lw += child.lw;
+    n.lw_smooth += child.lw_smooth;
+  }
+}
+
 // Splits refs [b, e) into 2..4 groups: one binary SAH split, then each half again if it is
 // larger than a leaf [QSS 4.1: three binary splits per level].
 std::vector<std::pair<int, int>> split4(std::vector<EdgeBoxRef>& refs, int b, int e, const EdgeSetOptions& opt) {
@@ -149,8 +164,15 @@ std::vector<std::pair<int, int>> build_topology(std::vector<Edge>& edges, int eb
     ++depth;
   }
   permute_edges(edges, ebase, refs);
-  // ---- B_p and L_w of every node (edges are in their final order now), in parallel
-  tbb::parallel_for(nbase, int(nodes.size()), [&](int i) { node_extent(nodes[size_t(i)], edges); });
+  // ---- B_p and L_w of every node (edges are in their final order now): the leaves from their
+  // edges, then the inner nodes from their children, deepest level first; each step in parallel
+  tbb::parallel_for(nbase, int(nodes.size()), [&](int i) {
+    if (nodes[size_t(i)].is_leaf()) node_extent(nodes[size_t(i)], edges);
+  });
+  for (auto level = levels.rbegin(); level != levels.rend(); ++level)
+    tbb::parallel_for(level->first, level->second, [&](int i) {
+      if (!nodes[size_t(i)].is_leaf()) node_extent_from_children(nodes[size_t(i)], nodes);
+    });
   return levels;
 }
 
@@ -415,18 +437,8 @@ void EdgeSet::refit_edges(std::span<const ForestShapeInput> shapes, RefitReport&
     ForestNode& n = nodes_[i];
     if (n.is_leaf()) node_extent(n, n.always() ? always_ : edges_);
   });
-  for (size_t i = shapes_nodes_end_; i-- > 0;) {
-    ForestNode& n = nodes_[i];
-    if (n.is_leaf()) continue;
-    n.bp = Box3();
-    n.lw = n.lw_smooth = 0.0;
-    for (int c = n.first; c < n.first + n.count; ++c) {
-      const ForestNode& child = nodes_[size_t(c)];
-      n.bp.expand(child.bp);
-      n.lw += child.lw;
-      n.lw_smooth += child.lw_smooth;
-    }
-  }
+  for (size_t i = shapes_nodes_end_; i-- > 0;)
+    if (!nodes_[i].is_leaf()) node_extent_from_children(nodes_[i], nodes_);
 }
 
 std::vector<CrossingSegment> EdgeSet::find_crossings(std::span<const ForestShapeInput> shapes,

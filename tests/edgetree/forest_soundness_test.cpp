@@ -301,6 +301,28 @@ TEST(ForestRefit, NoMotionAndCrossings) {
   EXPECT_EQ(f.always_edges().size(), rebuilt.always_edges().size());
 }
 
+// A refit of unmoved vertices gives every node the B_p and L_w it was built with, to the bit: build
+// and refit both take an inner node's from its children, in the same order (the build once summed
+// L_w over all of a node's edges, which rounds differently). Spot, whose concave creases make an
+// always-candidate tree as well.
+TEST(ForestRefit, UnmovedRefitKeepsTheBuiltExtents) {
+  const TriangleMesh mesh = mesh_file("spot.obj");
+  ForestShapeInput in{&mesh, 0, false, CreaseSet::Concave};
+  EdgeForest f = EdgeForest::build(std::span(&in, 1));
+  const std::vector<ForestNode> built = f.nodes();
+  ASSERT_TRUE(f.refit(std::span(&in, 1)).refitted);
+  ASSERT_EQ(f.nodes().size(), built.size());
+  int always = 0;
+  for (size_t i = 0; i < built.size(); ++i) {
+    const ForestNode &n = f.nodes()[i], &m = built[i];
+    ASSERT_TRUE(n.bp.lo == m.bp.lo && n.bp.hi == m.bp.hi) << "node " << i;
+    ASSERT_EQ(n.lw, m.lw) << "node " << i;
+    ASSERT_EQ(n.lw_smooth, m.lw_smooth) << "node " << i;
+    always += n.always();
+  }
+  EXPECT_GT(always, 100);
+}
+
 // A refit after a small move takes its curves' pairs from the pair cache its first refit filled
 // (CandidatePairCache), and its crossing segments are those of a forest built at the new places.
 TEST(ForestRefit, CurvesFromThePairCacheAreThoseOfABuild) {
