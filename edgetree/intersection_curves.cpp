@@ -428,9 +428,11 @@ CacheCheck check_cache(const CandidatePairCache& cache, std::span<const CurveMes
   for (size_t i = 0; i < meshes.size(); ++i) {
     const std::vector<Vec3>& now = meshes[i].mesh->positions;
     for (size_t v = 0; v < now.size(); ++v) {
-      const double move = (now[v] - cache.positions[i][v]).cwiseAbs().maxCoeff();
-      if (!(move <= std::numeric_limits<double>::max())) return CacheCheck::Unusable;  // not finite
-      d = std::max(d, move);
+      // A coordinate that is not finite (or a move that overflows) makes the cache unusable; tested
+      // per coordinate, for maxCoeff would pass over a NaN in y or z.
+      const Vec3 delta = now[v] - cache.positions[i][v];
+      if (!delta.allFinite()) return CacheCheck::Unusable;
+      d = std::max(d, delta.cwiseAbs().maxCoeff());
     }
   }
   // fl(x - y) = (x - y)(1 + e), |e| <= 2^-53: the true move is at most d (1 + 2^-52), and the

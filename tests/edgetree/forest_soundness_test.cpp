@@ -303,8 +303,10 @@ TEST(ForestRefit, NoMotionAndCrossings) {
 
 // A refit of unmoved vertices gives every node the B_p and L_w it was built with, to the bit: build
 // and refit both take an inner node's from its children, in the same order (the build once summed
-// L_w over all of a node's edges, which rounds differently). Spot, whose concave creases make an
-// always-candidate tree as well.
+// L_w over all of a node's edges, which rounds differently: then this fails at the root's L_w;
+// B_p, a min and max, cannot tell the two apart). Edge lengths come out equal because build
+// (mesh_edges.cpp) and refit (edge_set.cpp) compute them with the same expression. Spot, whose
+// concave creases make an always-candidate tree as well.
 TEST(ForestRefit, UnmovedRefitKeepsTheBuiltExtents) {
   const TriangleMesh mesh = mesh_file("spot.obj");
   ForestShapeInput in{&mesh, 0, false, CreaseSet::Concave};

@@ -12,6 +12,7 @@
 #include <tbb/global_control.h>
 
 #include <algorithm>
+#include <limits>
 #include <map>
 #include <random>
 #include <set>
@@ -399,6 +400,27 @@ TEST(IntersectionCurves, PairCacheFindsTrianglesThatMovedTowardsEachOther) {
     IntersectionCurveStats stats;
     expect_same_segments(find_intersection_curves(in, &stats, &cache), plain, "moved " + std::to_string(s));
     EXPECT_FALSE(stats.from_cache);
+  }
+}
+
+// A vertex that is no longer finite makes the cache unusable, whichever coordinate: the search
+// runs without it (a cached search would send pairs whose box test a NaN defeats to the narrow
+// phase). Two triangles of one mesh share vertex 0 and lie apart in y; after the fill, vertex 0's
+// y (and then x, z) becomes NaN. Fails when the check takes the largest move with maxCoeff, which
+// passes over a NaN in y or z.
+TEST(IntersectionCurves, PairCacheDoesNotServeANonFiniteVertex) {
+  for (int axis = 0; axis < 3; ++axis) {
+    TriangleMesh m;
+    m.positions = {{0, 0, 0}, {1, 0.1, 0}, {1, 0.2, 1}, {-1, 0.3, 0}, {-1, 0.4, 1}};
+    m.triangles = {{0, 1, 2}, {0, 3, 4}};
+    const std::vector<CurveMesh> in{{&m, 0}};
+    CandidatePairCache cache;
+    find_intersection_curves(in, nullptr, &cache);
+    ASSERT_TRUE(cache.valid);
+    m.positions[0][axis] = std::numeric_limits<double>::quiet_NaN();
+    IntersectionCurveStats stats;
+    find_intersection_curves(in, &stats, &cache);
+    EXPECT_FALSE(stats.from_cache) << "axis " << axis;
   }
 }
 

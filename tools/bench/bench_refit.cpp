@@ -150,6 +150,10 @@ int main(int argc, char** argv) {
   app.add_flag("--without-curves", refits_without_curves,
                "with --refits-only: a forest built and refitted without intersection curves");
   if (const auto code = qsil::cli::parse_arguments(app, argc, argv)) return *code;
+  if (refits_without_curves && refits_only == 0) {
+    std::fprintf(stderr, "bench_refit: --without-curves needs --refits-only\n");
+    return 2;
+  }
   if (meshes.empty())
     meshes = {"scenes/meshes/spot.obj", "scenes/meshes/bunny.obj", "scenes/stability/meshes/teapot.obj"};
   tbb::global_control gc(tbb::global_control::max_allowed_parallelism, 2);
@@ -173,7 +177,10 @@ int main(int argc, char** argv) {
       RefitReport rr;
       for (int r = 0; r < refits_only; ++r) {
         rr = f.refit(span);
-        if (!rr.refitted) return 1;
+        if (!rr.refitted) {
+          std::fprintf(stderr, "bench_refit: %s: %s\n", name.c_str(), rr.reason.c_str());
+          return 1;
+        }
         total += rr.seconds;
         curves += rr.crossing_seconds;
       }

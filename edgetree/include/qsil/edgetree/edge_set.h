@@ -66,8 +66,12 @@ struct Edge : MeshEdge {
 /// The velocities of end `end` (0: p0, 1: p1) of mesh edge e (e.crossing null), by reference: its
 /// vertex's (v0, v1), 3 x kMaxParameters, world units per unit theta (see edge_end_velocity).
 inline const SceneVelocities::Block& mesh_edge_end_velocity(const Edge& e, int end, const SceneVelocities& velocities) {
+  QSIL_DCHECK_MSG(!e.crossing, "mesh_edge_end_velocity of a segment of an intersection curve");
   return velocities.position[size_t(e.shape)][size_t(end ? e.v1 : e.v0)];
 }
+/// Not for a temporary SceneVelocities: the reference would outlive it.
+const SceneVelocities::Block& mesh_edge_end_velocity(const Edge& e, int end,
+                                                     const SceneVelocities&& velocities) = delete;
 
 /// The velocity of end `end` (0: p0, 1: p1) of edge e for every parameter (3 x kMaxParameters,
 /// world units per unit theta): its vertex's (v0, v1) for a mesh edge, crossing_end_velocity for
