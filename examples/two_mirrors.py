@@ -1,9 +1,9 @@
 #!/usr/bin/env python3
-"""Reconstruct an object seen only in two rough mirrors ([QSS] Sec. 5.5, Fig. 14) with qsil's reverse mode.
+"""Reconstruct an object whose details are seen only in two rough mirrors ([QSS] Sec. 5.5, Fig. 14) with qsil's reverse mode.
 
-The scene is scenes/two-mirrors.xml: the camera sees the bunny, which stands behind it, only in two
-GGX mirrors (alpha 0.01) set in a shallow V, each showing it from its own side, under an
-environment map. One target image (the true bunny, high spp; one per film size of --res, which
+The scene is scenes/two-mirrors.xml: the camera sees the bunny directly from behind, and its face
+and flanks only in two GGX mirrors (alpha 0.01) behind it, one on each side, under an environment
+map. One target image (the true bunny, high spp; one per film size of --res, which
 grows at each remeshing: coarse to fine); the optimisation starts from a sphere and moves every
 vertex:
 
@@ -17,15 +17,15 @@ vertex:
 The estimator is set up once per mesh (qsil.ReverseEstimator: update() refits the edge forest after
 each step, sets up anew after a remeshing). Each boundary method (quadric: the edge forest;
 vsphere: Li 2019's tree; none: no boundary term) runs for the same wall time; METHOD:2 also fits
-the image of a second camera that sees the object directly (a multi-view target, for
+the image of a second camera that sees the object from its side (a multi-view target, for
 comparison). At ten points the shape is scored outside the budget: the loss of a fixed-seed
 render from the camera at the largest film size, and the Chamfer and Hausdorff distances to the
 true mesh (qsil_shape.SurfaceDistance: area-uniform surface samples, relative to the true mesh's
-bounding-box diagonal), of the whole surface and of the part the camera sees in the mirrors
-(seen_in_mirrors). On a terminal a status line shows the time budget, steps/s and the loss.
+bounding-box diagonal), of the whole surface and of the part the camera sees, directly or in a
+mirror (seen_by_camera). On a terminal a status line shows the time budget, steps/s and the loss.
 Output (--out): results.json (the record), progress.png (loss and distances against time),
 evolution-METHOD.png (the shape at five times, from the camera and from a second camera that sees
-the object directly), report.md (the text that --page writes into docs/inverse-rendering.md;
+the object from its side), report.md (the text that --page writes into docs/inverse-rendering.md;
 --page-from rewrites it from a record alone).
 
 Usage: /usr/bin/python3 examples/two_mirrors.py [--build build] [--seconds 1200] [--methods quadric,vsphere,none]
@@ -33,6 +33,7 @@ Needs the Python module (built by CMake into BUILD/python), NumPy, SciPy and mat
 """
 import argparse
 import os
+import re
 import sys
 import tempfile
 import time
@@ -45,14 +46,33 @@ from qsil_shape import (LargeSteps, Progress, SurfaceDistance, add_page_argument
                         mean_edge, page_from_record, progress_chart, ratio, write_obj, write_record)
 SCENE = os.path.join(ROOT, "scenes", "two-mirrors.xml")
 # The second camera (display only): beside the bunny, looking at its bounding-box centre.
-SECOND_VIEW = '<lookat origin="1.7, 0.9, 3.3" target="0, 0, 1.4" up="0, 1, 0"/>'
+SECOND_VIEW = '<lookat origin="3.2, 1.6, -2.6" target="0, 0, -3.4" up="0, 1, 0"/>'
+
+
+def camera_lookat(xml, where):
+    """The text of the first <lookat .../> element of a scene's XML text (the camera's); where names
+    the file in the error (ValueError) when there is none."""
+    m = re.search(r"<lookat [^>]*/>", xml)
+    if m is None:
+        raise ValueError("%s: no <lookat .../> element for the camera" % where)
+    return m.group(0)
+
+
+def camera_half_fov(xml, where):
+    """Half the camera's field of view in radians, from the first <float name="fov"> of a scene's XML
+    text: the film is square, so the x and y fields of view are equal. ValueError (naming where)
+    without one."""
+    m = re.search(r'<float name="fov" value="([^"]*)"/>', xml)
+    if m is None:
+        raise ValueError("%s: no <float name=\"fov\" .../> for the camera" % where)
+    return np.radians(0.5 * float(m.group(1)))
 
 
 def second_view_scene(tmp):
     """two-mirrors.xml seen by the second camera (absolute paths, written to tmp)."""
     with open(SCENE) as f:
         xml = f.read()
-    xml = xml.replace('<lookat origin="0, 0, 0" target="0, 0, -1" up="0, 1, 0"/>', SECOND_VIEW)
+    xml = xml.replace(camera_lookat(xml, SCENE), SECOND_VIEW)
     scenes = os.path.join(ROOT, "scenes")
     xml = xml.replace('value="meshes/', 'value="%s/meshes/' % scenes).replace('value="envmaps/', 'value="%s/envmaps/' % scenes)
     path = os.path.join(tmp, "two-mirrors-second-view.xml")
@@ -63,6 +83,15 @@ def second_view_scene(tmp):
 
 RECORD = "images/two-mirrors/results.json"
 SCRIPT = "examples/two_mirrors.py"
+
+
+def seen_how(r):
+    """How the record r's "seen" part was seen, and by which function: records written before the
+    scene changed (2026-11-27; no "mirror_only_share") scored the part seen in the mirrors, with
+    seen_in_mirrors; later ones the part seen directly or in a mirror, with seen_by_camera."""
+    if "mirror_only_share" not in r:
+        return " in the mirrors", "", "seen_in_mirrors"
+    return ", directly or in a mirror", "%.0f %% only in a mirror; " % (100 * r["mirror_only_share"]), "seen_by_camera"
 
 
 def page_text(r):
@@ -76,6 +105,12 @@ def page_text(r):
             return str(x)
         mantissa, exponent = ("%.1e" % x).split("e")
         return "%s·10%s" % (mantissa, str(int(exponent)).translate(str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")))
+    def loss_ratio(a, b, of=""):
+        """ratio's text for two losses above the floor (followed by of), or why there is none: a
+        loss at or below the floor is within the scoring render's noise, which cannot rank it."""
+        if a > 0 and b > 0:
+            return ratio(a, b) + of
+        return "no ratio: a loss at or below the floor is within the scoring render's noise"
     res = r["res"]
     schedule = " → ".join("%d²" % x for x in res) if len(set(res)) > 1 else "%d²" % res[0]
     out = ["**Set-up** (from the record): film %s over %d phases of equal time between %d remeshings; %d spp "
@@ -86,11 +121,10 @@ def page_text(r):
            "of a fixed-seed 64-spp render at %d² (its noise floor, the true bunny's loss, is %.5f) and the Chamfer "
            "and Hausdorff distances between the surfaces (20 000 area-uniform samples each), in %% of the bunny's "
            "diagonal (%.2f); \"seen\": the same distances between the %.0f %% of the bunny's surface that the camera "
-           "sees in the mirrors (a ray test from each sample, `seen_in_mirrors`) and the shape's samples nearest to it."
-           % (schedule, len(res), r["remeshes"], r["spp"], r["target_spp"], r["start_vertices"],
-                                  r["lam"], r["lr"], r["lr_decay"], r["min_edge"], 100 * r["min_edge"] / r["diag"],
-                                  r["seconds"], r["threads"], r["score_res"], floor, r["diag"],
-                                  100 * r["seen_share"]),
+           "sees%s (%sa ray test from each sample, `%s`) and the shape's samples nearest to it."
+           % ((schedule, len(res), r["remeshes"], r["spp"], r["target_spp"], r["start_vertices"],
+               r["lam"], r["lr"], r["lr_decay"], r["min_edge"], 100 * r["min_edge"] / r["diag"],
+               r["seconds"], r["threads"], r["score_res"], floor, r["diag"], 100 * r["seen_share"]) + seen_how(r)),
            "",
            "| method | steps in %g s | steps/s | set-ups / refits | vertices | loss above floor | Chamfer | Hausdorff "
            "| Chamfer, seen | Hausdorff, seen |" % r["seconds"],
@@ -119,15 +153,15 @@ def page_text(r):
             out.append("- quadric against vsphere at equal time: loss above the floor %s against %s (%s), Chamfer "
                        "%s against %s, Hausdorff %s against %s." % (
                            sci(q["loss"] - floor), sci(v["loss"] - floor),
-                           ratio(v["loss"] - floor, q["loss"] - floor), pct(q["chamfer"]), pct(v["chamfer"]),
+                           loss_ratio(v["loss"] - floor, q["loss"] - floor), pct(q["chamfer"]), pct(v["chamfer"]),
                            pct(q["hausdorff"]), pct(v["hausdorff"])))
         if "none" in ms:
             n = ms["none"]
             out.append("- Without the boundary term (none): Chamfer %s (%s quadric's; the start's is %s), "
-                       "Hausdorff %s, loss above the floor %s (%s quadric's)." % (
+                       "Hausdorff %s, loss above the floor %s (%s)." % (
                            pct(n["chamfer"]), ratio(n["chamfer"], q["chamfer"]), pct(r["start"]["chamfer"]),
                            pct(n["hausdorff"]), sci(n["loss"] - floor),
-                           ratio(n["loss"] - floor, q["loss"] - floor)))
+                           loss_ratio(n["loss"] - floor, q["loss"] - floor, " quadric's")))
     return "\n".join(out) + "\n"
 
 
@@ -152,33 +186,68 @@ def occluded(origins, targets, V, F, chunk=128):
     return hit
 
 
-def seen_in_mirrors(points, V, F, scene, half_fov):
-    """(n,) bool: which points on the mesh V, F the camera (at the origin, looking along -z, square
-    film, half field of view half_fov) sees by one mirror reflection in scene's mirror-left or
-    mirror-right: the segment from the point to its reflected camera crosses the mirror's rectangle
-    at a point inside the camera's view, and the mesh does not block the way from the point to it."""
-    seen = np.zeros(len(points), dtype=bool)
+def camera_frame(lookat):
+    """The camera of a Mitsuba <lookat origin=".." target=".." up=".."/> element's text: its origin,
+    and its forward, right and up unit vectors (3,) each, in world space. ValueError when an
+    attribute is missing, or when up is parallel to the view direction (no frame)."""
+    vals = {k: np.array([float(x) for x in v.split(",")]) for k, v in re.findall(r'(origin|target|up)="([^"]*)"', lookat)}
+    if set(vals) != {"origin", "target", "up"}:
+        raise ValueError("lookat %r: expected origin, target and up" % lookat)
+    f = vals["target"] - vals["origin"]
+    f /= np.linalg.norm(f)
+    r = np.cross(f, vals["up"])
+    if not np.linalg.norm(r) > 1e-12 * np.linalg.norm(vals["up"]):
+        raise ValueError("lookat %r: up is parallel to the view direction" % lookat)
+    r /= np.linalg.norm(r)
+    return vals["origin"], f, r, np.cross(r, f)
+
+
+def in_view(q, camera, half_fov):
+    """(k,) bool: whether the points q (k, 3) lie in the view of camera (camera_frame's tuple; a
+    square film with half field of view half_fov in radians)."""
+    o, f, r, u = camera
+    d = q - o
+    z = d @ f
+    t = np.tan(half_fov)
+    return (z > 0) & (np.abs(d @ r) <= z * t) & (np.abs(d @ u) <= z * t)
+
+
+def seen_by_camera(points, V, F, scene, camera, half_fov):
+    """Which points on the mesh V, F (n, 3) the camera (camera_frame's tuple; square film, half
+    field of view half_fov in radians) sees: ((n,) bool directly, (n,) bool by one reflection in
+    scene's mirror-left or mirror-right). Directly: in view, and the segment to the camera crosses
+    no triangle. In a mirror: the segment from the point to the camera reflected in the mirror's
+    plane meets the mirror's rectangle at a point m in view, and neither the way from the point to m
+    nor the way from m to the camera crosses a triangle of V, F. The mirrors count as two-sided and
+    block no way: both hold in scenes/two-mirrors.xml, where the bunny stands in front of them."""
+    o = camera[0]
+    direct = in_view(points, camera, half_fov)
+    idx = np.nonzero(direct)[0]
+    direct[idx[occluded(points[idx], np.broadcast_to(o, (len(idx), 3)), V, F)]] = False
+    mirrored = np.zeros(len(points), dtype=bool)
     for mirror in ("mirror-left", "mirror-right"):
         M = scene.vertices(mirror)  # the rectangle's 4 corners
         c = M.mean(axis=0)
         n = np.cross(M[1] - M[0], M[2] - M[0])
         n /= np.linalg.norm(n)
-        camera = -2 * np.dot(-c, n) * n  # the origin reflected across the mirror's plane
-        d = camera - points
-        s = np.dot(c - points, n) / np.dot(d, n)  # where the segment meets the plane
-        m = points + s[:, None] * d
+        image = o - 2 * np.dot(o - c, n) * n  # the camera reflected across the mirror's plane
+        d = image - points
+        with np.errstate(divide="ignore", invalid="ignore"):  # a segment parallel to the plane: s not finite
+            s = np.dot(c - points, n) / np.dot(d, n)  # where the segment meets the plane
+            m = points + s[:, None] * d
         # Inside the rectangle: coordinates along its edges from the first corner (a rectangle's
         # corners come in order around it).
         ex, ey = M[1] - M[0], M[3] - M[0]
         lx = np.dot(m - M[0], ex) / np.dot(ex, ex)
         ly = np.dot(m - M[0], ey) / np.dot(ey, ey)
         on_mirror = (s > 0) & (s < 1) & (lx >= 0) & (lx <= 1) & (ly >= 0) & (ly <= 1)
-        in_view = (m[:, 2] < 0) & (np.abs(m[:, 0]) <= -m[:, 2] * np.tan(half_fov)) & \
-                  (np.abs(m[:, 1]) <= -m[:, 2] * np.tan(half_fov))
-        candidate = on_mirror & in_view & ~seen
+        candidate = on_mirror & in_view(m, camera, half_fov) & ~mirrored
         idx = np.nonzero(candidate)[0]
-        seen[idx[~occluded(points[idx], m[idx], V, F)]] = True
-    return seen
+        ok = ~occluded(points[idx], m[idx], V, F)
+        idx = idx[ok]
+        idx = idx[~occluded(m[idx], np.broadcast_to(o, (len(idx), 3)), V, F)]
+        mirrored[idx] = True
+    return direct, mirrored
 
 
 def main():
@@ -258,12 +327,17 @@ def main():
     centre = 0.5 * (TV.min(axis=0) + TV.max(axis=0))
     V0, F0 = icosphere(args.subdiv, centre, args.radius)
     F0 = F0.astype(np.int64)
-    # The part of the truth the camera sees in the mirrors (the scene's camera: at the origin,
-    # looking along -z, fov 50 degrees on a square film); the rest only the shape prior constrains.
-    seen = seen_in_mirrors(distances.points, TV, TF, truth_scene, np.radians(25.0))
+    # The part of the truth the camera sees, directly or in a mirror (the scene's camera, on its
+    # square film); the rest only the shape prior constrains.
+    with open(SCENE) as f:
+        xml = f.read()
+    camera = camera_frame(camera_lookat(xml, SCENE))
+    seen_direct, seen_mirrored = seen_by_camera(distances.points, TV, TF, truth_scene, camera,
+                                                camera_half_fov(xml, SCENE))
+    seen = seen_direct | seen_mirrored
 
     def score_shape(V, F):
-        """Chamfer and Hausdorff distances, of the whole surface and of the part seen in the mirrors."""
+        """Chamfer and Hausdorff distances, of the whole surface and of the part the camera sees."""
         return distances(V, F) + distances(V, F, part=seen)
 
     start_chamfer, start_hausdorff, start_seen_chamfer, start_seen_hausdorff = score_shape(V0, F0)
@@ -271,7 +345,7 @@ def main():
                "lr": args.lr, "lam": args.lam, "remeshes": args.remeshes, "lr_decay": args.lr_decay,
                "start_vertices": int(len(V0)), "truth_vertices": int(len(TV)), "diag": distances.diag, "floor": floor,
                "min_edge": args.min_edge, "score_res": score_res, "threads": args.threads or os.cpu_count(),
-               "seen_share": float(seen.mean()),
+               "seen_share": float(seen.mean()), "mirror_only_share": float((seen_mirrored & ~seen_direct).mean()),
                "start": {"chamfer": start_chamfer, "hausdorff": start_hausdorff, "seen_chamfer": start_seen_chamfer,
                          "seen_hausdorff": start_seen_hausdorff}, "methods": {}}
     evolution = {}
@@ -359,7 +433,7 @@ def main():
         evolution[name] = snapshots
         write_obj(os.path.join(args.out, "result-%s.obj" % name.replace(":", "-")), V, F)
 
-    # ---- Charts: loss above the floor, Chamfer and Hausdorff against time.
+    # ---- Charts: the loss and its floor, Chamfer and Hausdorff against time.
     progress_chart(os.path.join(args.out, "progress.png"), results["methods"], floor,
                    "Two mirrors: film %s per phase, %d spp per step, %d remeshings"
                    % (" -> ".join("%d^2" % r for r in res_of_phase), args.spp, args.remeshes),

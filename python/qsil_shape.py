@@ -248,8 +248,10 @@ def replace_generated(page, record, script, text):
 def progress_chart(path, methods, floor, title, seen=False, targets=None):
     """Writes the chart of a demo's record: for each method (name -> {"steps", "curve"}, a curve's
     rows being (seconds, step, loss, chamfer, hausdorff, vertices[, seen chamfer, seen hausdorff]))
-    the loss above the noise floor `floor`, and the Chamfer and Hausdorff distances (fractions,
-    shown in %), against time. seen: also the seen part's distances (dotted); targets: (chamfer,
+    the image loss above the noise floor `floor` (the true mesh's loss; a dashed line at zero), and
+    the Chamfer and Hausdorff distances (fractions, shown in %), against time. The loss axis is
+    linear: a scoring render's noise can put a shape's loss below the floor, which a log axis would
+    hide. seen: also the seen part's distances (dotted); targets: (chamfer,
     hausdorff) fractions drawn as dashed lines."""
     import matplotlib
     matplotlib.use("Agg")
@@ -258,12 +260,12 @@ def progress_chart(path, methods, floor, title, seen=False, targets=None):
     for method, r in methods.items():
         c = np.array(r["curve"])
         label = "%s (%d steps)" % (method, r["steps"])
-        axes[0].plot(c[:, 0], np.maximum(c[:, 2] - floor, 1e-9), marker="o", label=label)
+        axes[0].plot(c[:, 0], c[:, 2] - floor, marker="o", label=label)
         for k, ax in ((3, axes[1]), (4, axes[2])):
             line, = ax.plot(c[:, 0], 100 * c[:, k], marker="o", label=label)
             if seen:
                 ax.plot(c[:, 0], 100 * c[:, k + 3], ls=":", color=line.get_color(), label=method + ": seen part")
-    axes[0].set_yscale("log")
+    axes[0].axhline(0.0, color="k", ls="--", lw=0.8, label="noise floor (the true mesh's loss)")
     axes[0].set_ylabel("image loss above the noise floor (%.4g)" % floor)
     axes[1].set_ylabel("Chamfer distance (% of the diagonal)")
     axes[2].set_ylabel("Hausdorff distance (% of the diagonal)")
