@@ -3,6 +3,7 @@
 /// and the bundled scenes, including the geometric property that makes spot-mirror the paper's
 /// setup (Spot visible only in the mirror).
 
+#include "qsil/bsdf.h"
 #include "qsil/error.h"
 #include "qsil/scene.h"
 #include "ray_hits.h"
@@ -378,7 +379,7 @@ TEST(SceneLoaderTest, SpotMirrorShowsSpotOnlyInTheMirror) {
       const auto hit = test::ray_hits_mesh(o, d, mirror.mesh);
       if (!hit || d.dot(n) >= 0) continue;
       ++on_mirror;
-      const Vec3 r = d - 2 * d.dot(n) * n;
+      const Vec3 r = reflect(-d, n);
       reflected_hits += ray_hits_box(o + hit->t * d, r, box);
     }
   }
@@ -440,7 +441,7 @@ TEST(SceneLoaderTest, TwoMirrorsShowTheBunnyFromThreeSides) {
       if (view > 0) {
         const Vec3& n = normals[size_t(view - 1)];
         if (d.dot(n) >= 0) continue;
-        along = d - 2 * d.dot(n) * n;
+        along = reflect(-d, n);
         const Vec3 on_mirror = point;
         const auto reflected = test::ray_hits_mesh(on_mirror, along, bunny);
         if (!reflected) continue;
