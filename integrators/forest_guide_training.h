@@ -54,12 +54,7 @@ std::vector<edgetree::GuideRecord> forest_guide_pass(const PathContext& ctx, con
         }
       }
   });
-  for (const PathStats& st : tile_stats) {
-    stats.rays += st.rays;
-    stats.boundary_traversals += st.boundary_traversals;
-    stats.boundary_zero += st.boundary_zero;
-    stats.boundary_seconds += st.boundary_seconds;
-  }
+  for (const PathStats& st : tile_stats) stats += st;
   std::vector<edgetree::GuideRecord> out;
   for (const std::vector<edgetree::GuideRecord>& r : per_tile) out.insert(out.end(), r.begin(), r.end());
   return out;

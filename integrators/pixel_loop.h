@@ -97,10 +97,7 @@ void run_pixels(const Camera& camera, const FilmLayout& layout, const RenderOpti
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   for (const PathStats& st : stats) {
     result.rays += st.rays;
-    total.rays += st.rays;
-    total.boundary_traversals += st.boundary_traversals;
-    total.boundary_zero += st.boundary_zero;
-    total.boundary_seconds += st.boundary_seconds;
+    total += st;
   }
   result.nonfinite = nonfinite.load();
 }

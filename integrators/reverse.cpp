@@ -13,6 +13,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <optional>
 #include <set>
 #include <unordered_map>
 
@@ -61,16 +62,39 @@ struct ReverseView {
   Tape* tape;
   Vec3T<Real> position(int shape, int v) const { return lift<Real>(scene->shapes[shape].mesh.positions[v]); }
   Vec3T<Real> normal(int shape, int v) const { return lift<Real>(scene->shapes[shape].mesh.normals[v]); }
-  void attach(SurfaceInteraction<Real>& si, const Hit& hit, const Vec3& o, const Vec3& d, bool scatters) const {
-    if (!scatters || !(*chosen)[size_t(si.shape)]) return;
+  /// Always true: the path goes on (trace_path's attach contract).
+  bool attach(SurfaceInteraction<Real>& si, const Hit& hit, const Vec3& o, const Vec3& d, bool scatters) const {
+    if (!scatters || !(*chosen)[size_t(si.shape)]) return true;
     tape->moving = true;
     const int slot = (int(tape->hits.size()) - tape->window) * kSlotsPerHit;
     tape->hits.push_back({hit, o, d});
-    if (slot < 0 || slot >= kSlots) return;
+    if (slot < 0 || slot >= kSlots) return true;
     for (int i = 0; i < 3; ++i) {
       si.p[i].derivatives()[slot + i] += 1.0;
       si.ns[i].derivatives()[slot + 3 + i] += 1.0;
     }
+    return true;
+  }
+};
+
+/// The view of reverse mode's probe pass: doubles, sampling as a derivative path does
+/// (kDerivativeSampling: the same random numbers give ReverseView's path), stopping at the first
+/// chosen-shape hit that scatters. A path without one has no interior derivative (no vertex of
+/// it moves) and its boundary term moves edges only, so its probe pass is the whole sample and
+/// needs no duals; the other paths are traced again with ReverseView. On a scene where the
+/// chosen shapes fill a small part of the image, most paths skip the dual arithmetic.
+struct ProbeView {
+  using Real = double;
+  static constexpr bool kDerivativeSampling = true;
+  const Scene* scene;
+  const std::vector<bool>* chosen;
+  bool* stopped;  ///< set when the path met a chosen-shape hit that scatters
+  Vec3 position(int shape, int v) const { return scene->shapes[size_t(shape)].mesh.positions[size_t(v)]; }
+  Vec3 normal(int shape, int v) const { return scene->shapes[size_t(shape)].mesh.normals[size_t(v)]; }
+  bool attach(SurfaceInteraction<Real>& si, const Hit&, const Vec3&, const Vec3&, bool scatters) const {
+    if (!scatters || !(*chosen)[size_t(si.shape)]) return true;
+    *stopped = true;
+    return false;
   }
 };
 
@@ -143,7 +167,9 @@ void add_edge_adjoint(const edgetree::Edge& e, const Vec3& g0, const Vec3& g1,
 }
 
 /// The secondary boundary term of a reverse-mode pass (the reverse of BoundaryHook): the edge's
-/// share goes to the sample's contribution list (first pass only), p's share to L's slots.
+/// share goes to the sample's contribution list (first pass only), p's share to L's slots. Real
+/// is RDual (ReverseView) or double (ProbeView: p does not move, p's share is zero).
+template <class Real>
 struct ReverseBoundaryHook : BoundaryHookBase {
   const Tape* tape;
   const std::vector<int>* chosen_index;  ///< per shape: its index in the chosen list, or -1
@@ -151,10 +177,12 @@ struct ReverseBoundaryHook : BoundaryHookBase {
   bool edges;                            ///< add the edge vertices' share (first pass of the path)
   std::vector<Contribution>* out;
 
-  void operator()(const SurfaceInteraction<RDual>& si, const ShadingPoint<RDual>& sp, const Vec3& wo_local,
-                  const ColorT<RDual>& beta, int seg, Sampler&, PathStats& stats, ColorT<RDual>& L) const {
-    Eigen::Matrix<double, 3, kSlots> dp;
-    for (int i = 0; i < 3; ++i) dp.row(i) = si.p[i].derivatives().transpose();
+  void operator()(const SurfaceInteraction<Real>& si, const ShadingPoint<Real>& sp, const Vec3& wo_local,
+                  const ColorT<Real>& beta, int seg, Sampler&, PathStats& stats, ColorT<Real>& L) const {
+    constexpr bool duals = !std::is_same_v<Real, double>;
+    Eigen::Matrix<double, 3, kSlots> dp = Eigen::Matrix<double, 3, kSlots>::Zero();
+    if constexpr (duals)
+      for (int i = 0; i < 3; ++i) dp.row(i) = si.p[i].derivatives().transpose();
     edgetree::SilhouetteQuery q = boundary_query(*boundary_ctx, si, sp, wo_local, scratch);
     q.eligible = tape->moving ? &boundary_ctx->all : &boundary_ctx->moving;
     q.velocities = nullptr;  // a parameter per vertex: no normal-velocity factor
@@ -163,9 +191,11 @@ struct ReverseBoundaryHook : BoundaryHookBase {
         [](const edgetree::Edge&, double, const Vec3&) { return true; },
         [&](const edgetree::Edge& e, double t, const Color& weight, const Vec3& g) {
           // p's share: J = g . (v_edge - dp), the -g . dp part through L's slots.
-          const Eigen::Matrix<double, 1, kSlots> Jp = -(g.transpose() * dp);
-          if (!Jp.isZero(0.0))
-            for (int c = 0; c < 3; ++c) L[c] += RDual(0.0, (weight[c] * Jp).transpose());
+          if constexpr (duals) {
+            const Eigen::Matrix<double, 1, kSlots> Jp = -(g.transpose() * dp);
+            if (!Jp.isZero(0.0))
+              for (int c = 0; c < 3; ++c) L[c] += RDual(0.0, (weight[c] * Jp).transpose());
+          }
           // The edge's share: its ends' velocities, (1 - t) v0 + t v1.
           if (edges) {
             const double a = (adjoint * weight).sum();
@@ -190,7 +220,7 @@ struct TileSums {
   Accumulator acc;
   PathStats stats;
   double loss = 0;
-  uint64_t nonfinite = 0, replays = 0;
+  uint64_t nonfinite = 0, replays = 0, probed = 0;
 };
 
 /// What one tile's samples reuse from one to the next: the hit tape, the vertex adjoints of a
@@ -289,6 +319,45 @@ class ReverseEstimator::Impl : public RenderSetup {
     }
   }
 
+  /// The probe pass of sample `ps` (ProbeView): the sample's path in doubles with its secondary
+  /// boundary term (edges' shares to `scratch.contributions`, adjoint `a`). Returns the path's
+  /// radiance when it met no chosen-shape hit that scatters: then this pass is the whole sample.
+  /// Otherwise returns nothing and leaves `scratch.contributions` and `st` as they were: the
+  /// caller traces the sample with duals (trace_pass), which draws the same random numbers.
+  std::optional<Color> trace_probe(const PixelSample& ps, const Color& a, TileScratch& scratch, PathStats& st) const {
+    Tape& tape = scratch.tape;
+    const Camera& cam = scene.camera;
+    const uint64_t pixel = uint64_t(ps.y) * uint64_t(cam.width) + uint64_t(ps.x);
+    tape.reset(0);
+    const size_t kept = scratch.contributions.size();
+    PathStats probe_stats;
+    Sampler sampler(ps.seed, pixel, uint64_t(ps.s));
+    const CameraRay ray = trace_camera_ray(ctx, ps.x, ps.y, sampler.next2(), probe_stats);
+    bool stopped = false;
+    const ProbeView view{&scene, &chosen, &stopped};
+    const int traversals =
+        boundary.sampler ? boundary_traversals(boundary_ctx.sppi, ps.seed, pixel, uint64_t(ps.s)) : 0;
+    Color L;
+    if (traversals > 0) {
+      Sampler bsampler(ps.seed, pixel, uint64_t(ps.s), 1);
+      const ReverseBoundaryHook<double> hook{{&ctx, &boundary_ctx, &bsampler, traversals, &scratch.edge_choice},
+                                             &tape,
+                                             &chosen_index,
+                                             a,
+                                             true,
+                                             &scratch.contributions};
+      L = trace_path(ctx, view, {cam.origin(), ray.dir, ray.hit}, sampler, probe_stats, hook);
+    } else {
+      L = trace_path(ctx, view, {cam.origin(), ray.dir, ray.hit}, sampler, probe_stats);
+    }
+    if (stopped) {
+      scratch.contributions.resize(kept);
+      return std::nullopt;
+    }
+    st += probe_stats;
+    return L;
+  }
+
   /// One pass of sample `ps`'s path: the path from the sample's first random number, with slots
   /// for tape hits [window, window + kHitsPerPass) (every pass draws the same numbers: the same
   /// path), its secondary boundary term adding to `scratch.contributions` (adjoint `a` of the
@@ -307,12 +376,12 @@ class ReverseEstimator::Impl : public RenderSetup {
     ColorT<RDual> L;
     if (traversals > 0) {
       Sampler bsampler(ps.seed, pixel, uint64_t(ps.s), 1);
-      const ReverseBoundaryHook hook{{&ctx, &boundary_ctx, &bsampler, traversals, &scratch.edge_choice},
-                                     &tape,
-                                     &chosen_index,
-                                     a,
-                                     window == 0,
-                                     &scratch.contributions};
+      const ReverseBoundaryHook<RDual> hook{{&ctx, &boundary_ctx, &bsampler, traversals, &scratch.edge_choice},
+                                            &tape,
+                                            &chosen_index,
+                                            a,
+                                            window == 0,
+                                            &scratch.contributions};
       L = trace_path(ctx, view, {lift<RDual>(origin), ray.dir, ray.hit}, sampler, st, hook);
     } else {
       L = trace_path(ctx, view, {lift<RDual>(origin), ray.dir, ray.hit}, sampler, st);
@@ -337,10 +406,18 @@ class ReverseEstimator::Impl : public RenderSetup {
         for (int s = first; s < first + count; ++s) {
           contributions.clear();
           const PixelSample ps{x, y, s, seed};
-          const Color value_L = value(trace_pass(ps, 0, a, scratch, sums.stats));
-          for (int w = kHitsPerPass; w < int(scratch.tape.hits.size()); w += kHitsPerPass) {
-            trace_pass(ps, w, a, scratch, sums.stats);
-            ++sums.replays;
+          std::optional<Color> probed;
+          if (config.probe_paths) probed = trace_probe(ps, a, scratch, sums.stats);
+          Color value_L;
+          if (probed) {
+            value_L = *probed;
+            ++sums.probed;
+          } else {
+            value_L = value(trace_pass(ps, 0, a, scratch, sums.stats));
+            for (int w = kHitsPerPass; w < int(scratch.tape.hits.size()); w += kHitsPerPass) {
+              trace_pass(ps, w, a, scratch, sums.stats);
+              ++sums.replays;
+            }
           }
           if (!value_L.allFinite() || !finite(contributions)) {
             ++sums.nonfinite;
@@ -497,6 +574,7 @@ ReverseResult ReverseEstimator::run(const std::vector<double>& adjoint, const Re
     r.zero_traversals += t.stats.boundary_zero;
     r.nonfinite += t.nonfinite;
     r.replays += t.replays;
+    r.probed += t.probed;
   }
 
   if (m.boundary.sampler) m.add_primary_term(adjoint, first, count, options, d_position, r);

@@ -303,7 +303,7 @@ std::vector<double> adjoint_weights(const Scene& scene, const Array& adjoint) {
 }
 
 /// A reverse-mode result as qsil.reverse returns it: 'image' (H, W, 3), 'loss', 'gradient'
-/// {shape id: (V, 3)}, 'seconds', 'nonfinite'.
+/// {shape id: (V, 3)}, 'seconds', 'nonfinite', 'probed'.
 py::dict reverse_dict(const ReverseResult& r, const std::vector<std::string>& shapes) {
   Array image({r.height, r.width, 3});
   std::copy(r.image.begin(), r.image.end(), image.mutable_data());
@@ -321,6 +321,7 @@ py::dict reverse_dict(const ReverseResult& r, const std::vector<std::string>& sh
   out["gradient"] = gradient;
   out["seconds"] = r.seconds;
   out["nonfinite"] = r.nonfinite;
+  out["probed"] = r.probed;
   return out;
 }
 
@@ -353,20 +354,24 @@ void bind_reverse(py::module_& m) {
       "Reverse mode set up once for an optimisation: run() as qsil.reverse, update() after the scene's meshes "
       "changed (set_vertices: the edge forest is refitted, the ray tracer's vertices moved; set_mesh: set up anew)")
       .def(py::init([](const Scene& scene, const std::vector<std::string>& shapes, const std::string& boundary,
-                       double sppi, double sppp, bool intersection_curves) {
+                       double sppi, double sppp, bool intersection_curves, bool probe_paths) {
              const Method method = parse_method(boundary, "boundary", kBoundaryMethods);
              const std::vector<int> indices = resolve_shapes(scene, shapes);
              auto p = std::make_unique<PyReverseEstimator>();
              p->scene = &scene;
              p->shapes = shapes;
              py::gil_scoped_release release;
-             p->estimator = std::make_unique<ReverseEstimator>(
-                 scene, ReverseConfig{indices, method, sppi, sppp, intersection_curves});
+             ReverseConfig config{indices, method, sppi, sppp, intersection_curves};
+             config.probe_paths = probe_paths;
+             p->estimator = std::make_unique<ReverseEstimator>(scene, config);
              return p;
            }),
            py::arg("scene"), py::arg("shapes"), py::arg("boundary") = "quadric", py::arg("sppi") = 0,
-           py::arg("sppp") = kDefaultSppp, py::arg("intersection_curves") = true, py::keep_alive<1, 2>(),
-           "Sets up reverse mode for `shapes` of `scene` (kept alive by the estimator); arguments as for qsil.reverse")
+           py::arg("sppp") = kDefaultSppp, py::arg("intersection_curves") = true, py::arg("probe_paths") = true,
+           py::keep_alive<1, 2>(),
+           "Sets up reverse mode for `shapes` of `scene` (kept alive by the estimator); arguments as for "
+           "qsil.reverse; probe_paths=False traces every path with dual numbers (the same estimates, slower: "
+           "for timing, ReverseConfig::probe_paths)")
       .def(
           "run",
           [](PyReverseEstimator& self, const Array& adjoint, int spp, uint64_t seed, int threads) {
@@ -381,7 +386,7 @@ void bind_reverse(py::module_& m) {
           },
           py::arg("adjoint"), py::arg("spp") = 0, py::arg("seed") = 0, py::arg("threads") = 0,
           "As qsil.reverse on the scene as of the last update(): a dict with 'image', 'loss', 'gradient', "
-          "'seconds', 'nonfinite'")
+          "'seconds', 'nonfinite', 'probed'")
       .def(
           "render",
           [](PyReverseEstimator& self, int spp, uint64_t seed, int threads) {
@@ -417,12 +422,12 @@ void bind_reverse(py::module_& m) {
           "After the scene's meshes changed: a dict with 'refitted' (the edge forest was refitted, not built anew), "
           "'reason' (why it was built anew), 'box_growth', 'seconds' (the whole update), 'edge_seconds' (the edge "
           "structure's part)");
-  m.def("reverse", reverse,
-      py::arg("scene"), py::arg("shapes"), py::arg("adjoint"), py::arg("spp") = 0, py::arg("seed") = 0,
-      py::arg("threads") = 0, py::arg("boundary") = "quadric", py::arg("sppi") = 0,
-      py::arg("sppp") = kDefaultSppp, py::arg("intersection_curves") = true,
-      "Reverse mode: for the loss L = sum(adjoint * I), a dict with 'image' (H, W, 3), 'loss' (of that image), "
-      "'gradient' {shape id: dL/dx (V, 3)}, 'seconds', 'nonfinite'; sppi, sppp and intersection_curves as for grad");
+  m.def("reverse", reverse, py::arg("scene"), py::arg("shapes"), py::arg("adjoint"), py::arg("spp") = 0,
+        py::arg("seed") = 0, py::arg("threads") = 0, py::arg("boundary") = "quadric", py::arg("sppi") = 0,
+        py::arg("sppp") = kDefaultSppp, py::arg("intersection_curves") = true,
+        "Reverse mode: for the loss L = sum(adjoint * I), a dict with 'image' (H, W, 3), 'loss' (of that image), "
+        "'gradient' {shape id: dL/dx (V, 3)}, 'seconds', 'nonfinite', 'probed'; sppi, sppp and intersection_curves as "
+        "for grad");
   // The keyword names before 2026-11-25 (boundary_spp, primary_samples): the same function.
   m.def("reverse", reverse, py::arg("scene"), py::arg("shapes"), py::arg("adjoint"), py::arg("spp") = 0,
         py::arg("seed") = 0, py::arg("threads") = 0, py::arg("boundary") = "quadric", py::arg("boundary_spp") = 0,

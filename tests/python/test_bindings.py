@@ -238,6 +238,18 @@ def test_reverse_estimator_equals_reverse_and_follows_the_scene():
     assert est.run(np.ones((8, 8, 3)), spp=1)["image"].shape == (8, 8, 3)
 
 
+def test_reverse_estimator_probe_paths_switch():
+    # probe_paths=False traces every path with dual numbers: the same estimate to rounding (the C++
+    # test ReverseMode.ProbePassChangesNothingButTheCost checks it bit by bit), no samples probed.
+    s = load(res=12, spp=2)
+    adj = np.random.default_rng(4).uniform(-1, 1, (s.height, s.width, 3))
+    a = qsil.ReverseEstimator(s, ["spot"]).run(adj, spp=2, seed=6)
+    b = qsil.ReverseEstimator(s, ["spot"], probe_paths=False).run(adj, spp=2, seed=6)
+    assert 0 < a["probed"] < 12 * 12 * 2 and b["probed"] == 0, (a["probed"], b["probed"])
+    np.testing.assert_allclose(a["gradient"]["spot"], b["gradient"]["spot"], rtol=1e-12, atol=0)
+    np.testing.assert_allclose(a["image"], b["image"], rtol=1e-12, atol=0)
+
+
 def test_reverse_estimator_render_is_qsil_render():
     # The primal image from the estimator's own set-up equals qsil.render's bit for bit, as set up
     # and after a step; a stale set-up is refused as run() refuses it.

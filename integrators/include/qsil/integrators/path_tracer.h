@@ -52,6 +52,13 @@ struct PathStats {
   uint64_t boundary_traversals = 0;  ///< edge-forest traversals (boundary-term samples)
   uint64_t boundary_zero = 0;        ///< ...that contributed nothing (no edge, not a silhouette, occluded, f = 0)
   double boundary_seconds = 0;       ///< thread time spent in the boundary term
+  PathStats& operator+=(const PathStats& o) {
+    rays += o.rays;
+    boundary_traversals += o.boundary_traversals;
+    boundary_zero += o.boundary_zero;
+    boundary_seconds += o.boundary_seconds;
+    return *this;
+  }
 };
 
 /// Power heuristic weight of a strategy with pdf a against one with pdf b (Veach 1997). Detached.
@@ -259,13 +266,14 @@ inline LightDirection sample_light_direction(const PathContext& ctx, const Vec3&
 /// point, the triangle), traces the shadow ray and returns the sample, or nothing when the light
 /// sample is invalid, the BSDF is zero toward it or it is occluded. `wo_local` is the viewer
 /// direction in the shading frame (detached); `bsdf_toward(w)` is f_s cos toward world direction
-/// w. MIS: power heuristic against BSDF sampling (with the defensive diffuse share of paths over T,
-/// kDerivativeDiffuseUniformShare).
+/// w. MIS: power heuristic against BSDF sampling, whose diffuse directions come from the path's
+/// defensive share `uniform_share` (trace_path's: kDerivativeDiffuseUniformShare on paths that
+/// carry derivatives, 0 on primal paths).
 template <class T, class BsdfToward>
 std::optional<DirectLight<T>> sample_direct_light(const PathContext& ctx, const SurfaceInteraction<T>& si,
                                                   const ShadingPoint<T>& sp, const Vec3& wo_world, const Vec3& wo_local,
-                                                  const BsdfToward& bsdf_toward, Sampler& sampler, PathStats& stats) {
-  constexpr double uniform_share = std::is_same_v<T, double> ? 0.0 : kDerivativeDiffuseUniformShare;
+                                                  const BsdfToward& bsdf_toward, double uniform_share, Sampler& sampler,
+                                                  PathStats& stats) {
   const LightDirection ld = sample_light_direction(ctx, value(si.p), sampler);
   const Vec3& wi = ld.wi;
   Color Le = Color::Zero();
@@ -357,8 +365,14 @@ ColorT<typename View::Real> trace_path(const PathContext& ctx, const View& view,
                                        const Hook& hook = {}, const Warp& warp = {}) {
   using T = typename View::Real;
   // Paths that carry derivatives draw diffuse directions from the defensive mixture
-  // (kDerivativeDiffuseUniformShare, bsdf.h); primal paths from the cosine density.
-  constexpr double uniform_share = std::is_same_v<T, double> ? 0.0 : kDerivativeDiffuseUniformShare;
+  // (kDerivativeDiffuseUniformShare, bsdf.h); primal paths from the cosine density. A double
+  // view that stands in for a derivative path (View::kDerivativeSampling, reverse mode's probe)
+  // samples as the derivative path would, so that both trace the same path.
+  constexpr bool derivative_sampling = [] {
+    if constexpr (requires { View::kDerivativeSampling; }) return View::kDerivativeSampling;
+    return !std::is_same_v<T, double>;
+  }();
+  constexpr double uniform_share = derivative_sampling ? kDerivativeDiffuseUniformShare : 0.0;
   ColorT<T> L = lift<T>(Color::Zero().eval());
   ColorT<T> beta = lift<T>(Color::Ones().eval());
   Vec3T<T> o = ray.origin;
@@ -377,8 +391,10 @@ ColorT<typename View::Real> trace_path(const PathContext& ctx, const View& view,
                                              : make_interaction(view, hit, o, d, ctx.tracer->local_origin());
     // A view with a tape (reverse mode, qsil/integrators/reverse.h) records the hit and gives its
     // point and shading normal derivative slots of their own; the other views have no attach().
+    // attach() returns false to end the path here (L as it stands): reverse mode's probe stops at
+    // the first hit that needs derivatives.
     if constexpr (requires { view.attach(si, hit, value(o), d, true); }) {
-      view.attach(si, hit, value(o), d, seg < ctx.max_depth);
+      if (!view.attach(si, hit, value(o), d, seg < ctx.max_depth)) break;
       si.constant = false;  // attach() gives the point derivative slots of its own
     }
     // A ray grazing a triangle's plane has no well-defined intersection: end the path rather than
@@ -412,7 +428,8 @@ ColorT<typename View::Real> trace_path(const PathContext& ctx, const View& view,
     hook(si, sp, wo_value, beta, seg, sampler, stats, L);
 
     // ---- Next-event estimation: keep only the sampled direction; re-evaluate along it.
-    if (const auto direct = sample_direct_light(ctx, si, sp, wo_world, wo_value, bsdf_toward, sampler, stats))
+    if (const auto direct =
+            sample_direct_light(ctx, si, sp, wo_world, wo_value, bsdf_toward, uniform_share, sampler, stats))
       L += beta * direct->f * lift<T>(direct->weighted_radiance);
 
     // ---- BSDF sampling: a detached direction, then the throughput re-evaluated over T.

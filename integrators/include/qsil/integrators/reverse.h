@@ -43,6 +43,11 @@ struct ReverseConfig {
   double sppp = kDefaultSppp;
   /// Sample the intersection curves where surfaces cross (EstimatorConfig::intersection_curves).
   bool intersection_curves = true;
+  /// Trace each sample's path in doubles first and again with dual numbers only when it meets a
+  /// chosen shape where it scatters (the same estimates from the same random numbers; a path that
+  /// never meets one has no interior derivative). false: every path with dual numbers, which
+  /// costs more where the chosen shapes fill little of what the paths see (for tests and timing).
+  bool probe_paths = true;
 };
 
 /// One reverse-mode run.
@@ -62,6 +67,7 @@ struct ReverseResult {
   uint64_t traversals = 0;       ///< boundary-term samples drawn (secondary and primary)
   uint64_t zero_traversals = 0;  ///< ...that contributed nothing
   uint64_t replays = 0;          ///< extra passes of paths with more than two chosen-shape hits
+  uint64_t probed = 0;           ///< samples whose probe pass was the whole sample (ReverseConfig::probe_paths)
 };
 
 /// What ReverseEstimator::update did.
