@@ -112,8 +112,10 @@ def page_text(r):
             return ratio(a, b) + of
         return "no ratio: a loss at or below the floor is within the scoring render's noise"
     res = r["res"]
+    spp = r["spp"] if isinstance(r["spp"], list) else [r["spp"]]
+    spp_text = " → ".join("%d" % x for x in spp) if len(set(spp)) > 1 else "%d" % spp[0]
     schedule = " → ".join("%d²" % x for x in res) if len(set(res)) > 1 else "%d²" % res[0]
-    out = ["**Set-up** (from the record): film %s over %d phases of equal time between %d remeshings; %d spp "
+    out = ["**Set-up** (from the record): film %s over %d phases of equal time between %d remeshings; %s spp "
            "per step for the primal render and for the reverse run (independent seeds); targets at %d spp; "
            "start: a sphere of %d vertices at the bunny's bounding-box centre; Large Steps λ %g, step %g on u, "
            "×%g at each remeshing (`qsil.remesh` to half the mean edge, at least %g: %.1f %% of the diagonal). "
@@ -122,7 +124,7 @@ def page_text(r):
            "and Hausdorff distances between the surfaces (20 000 area-uniform samples each), in %% of the bunny's "
            "diagonal (%.2f); \"seen\": the same distances between the %.0f %% of the bunny's surface that the camera "
            "sees%s (%sa ray test from each sample, `%s`) and the shape's samples nearest to it."
-           % ((schedule, len(res), r["remeshes"], r["spp"], r["target_spp"], r["start_vertices"],
+           % ((schedule, len(res), r["remeshes"], spp_text, r["target_spp"], r["start_vertices"],
                r["lam"], r["lr"], r["lr_decay"], r["min_edge"], 100 * r["min_edge"] / r["diag"],
                r["seconds"], r["threads"], r["score_res"], floor, r["diag"], 100 * r["seen_share"]) + seen_how(r)),
            "",
@@ -258,7 +260,9 @@ def main():
     ap.add_argument("--res", default="64,64,128,128",
                     help="film size per phase (coarse to fine): a comma list, one per phase between remeshings "
                          "(the last repeats); the scoring and the pictures use the largest")
-    ap.add_argument("--spp", type=int, default=4, help="samples per pixel of each primal render and gradient")
+    ap.add_argument("--spp", default="4",
+                    help="samples per pixel of each primal render and reverse run, per phase: a comma list as "
+                         "--res (the last repeats)")
     ap.add_argument("--target-spp", type=int, default=1024)
     ap.add_argument("--subdiv", type=int, default=3, help="icosphere subdivisions of the start (3: 642 vertices)")
     ap.add_argument("--radius", type=float, default=0.6, help="radius of the start sphere (scene units)")
@@ -289,8 +293,16 @@ def main():
     if len(phase_res) > args.remeshes + 1:
         ap.error("--res %r: %d film sizes for %d phases (--remeshes %d)" % (args.res, len(phase_res),
                                                                            args.remeshes + 1, args.remeshes))
+    try:
+        phase_spp = [int(n) for n in args.spp.split(",")]
+    except ValueError:
+        ap.error("--spp %r: expected a comma list of sample counts" % args.spp)
+    if min(phase_spp) < 1 or len(phase_spp) > args.remeshes + 1:
+        ap.error("--spp %r: one count >= 1 per phase, at most %d (--remeshes %d)" % (args.spp, args.remeshes + 1,
+                                                                                   args.remeshes))
     phases = args.remeshes + 1
     res_of_phase = [phase_res[min(i, len(phase_res) - 1)] for i in range(phases)]
+    spp_of_phase = [phase_spp[min(i, len(phase_spp) - 1)] for i in range(phases)]
     score_res = max(res_of_phase)
     os.makedirs(args.out, exist_ok=True)
     tmp = tempfile.mkdtemp(prefix="qsil-two-mirrors-")
@@ -341,7 +353,7 @@ def main():
         return distances(V, F) + distances(V, F, part=seen)
 
     start_chamfer, start_hausdorff, start_seen_chamfer, start_seen_hausdorff = score_shape(V0, F0)
-    results = {"res": res_of_phase, "spp": args.spp, "target_spp": args.target_spp, "seconds": args.seconds,
+    results = {"res": res_of_phase, "spp": spp_of_phase if len(set(spp_of_phase)) > 1 else spp_of_phase[0], "target_spp": args.target_spp, "seconds": args.seconds,
                "lr": args.lr, "lam": args.lam, "remeshes": args.remeshes, "lr_decay": args.lr_decay,
                "start_vertices": int(len(V0)), "truth_vertices": int(len(TV)), "diag": distances.diag, "floor": floor,
                "min_edge": args.min_edge, "score_res": score_res, "threads": args.threads or os.cpu_count(),
@@ -387,10 +399,10 @@ def main():
             grad = np.zeros_like(V)
             step_loss = 0.0
             for sc, est, tgt in zip(scenes, estimators, targets):
-                image = est.render(spp=args.spp, seed=seed, threads=args.threads)
+                image = est.render(spp=spp_of_phase[phase], seed=seed, threads=args.threads)
                 step_loss += float(((image - tgt) ** 2).mean()) / len(scenes)
                 w = 2 * (image - tgt) / (image.size * len(scenes))
-                grad += est.run(w, spp=args.spp, seed=seed + 1, threads=args.threads)["gradient"]["bunny"]
+                grad += est.run(w, spp=spp_of_phase[phase], seed=seed + 1, threads=args.threads)["gradient"]["bunny"]
                 seed += 2
             V = opt.step(grad)
             step += 1
@@ -435,8 +447,9 @@ def main():
 
     # ---- Charts: the loss and its floor, Chamfer and Hausdorff against time.
     progress_chart(os.path.join(args.out, "progress.png"), results["methods"], floor,
-                   "Two mirrors: film %s per phase, %d spp per step, %d remeshings"
-                   % (" -> ".join("%d^2" % r for r in res_of_phase), args.spp, args.remeshes),
+                   "Two mirrors: film %s per phase, %s spp per step, %d remeshings"
+                   % (" -> ".join("%d^2" % r for r in res_of_phase),
+                      "/".join(str(n) for n in sorted(set(spp_of_phase), reverse=True)), args.remeshes),
                    seen=True, targets=(0.01, 0.05))
     for method, snapshots in evolution.items():
         cols = [("truth", truth_pictures)] + [("%.0f s" % t, p) for t, p in snapshots]

@@ -102,3 +102,14 @@ def test_seen_directly_and_the_way_back_from_the_mirror():
     assert list(mirrored) == [False, False]
     direct, _ = two_mirrors.seen_by_camera(points[:1], V, TRI_F, MirrorScene(), AXIS_CAMERA, np.radians(5.0))
     assert list(direct) == [False]
+
+
+def test_page_names_a_per_phase_spp():
+    # --spp 4,4,1,1 records a list; the page's set-up names it per phase, as the film sizes.
+    import json
+    with open(os.path.join(ROOT, "docs", "images", "two-mirrors", "results.json")) as f:
+        record = json.load(f)
+    assert "; %d spp per step" % record["spp"] in two_mirrors.page_text(record)
+    record["spp"] = [4, 4, 1, 1]
+    record["res"] = [64, 128, 256, 256]
+    assert "; 4 → 4 → 1 → 1 spp per step" in two_mirrors.page_text(record)
