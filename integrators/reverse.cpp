@@ -81,8 +81,9 @@ struct ReverseView {
 /// (kDerivativeSampling: the same random numbers give ReverseView's path), stopping at the first
 /// chosen-shape hit that scatters. A path without one has no interior derivative (no vertex of
 /// it moves) and its boundary term moves edges only, so its probe pass is the whole sample and
-/// needs no duals; the other paths are traced again with ReverseView. On a scene where the
-/// chosen shapes fill a small part of the image, most paths skip the dual arithmetic.
+/// needs no duals; the other paths are traced again with ReverseView, whose boundary term takes
+/// over the probe's stream at the first chosen-shape hit. On a scene where the chosen shapes fill
+/// a small part of the image, most paths skip the dual arithmetic.
 struct ProbeView {
   using Real = double;
   static constexpr bool kDerivativeSampling = true;
@@ -176,9 +177,16 @@ struct ReverseBoundaryHook : BoundaryHookBase {
   Color adjoint;                         ///< the pixel's adjoint / spp
   bool edges;                            ///< add the edge vertices' share (first pass of the path)
   std::vector<Contribution>* out;
+  /// Skip the vertices before the path's first chosen-shape hit (tape->moving false): a probe
+  /// pass did them, and `sampler` continues where the probe's stream stopped.
+  bool after_probe = false;
+  /// Where the boundary samples' counters go; null: trace_path's (the path's) counters.
+  PathStats* stats_out = nullptr;
 
   void operator()(const SurfaceInteraction<Real>& si, const ShadingPoint<Real>& sp, const Vec3& wo_local,
-                  const ColorT<Real>& beta, int seg, Sampler&, PathStats& stats, ColorT<Real>& L) const {
+                  const ColorT<Real>& beta, int seg, Sampler&, PathStats& path_stats, ColorT<Real>& L) const {
+    if (after_probe && !tape->moving) return;
+    PathStats& stats = stats_out ? *stats_out : path_stats;
     constexpr bool duals = !std::is_same_v<Real, double>;
     Eigen::Matrix<double, 3, kSlots> dp = Eigen::Matrix<double, 3, kSlots>::Zero();
     if constexpr (duals)
@@ -229,6 +237,9 @@ struct TileScratch {
   Tape tape;
   std::vector<Contribution> contributions;
   edgetree::EdgeChoiceScratch edge_choice;
+  /// The boundary term's stream where a probe pass stopped (at the path's first chosen-shape hit
+  /// that scatters): the dual passes of the sample continue it from there.
+  std::optional<Sampler> resume;
 };
 
 /// One sample of one pixel: sample index s of pixel (x, y), and the run's seed.
@@ -319,20 +330,23 @@ class ReverseEstimator::Impl : public RenderSetup {
     }
   }
 
-  /// The probe pass of sample `ps` (ProbeView): the sample's path in doubles with its secondary
-  /// boundary term (edges' shares to `scratch.contributions`, adjoint `a`). Returns the path's
-  /// radiance when it met no chosen-shape hit that scatters: then this pass is the whole sample.
-  /// Otherwise returns nothing and leaves `scratch.contributions` and `st` as they were: the
-  /// caller traces the sample with duals (trace_pass), which draws the same random numbers.
+  /// The probe pass of sample `ps` (ProbeView): the sample's path in doubles up to its first
+  /// chosen-shape hit that scatters, with the secondary boundary term at the vertices before it
+  /// (edges' shares to `scratch.contributions`, adjoint `a`; the boundary samples' counters to
+  /// `st`). Returns the path's radiance when there is no such hit: this pass is then the whole
+  /// sample, and its path's counters go to `st` too. Otherwise returns nothing and leaves the
+  /// boundary term's stream in `scratch.resume`: the caller traces the sample with duals
+  /// (trace_pass), which draws the path's numbers again and continues the boundary term from
+  /// that hit on (the vertices before it do not move: their terms are what this pass added).
   std::optional<Color> trace_probe(const PixelSample& ps, const Color& a, TileScratch& scratch, PathStats& st) const {
     Tape& tape = scratch.tape;
     const Camera& cam = scene.camera;
     const uint64_t pixel = uint64_t(ps.y) * uint64_t(cam.width) + uint64_t(ps.x);
     tape.reset(0);
-    const size_t kept = scratch.contributions.size();
-    PathStats probe_stats;
+    scratch.resume.reset();
+    PathStats path_stats;  // the dual pass counts the path's rays itself if the probe stops
     Sampler sampler(ps.seed, pixel, uint64_t(ps.s));
-    const CameraRay ray = trace_camera_ray(ctx, ps.x, ps.y, sampler.next2(), probe_stats);
+    const CameraRay ray = trace_camera_ray(ctx, ps.x, ps.y, sampler.next2(), path_stats);
     bool stopped = false;
     const ProbeView view{&scene, &chosen, &stopped};
     const int traversals =
@@ -340,28 +354,28 @@ class ReverseEstimator::Impl : public RenderSetup {
     Color L;
     if (traversals > 0) {
       Sampler bsampler(ps.seed, pixel, uint64_t(ps.s), 1);
-      const ReverseBoundaryHook<double> hook{{&ctx, &boundary_ctx, &bsampler, traversals, &scratch.edge_choice},
-                                             &tape,
-                                             &chosen_index,
-                                             a,
-                                             true,
-                                             &scratch.contributions};
-      L = trace_path(ctx, view, {cam.origin(), ray.dir, ray.hit}, sampler, probe_stats, hook);
+      ReverseBoundaryHook<double> hook{{&ctx, &boundary_ctx, &bsampler, traversals, &scratch.edge_choice},
+                                       &tape,
+                                       &chosen_index,
+                                       a,
+                                       true,
+                                       &scratch.contributions};
+      hook.stats_out = &st;
+      L = trace_path(ctx, view, {cam.origin(), ray.dir, ray.hit}, sampler, path_stats, hook);
+      if (stopped) scratch.resume = bsampler;
     } else {
-      L = trace_path(ctx, view, {cam.origin(), ray.dir, ray.hit}, sampler, probe_stats);
+      L = trace_path(ctx, view, {cam.origin(), ray.dir, ray.hit}, sampler, path_stats);
     }
-    if (stopped) {
-      scratch.contributions.resize(kept);
-      return std::nullopt;
-    }
-    st += probe_stats;
+    if (stopped) return std::nullopt;
+    st += path_stats;
     return L;
   }
 
   /// One pass of sample `ps`'s path: the path from the sample's first random number, with slots
   /// for tape hits [window, window + kHitsPerPass) (every pass draws the same numbers: the same
   /// path), its secondary boundary term adding to `scratch.contributions` (adjoint `a` of the
-  /// pixel, per sample) and its hits' adjoints added by backpropagate_hits.
+  /// pixel, per sample; after a probe pass, `scratch.resume`, from the first chosen-shape hit on)
+  /// and its hits' adjoints added by backpropagate_hits.
   ColorT<RDual> trace_pass(const PixelSample& ps, int window, const Color& a, TileScratch& scratch,
                            PathStats& st) const {
     Tape& tape = scratch.tape;
@@ -375,13 +389,15 @@ class ReverseEstimator::Impl : public RenderSetup {
     const int traversals = boundary.sampler ? boundary_traversals(boundary_ctx.sppi, ps.seed, pixel, uint64_t(ps.s)) : 0;
     ColorT<RDual> L;
     if (traversals > 0) {
-      Sampler bsampler(ps.seed, pixel, uint64_t(ps.s), 1);
-      const ReverseBoundaryHook<RDual> hook{{&ctx, &boundary_ctx, &bsampler, traversals, &scratch.edge_choice},
-                                            &tape,
-                                            &chosen_index,
-                                            a,
-                                            window == 0,
-                                            &scratch.contributions};
+      // After a probe pass, the boundary term continues its stream from the first chosen-shape hit.
+      Sampler bsampler = scratch.resume ? *scratch.resume : Sampler(ps.seed, pixel, uint64_t(ps.s), 1);
+      ReverseBoundaryHook<RDual> hook{{&ctx, &boundary_ctx, &bsampler, traversals, &scratch.edge_choice},
+                                      &tape,
+                                      &chosen_index,
+                                      a,
+                                      window == 0,
+                                      &scratch.contributions};
+      hook.after_probe = scratch.resume.has_value();
       L = trace_path(ctx, view, {lift<RDual>(origin), ray.dir, ray.hit}, sampler, st, hook);
     } else {
       L = trace_path(ctx, view, {lift<RDual>(origin), ray.dir, ray.hit}, sampler, st);
@@ -407,6 +423,7 @@ class ReverseEstimator::Impl : public RenderSetup {
           contributions.clear();
           const PixelSample ps{x, y, s, seed};
           std::optional<Color> probed;
+          scratch.resume.reset();
           if (config.probe_paths) probed = trace_probe(ps, a, scratch, sums.stats);
           Color value_L;
           if (probed) {

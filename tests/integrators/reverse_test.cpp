@@ -297,9 +297,10 @@ TEST(ReverseMode, SameGradientForAnyThreadCount) {
 /// rounding (relative 1e-12: a path's radiance in doubles and as a dual's value may differ in the
 /// last bit), and the probe completes some samples but not all (the others meet the chosen shape).
 /// Fails if
-/// the probe sampled diffuse directions from the cosine density (other paths), kept the boundary
-/// contributions of a path it hands on to the dual pass (counted twice), or completed a path
-/// that meets the chosen shape (its interior term lost).
+/// the probe sampled diffuse directions from the cosine density (other paths), completed a path
+/// that meets the chosen shape (its interior term lost), or if the dual pass after a probe redid
+/// the boundary term of the vertices before the first chosen-shape hit (counted twice) or did not
+/// continue the probe's boundary stream (other boundary samples).
 void expect_probe_changes_nothing(const Scene& scene, const std::string& id) {
   ReverseConfig config{resolve_shapes(scene, {id}), Method::Quadric, 1};
   const ReverseEstimator probing(scene, config);

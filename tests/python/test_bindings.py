@@ -240,7 +240,7 @@ def test_reverse_estimator_equals_reverse_and_follows_the_scene():
 
 def test_reverse_estimator_probe_paths_switch():
     # probe_paths=False traces every path with dual numbers: the same estimate to rounding (the C++
-    # test ReverseMode.ProbePassChangesNothingButTheCost checks it bit by bit), no samples probed.
+    # test ReverseMode.ProbePassChangesNothingButTheCost checks the counters too), no samples probed.
     s = load(res=12, spp=2)
     adj = np.random.default_rng(4).uniform(-1, 1, (s.height, s.width, 3))
     a = qsil.ReverseEstimator(s, ["spot"]).run(adj, spp=2, seed=6)

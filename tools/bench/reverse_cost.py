@@ -23,13 +23,13 @@ import time
 import numpy as np
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-DEFAULT_CASES = ["scenes/two-mirrors.xml:bunny", "scenes/spot-mirror.xml:spot", "scenes/shadow-quad.xml:object",
-                 "scenes/direct.xml:spot"]
+DEFAULT_CASES = [os.path.join(ROOT, "scenes", c) for c in
+                 ("two-mirrors.xml:bunny", "spot-mirror.xml:spot", "shadow-quad.xml:object", "direct.xml:spot")]
 
 
 def measure(qsil, scene_file, shape, method, res, spp, pairs, threads):
     """Medians of render and run times (s) with and without the probe, the fastest runs' ratio, and
-    the share of samples the probe completed."""
+    the share of samples the probe completed (over all pairs)."""
     sc = qsil.Scene(scene_file, {"res": str(res)})
     w = np.random.default_rng(0).uniform(-1, 1, (res, res, 3)) / (res * res * 3)
     estimators = {p: qsil.ReverseEstimator(sc, [shape], boundary=method, probe_paths=p) for p in (True, False)}
@@ -43,9 +43,9 @@ def measure(qsil, scene_file, shape, method, res, spp, pairs, threads):
             r = estimators[p].run(w, spp=spp, seed=i, threads=threads)
             runs[p].append(time.perf_counter() - t0)
             if p:
-                probed = r["probed"]
+                probed += r["probed"]
     return (float(np.median(render)), float(np.median(runs[True])), float(np.median(runs[False])),
-            min(runs[True]) / min(runs[False]), probed / (res * res * spp))
+            min(runs[True]) / min(runs[False]), probed / (res * res * spp * pairs))
 
 
 def main():

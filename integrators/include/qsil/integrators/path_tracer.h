@@ -11,9 +11,9 @@
 /// density of a detached sample would bias the estimate. NEE samples a light point but keeps only
 /// its direction; the emitted radiance along it is constant, so it carries no derivative, and
 /// there is no geometry term. Env-map radiance depends on direction only: zero derivative.
-/// Paths that carry derivatives (T a dual) draw diffuse directions from a defensive mixture
-/// (kDerivativeDiffuseUniformShare, bsdf.h), whose pdf their MIS weights use too; primal paths
-/// draw them from the cosine density.
+/// Paths that carry derivatives (T a dual, or a view that declares kDerivativeSampling: reverse
+/// mode's probe) draw diffuse directions from a defensive mixture (kDerivativeDiffuseUniformShare,
+/// bsdf.h), whose pdf their MIS weights use too; primal paths draw them from the cosine density.
 ///
 /// Depth follows Mitsuba 3: max_depth counts path segments (1 = directly seen emitters,
 /// 2 = direct illumination); -1 means unbounded, capped at kUnboundedDepthCap segments.
@@ -359,6 +359,9 @@ struct NoWarp {
 /// by `warp(si, wo_world, w, stats)`, the path continues along the warped direction (the next
 /// hit, the next vertex's wo) and its contribution is multiplied by the warp's Jacobian. The
 /// ray's own direction is `warp.first_direction(ray.dir)` (its Jacobian is the caller's).
+/// A view with `attach(si, hit, origin, dir, scatters)` (reverse mode) is called after each hit;
+/// its returning false ends the path there, with L as it stands. `View::kDerivativeSampling`,
+/// where declared, chooses the diffuse sampling (file comment) instead of T.
 template <class View, class Hook = NoVertexHook, class Warp = NoWarp>
 ColorT<typename View::Real> trace_path(const PathContext& ctx, const View& view,
                                        const PathRay<typename View::Real>& ray, Sampler& sampler, PathStats& stats,

@@ -44,9 +44,10 @@ struct ReverseConfig {
   /// Sample the intersection curves where surfaces cross (EstimatorConfig::intersection_curves).
   bool intersection_curves = true;
   /// Trace each sample's path in doubles first and again with dual numbers only when it meets a
-  /// chosen shape where it scatters (the same estimates from the same random numbers; a path that
-  /// never meets one has no interior derivative). false: every path with dual numbers, which
-  /// costs more where the chosen shapes fill little of what the paths see (for tests and timing).
+  /// chosen shape where it scatters, from that hit on for the boundary term (the same estimates
+  /// from the same random numbers, to rounding; a path that never meets one has no interior
+  /// derivative). false: every path with dual numbers, which costs more where the chosen shapes
+  /// fill little of what the paths see (for tests and timing).
   bool probe_paths = true;
 };
 
@@ -62,7 +63,9 @@ struct ReverseResult {
   /// scene unit of length).
   std::vector<std::vector<Vec3>> gradient;
   double seconds = 0;            ///< wall time of the run
-  uint64_t rays = 0;             ///< ray queries issued
+  /// Ray queries of the estimate's passes: a sample's path counted once (not again by a dual pass
+  /// after a probe pass stopped), its boundary samples' rays, and replayed passes.
+  uint64_t rays = 0;
   uint64_t nonfinite = 0;        ///< samples with a NaN/inf value or gradient (dropped from every output, reported)
   uint64_t traversals = 0;       ///< boundary-term samples drawn (secondary and primary)
   uint64_t zero_traversals = 0;  ///< ...that contributed nothing
