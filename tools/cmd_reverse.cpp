@@ -129,10 +129,12 @@ const CommandRegistrar registrar{
                         (unsigned long long)r.nonfinite);
          double norm = 0;
          for (double v : rows) norm += v * v;
-         std::printf("reverse: %s %dx%d, %d spp, boundary %s, %.3f s (set-up %.3f s), %llu traversals, %llu replays\n",
-                     flags->scene.c_str(), cam.width, cam.height, r.spp, flags->boundary.method.c_str(),
-                     reverse.setup().seconds + r.seconds, reverse.setup().seconds, (unsigned long long)r.traversals,
-                     (unsigned long long)r.replays);
+         std::printf(
+             "reverse: %s %dx%d, %d spp, boundary %s, %.3f s (set-up %.3f s), %llu traversals, %llu replays, "
+             "%llu samples probed (no dual numbers)\n",
+             flags->scene.c_str(), cam.width, cam.height, r.spp, flags->boundary.method.c_str(),
+             reverse.setup().seconds + r.seconds, reverse.setup().seconds, (unsigned long long)r.traversals,
+             (unsigned long long)r.replays, (unsigned long long)r.probed);
          if (std::isnan(l2))
            std::printf("  loss sum W.I = %.9g\n", r.loss);
          else
