@@ -252,6 +252,21 @@ def seen_by_camera(points, V, F, scene, camera, half_fov):
     return direct, mirrored
 
 
+def per_phase(text, phases):
+    """One positive integer per phase from a comma list such as "64,128,256" (the last repeats):
+    a list of `phases` ints. Raises ValueError for a non-integer, a value < 1 or more values than
+    phases."""
+    try:
+        values = [int(v) for v in text.split(",")]
+    except ValueError:
+        raise ValueError("%r: expected a comma list of integers" % text) from None
+    if min(values) < 1:
+        raise ValueError("%r: values must be >= 1" % text)
+    if len(values) > phases:
+        raise ValueError("%r: %d values for %d phases" % (text, len(values), phases))
+    return [values[min(i, len(values) - 1)] for i in range(phases)]
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--build", default=os.path.join(ROOT, "build"), help="CMake build directory with python/qsil*.so")
@@ -284,25 +299,12 @@ def main():
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    try:
-        phase_res = [int(r) for r in args.res.split(",")]
-    except ValueError:
-        ap.error("--res %r: expected a comma list of film sizes" % args.res)
-    if min(phase_res) < 1:
-        ap.error("--res %r: film sizes must be >= 1" % args.res)
-    if len(phase_res) > args.remeshes + 1:
-        ap.error("--res %r: %d film sizes for %d phases (--remeshes %d)" % (args.res, len(phase_res),
-                                                                           args.remeshes + 1, args.remeshes))
-    try:
-        phase_spp = [int(n) for n in args.spp.split(",")]
-    except ValueError:
-        ap.error("--spp %r: expected a comma list of sample counts" % args.spp)
-    if min(phase_spp) < 1 or len(phase_spp) > args.remeshes + 1:
-        ap.error("--spp %r: one count >= 1 per phase, at most %d (--remeshes %d)" % (args.spp, args.remeshes + 1,
-                                                                                   args.remeshes))
     phases = args.remeshes + 1
-    res_of_phase = [phase_res[min(i, len(phase_res) - 1)] for i in range(phases)]
-    spp_of_phase = [phase_spp[min(i, len(phase_spp) - 1)] for i in range(phases)]
+    try:
+        res_of_phase = per_phase(args.res, phases)
+        spp_of_phase = per_phase(args.spp, phases)
+    except ValueError as e:
+        ap.error("--res %r / --spp %r (--remeshes %d): %s" % (args.res, args.spp, args.remeshes, e))
     score_res = max(res_of_phase)
     os.makedirs(args.out, exist_ok=True)
     tmp = tempfile.mkdtemp(prefix="qsil-two-mirrors-")
@@ -353,7 +355,8 @@ def main():
         return distances(V, F) + distances(V, F, part=seen)
 
     start_chamfer, start_hausdorff, start_seen_chamfer, start_seen_hausdorff = score_shape(V0, F0)
-    results = {"res": res_of_phase, "spp": spp_of_phase if len(set(spp_of_phase)) > 1 else spp_of_phase[0], "target_spp": args.target_spp, "seconds": args.seconds,
+    spp_record = spp_of_phase if len(set(spp_of_phase)) > 1 else spp_of_phase[0]
+    results = {"res": res_of_phase, "spp": spp_record, "target_spp": args.target_spp, "seconds": args.seconds,
                "lr": args.lr, "lam": args.lam, "remeshes": args.remeshes, "lr_decay": args.lr_decay,
                "start_vertices": int(len(V0)), "truth_vertices": int(len(TV)), "diag": distances.diag, "floor": floor,
                "min_edge": args.min_edge, "score_res": score_res, "threads": args.threads or os.cpu_count(),
@@ -449,7 +452,8 @@ def main():
     progress_chart(os.path.join(args.out, "progress.png"), results["methods"], floor,
                    "Two mirrors: film %s per phase, %s spp per step, %d remeshings"
                    % (" -> ".join("%d^2" % r for r in res_of_phase),
-                      "/".join(str(n) for n in sorted(set(spp_of_phase), reverse=True)), args.remeshes),
+                      " -> ".join(str(n) for n in spp_of_phase) if len(set(spp_of_phase)) > 1
+                      else str(spp_of_phase[0]), args.remeshes),
                    seen=True, targets=(0.01, 0.05))
     for method, snapshots in evolution.items():
         cols = [("truth", truth_pictures)] + [("%.0f s" % t, p) for t, p in snapshots]

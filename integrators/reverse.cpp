@@ -374,8 +374,8 @@ class ReverseEstimator::Impl : public RenderSetup {
   /// One pass of sample `ps`'s path: the path from the sample's first random number, with slots
   /// for tape hits [window, window + kHitsPerPass) (every pass draws the same numbers: the same
   /// path), its secondary boundary term adding to `scratch.contributions` (adjoint `a` of the
-  /// pixel, per sample; after a probe pass, `scratch.resume`, from the first chosen-shape hit on)
-  /// and its hits' adjoints added by backpropagate_hits.
+  /// pixel, per sample; after a probe pass stopped, only from the first chosen-shape hit on, drawing
+  /// from a copy of `scratch.resume`) and its hits' adjoints added by backpropagate_hits.
   ColorT<RDual> trace_pass(const PixelSample& ps, int window, const Color& a, TileScratch& scratch,
                            PathStats& st) const {
     Tape& tape = scratch.tape;

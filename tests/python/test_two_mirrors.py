@@ -2,7 +2,7 @@
 and view, and the test of what the camera sees directly and by one reflection, against
 hand-computed cases (a mirror facing the camera, a point straight behind it, one seen off-axis,
 one whose reflection misses the mirror, one hidden by an occluder on the way to the mirror or
-back from it).
+back from it); and the page's set-up line for one spp and for one spp per phase.
 
 Run by ctest with the bindings' suite (QSIL_SOURCE_DIR=<repository>); NumPy only.
 """
@@ -109,7 +109,19 @@ def test_page_names_a_per_phase_spp():
     import json
     with open(os.path.join(ROOT, "docs", "images", "two-mirrors", "results.json")) as f:
         record = json.load(f)
-    assert "; %d spp per step" % record["spp"] in two_mirrors.page_text(record)
+    record["spp"] = 4
+    assert "; 4 spp per step" in two_mirrors.page_text(record)
     record["spp"] = [4, 4, 1, 1]
     record["res"] = [64, 128, 256, 256]
     assert "; 4 → 4 → 1 → 1 spp per step" in two_mirrors.page_text(record)
+
+
+def test_per_phase_lists():
+    assert two_mirrors.per_phase("64,128,256", 4) == [64, 128, 256, 256]
+    assert two_mirrors.per_phase("4", 3) == [4, 4, 4]
+    for bad in ("64,x", "0,4", "1,2,3,4,5"):
+        try:
+            two_mirrors.per_phase(bad, 4)
+        except ValueError:
+            continue
+        raise AssertionError("accepted %r" % bad)

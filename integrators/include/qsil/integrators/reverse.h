@@ -43,11 +43,12 @@ struct ReverseConfig {
   double sppp = kDefaultSppp;
   /// Sample the intersection curves where surfaces cross (EstimatorConfig::intersection_curves).
   bool intersection_curves = true;
-  /// Trace each sample's path in doubles first and again with dual numbers only when it meets a
-  /// chosen shape where it scatters, from that hit on for the boundary term (the same estimates
-  /// from the same random numbers, to rounding; a path that never meets one has no interior
-  /// derivative). false: every path with dual numbers, which costs more where the chosen shapes
-  /// fill little of what the paths see (for tests and timing).
+  /// Trace each sample's path in doubles first (a probe pass), and again with dual numbers only
+  /// when it meets a chosen shape where it scatters; the dual pass then does the boundary term
+  /// only from that hit on, the probe having done the vertices before it. The estimates are the
+  /// same to rounding, from the same random numbers: a path that never meets a chosen shape has no
+  /// interior derivative. false: every path with dual numbers, which costs more where the chosen
+  /// shapes fill little of what the paths see (for tests and timing).
   bool probe_paths = true;
 };
 
@@ -63,11 +64,12 @@ struct ReverseResult {
   /// scene unit of length).
   std::vector<std::vector<Vec3>> gradient;
   double seconds = 0;            ///< wall time of the run
-  /// Ray queries of the estimate's passes: a sample's path counted once (not again by a dual pass
-  /// after a probe pass stopped), its boundary samples' rays, and replayed passes.
+  /// Ray queries of a sample's passes, its path's rays counted once: when a probe pass stopped,
+  /// those of the dual pass, not the probe's (without replays, the count of a run without the
+  /// probe; replayed passes after a probe skip the boundary term before the first chosen-shape hit).
   uint64_t rays = 0;
   uint64_t nonfinite = 0;        ///< samples with a NaN/inf value or gradient (dropped from every output, reported)
-  uint64_t traversals = 0;       ///< boundary-term samples drawn (secondary and primary)
+  uint64_t traversals = 0;       ///< boundary-term samples drawn (secondary and primary; as for rays)
   uint64_t zero_traversals = 0;  ///< ...that contributed nothing
   uint64_t replays = 0;          ///< extra passes of paths with more than two chosen-shape hits
   uint64_t probed = 0;           ///< samples whose probe pass was the whole sample (ReverseConfig::probe_paths)
