@@ -84,14 +84,10 @@ struct ReverseView {
 /// needs no duals; the other paths are traced again with ReverseView, whose boundary term takes
 /// over the probe's stream at the first chosen-shape hit. On a scene where the chosen shapes fill
 /// a small part of the image, most paths skip the dual arithmetic.
-struct ProbeView {
-  using Real = double;
+struct ProbeView : PrimalView {
   static constexpr bool kDerivativeSampling = true;
-  const Scene* scene;
   const std::vector<bool>* chosen;
   bool* stopped;  ///< set when the path met a chosen-shape hit that scatters
-  Vec3 position(int shape, int v) const { return scene->shapes[size_t(shape)].mesh.positions[size_t(v)]; }
-  Vec3 normal(int shape, int v) const { return scene->shapes[size_t(shape)].mesh.normals[size_t(v)]; }
   bool attach(SurfaceInteraction<Real>& si, const Hit&, const Vec3&, const Vec3&, bool scatters) const {
     if (!scatters || !(*chosen)[size_t(si.shape)]) return true;
     *stopped = true;
@@ -348,7 +344,7 @@ class ReverseEstimator::Impl : public RenderSetup {
     Sampler sampler(ps.seed, pixel, uint64_t(ps.s));
     const CameraRay ray = trace_camera_ray(ctx, ps.x, ps.y, sampler.next2(), path_stats);
     bool stopped = false;
-    const ProbeView view{&scene, &chosen, &stopped};
+    const ProbeView view{{&scene}, &chosen, &stopped};
     const int traversals =
         boundary.sampler ? boundary_traversals(boundary_ctx.sppi, ps.seed, pixel, uint64_t(ps.s)) : 0;
     Color L;
@@ -423,7 +419,6 @@ class ReverseEstimator::Impl : public RenderSetup {
           contributions.clear();
           const PixelSample ps{x, y, s, seed};
           std::optional<Color> probed;
-          scratch.resume.reset();
           if (config.probe_paths) probed = trace_probe(ps, a, scratch, sums.stats);
           Color value_L;
           if (probed) {
