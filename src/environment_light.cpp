@@ -71,8 +71,8 @@ EnvironmentLight::EnvironmentLight(const Environment& env) : type_(env.type) {
         c[k] = std::max(0.0, value) * env.scale;
       }
       const size_t i = size_t(y) * size_t(width_) + size_t(x);
-      texels_[i] = c;
       weights[i] = luminance(c) * sin_mid;
+      texels_[i] = {c, weights[i]};
       average_ += c * texel_solid_angle;
     }
   }
@@ -80,7 +80,7 @@ EnvironmentLight::EnvironmentLight(const Environment& env) : type_(env.type) {
   distribution_ = Distribution2D(weights, width_, height_);
 }
 
-Color EnvironmentLight::texel(int x, int y) const { return texels_[size_t(y) * size_t(width_) + size_t(x)]; }
+Color EnvironmentLight::texel(int x, int y) const { return texels_[size_t(y) * size_t(width_) + size_t(x)].radiance; }
 
 Color EnvironmentLight::eval(const Vec3& dir_world) const {
   switch (type_) {
@@ -128,7 +128,12 @@ double EnvironmentLight::pdf(const Vec3& dir_world) const {
   if (!(sin_theta > 0)) return 0.0;
   Vec2 uv = direction_to_uv(d_local.normalized());
   uv = uv.cwiseMin(kOneMinusEpsilon);  // v = 1 at the south pole belongs to the bottom row
-  return distribution_.pdf(uv) / (2.0 * kPi * kPi * sin_theta);
+  // distribution_.pdf(uv), with the weight read from the texel's record (the line eval() reads).
+  if (distribution_.is_zero() || !(uv.x() >= 0.0 && uv.x() < 1.0 && uv.y() >= 0.0 && uv.y() < 1.0)) return 0.0;
+  const int x = std::min(int(uv.x() * width_), width_ - 1);
+  const int y = std::min(int(uv.y() * height_), height_ - 1);
+  const double pdf_uv = texels_[size_t(y) * size_t(width_) + size_t(x)].weight / distribution_.integral();
+  return pdf_uv / (2.0 * kPi * kPi * sin_theta);
 }
 
 Color EnvironmentLight::average_radiance() const { return average_; }

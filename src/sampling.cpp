@@ -85,24 +85,27 @@ Vec3 square_to_uniform_triangle(const Vec2& u) {
 // Distribution1D
 // ---------------------------------------------------------------------------------------------
 
-Distribution1D::Distribution1D(std::span<const double> f) : f_(f.begin(), f.end()) {
-  if (f_.empty()) throw std::invalid_argument("Distribution1D: no bins");
-  for (size_t i = 0; i < f_.size(); ++i)
-    if (!(f_[i] >= 0.0) || !std::isfinite(f_[i]))
+Distribution1D::Distribution1D(std::span<const double> f) {
+  if (f.empty()) throw std::invalid_argument("Distribution1D: no bins");
+  for (size_t i = 0; i < f.size(); ++i)
+    if (!(f[i] >= 0.0) || !std::isfinite(f[i]))
       throw std::invalid_argument("Distribution1D: weight " + std::to_string(i) + " is negative or not finite");
-  const size_t n = f_.size();
-  cdf_.assign(n + 1, 0.0);
-  for (size_t i = 0; i < n; ++i) cdf_[i + 1] = cdf_[i] + f_[i];
-  sum_ = cdf_[n];
+  const size_t n = f.size();
+  bins_.assign(n + 1, Bin{});
+  for (size_t i = 0; i < n; ++i) {
+    bins_[i].f = f[i];
+    bins_[i + 1].cdf = bins_[i].cdf + f[i];
+  }
+  sum_ = bins_[n].cdf;
   is_zero_ = !(sum_ > 0.0);
   if (is_zero_) {
     // Degenerate: keep a uniform CDF so that sample() still yields well-formed numbers.
-    for (size_t i = 0; i <= n; ++i) cdf_[i] = double(i) / double(n);
+    for (size_t i = 0; i <= n; ++i) bins_[i].cdf = double(i) / double(n);
   } else {
-    // Dividing the prefix sums by their total keeps them monotone and makes cdf_[n] exactly 1;
-    // a zero-weight bin keeps exactly zero width.
-    for (size_t i = 1; i < n; ++i) cdf_[i] /= sum_;
-    cdf_[n] = 1.0;
+    // Dividing the prefix sums by their total keeps them monotone and makes the CDF's last value
+    // exactly 1; a zero-weight bin keeps exactly zero width.
+    for (size_t i = 1; i < n; ++i) bins_[i].cdf /= sum_;
+    bins_[n].cdf = 1.0;
   }
   // Guide table (the indexed search of Chen & Asau 1974): guide_[k] = the largest i with
   // cdf[i] <= k/n, so the bin of u in [k/n, (k+1)/n) lies in [guide_[k], guide_[k+1]].
@@ -110,9 +113,15 @@ Distribution1D::Distribution1D(std::span<const double> f) : f_(f.begin(), f.end(
   size_t i = 0;
   for (size_t k = 0; k <= n; ++k) {
     const double level = double(k) / double(n);
-    while (i + 1 <= n && cdf_[i + 1] <= level) ++i;
+    while (i + 1 <= n && bins_[i + 1].cdf <= level) ++i;
     guide_[k] = int(i);
   }
+}
+
+std::vector<double> Distribution1D::cdf() const {
+  std::vector<double> c(bins_.size());
+  for (size_t i = 0; i < bins_.size(); ++i) c[i] = bins_[i].cdf;
+  return c;
 }
 
 int Distribution1D::find_bin(double u) const {
@@ -120,26 +129,27 @@ int Distribution1D::find_bin(double u) const {
   // Largest i with cdf[i] <= u, clamped to [0, n-1]: searched between the guide table's bounds
   // (one or two steps for most u), and over the whole CDF when rounding of u n put u outside them
   // (the answer is the same as a binary search over the whole CDF, so sampling is unchanged).
+  const auto below = [](double value, const Bin& b) { return value < b.cdf; };
   int i = -1;
   const double un = u * double(n);
   if (un >= 0.0 && un < double(n)) {
     const size_t k = size_t(un);
-    const auto lo = cdf_.begin() + guide_[k];
-    const auto hi = cdf_.begin() + std::min<ptrdiff_t>(ptrdiff_t(n) + 1, ptrdiff_t(guide_[k + 1]) + 2);
-    i = int(std::upper_bound(lo, hi, u) - cdf_.begin()) - 1;
-    const bool found = i >= 0 && cdf_[size_t(i)] <= u && (i == n || u < cdf_[size_t(i) + 1]);
+    const auto lo = bins_.begin() + guide_[k];
+    const auto hi = bins_.begin() + std::min<ptrdiff_t>(ptrdiff_t(n) + 1, ptrdiff_t(guide_[k + 1]) + 2);
+    i = int(std::upper_bound(lo, hi, u, below) - bins_.begin()) - 1;
+    const bool found = i >= 0 && bins_[size_t(i)].cdf <= u && (i == n || u < bins_[size_t(i) + 1].cdf);
     if (!found) i = -1;
   }
-  if (i < 0) i = int(std::upper_bound(cdf_.begin(), cdf_.end(), u) - cdf_.begin()) - 1;
+  if (i < 0) i = int(std::upper_bound(bins_.begin(), bins_.end(), u, below) - bins_.begin()) - 1;
   i = std::clamp(i, 0, n - 1);
-  if (is_zero_ || f_[size_t(i)] > 0.0) return i;
+  if (is_zero_ || bins_[size_t(i)].f > 0.0) return i;
   // Rounding put u on a zero-width bin (u at or beyond the top of the CDF, or on a plateau):
   // move to the nearest bin of non-zero weight, preferring the one below (the CDF plateau is
   // reached from below), never a zero-probability bin and never an arbitrary fallback index.
   for (int j = i - 1; j >= 0; --j)
-    if (f_[size_t(j)] > 0.0) return j;
+    if (bins_[size_t(j)].f > 0.0) return j;
   for (int j = i + 1; j < n; ++j)
-    if (f_[size_t(j)] > 0.0) return j;
+    if (bins_[size_t(j)].f > 0.0) return j;
   return i;  // unreachable for a non-degenerate distribution
 }
 
@@ -149,8 +159,9 @@ Distribution1D::Sample Distribution1D::sample(double u) const {
   if (n == 0) return s;
   u = std::clamp(u, 0.0, kOneMinusEpsilon);
   const int i = find_bin(u);
-  const double width = cdf_[size_t(i) + 1] - cdf_[size_t(i)];
-  double du = width > 0.0 ? (u - cdf_[size_t(i)]) / width : 0.5;
+  const Bin& bin = bins_[size_t(i)];
+  const double width = bins_[size_t(i) + 1].cdf - bin.cdf;
+  double du = width > 0.0 ? (u - bin.cdf) / width : 0.5;
   du = std::clamp(du, 0.0, kOneMinusEpsilon);
   double x = (double(i) + du) / double(n);
   // Keep x inside bin i despite rounding of (i + du)/n, so that pdf(x) refers to the same bin.
@@ -159,8 +170,8 @@ Distribution1D::Sample Distribution1D::sample(double u) const {
   s.x = x;
   s.index = i;
   if (!is_zero_) {
-    s.pmf = f_[size_t(i)] / sum_;
-    s.pdf = f_[size_t(i)] / integral();
+    s.pmf = bin.f / sum_;
+    s.pdf = bin.f / integral();
   }
   return s;
 }
@@ -175,7 +186,7 @@ Distribution1D::Sample Distribution1D::sample_discrete(double u) const {
 double Distribution1D::pdf(double x) const {
   if (is_zero_ || !(x >= 0.0) || !(x < 1.0)) return 0.0;
   const int i = std::min(int(x * size()), size() - 1);
-  return f_[size_t(i)] / integral();
+  return bins_[size_t(i)].f / integral();
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -141,7 +141,8 @@ TEST(SamplingDistribution1D, GuideTableFindsTheSameBinAsABinarySearch) {
   const Distribution1D d(w);
   std::vector<double> us;
   for (int i = 0; i < 20000; ++i) us.push_back(rng.uniform());
-  for (double c : d.cdf()) us.insert(us.end(), {c, std::nextafter(c, 0.0), std::nextafter(c, 2.0)});
+  const std::vector<double> cdf = d.cdf();
+  for (double c : cdf) us.insert(us.end(), {c, std::nextafter(c, 0.0), std::nextafter(c, 2.0)});
   for (int k = 0; k <= d.size(); ++k) {
     const double c = double(k) / d.size();
     us.insert(us.end(), {c, std::nextafter(c, 0.0), std::nextafter(c, 2.0)});
@@ -149,7 +150,7 @@ TEST(SamplingDistribution1D, GuideTableFindsTheSameBinAsABinarySearch) {
   for (double u : us) {
     const double uc = std::clamp(u, 0.0, std::nextafter(1.0, 0.0));
     const int expected =
-        std::clamp(int(std::upper_bound(d.cdf().begin(), d.cdf().end(), uc) - d.cdf().begin()) - 1, 0, d.size() - 1);
+        std::clamp(int(std::upper_bound(cdf.begin(), cdf.end(), uc) - cdf.begin()) - 1, 0, d.size() - 1);
     ASSERT_EQ(d.sample(u).index, expected) << "u = " << u;
   }
 }

@@ -77,7 +77,14 @@ class EnvironmentLight {
   Color constant_ = Color::Zero();
   Mat3 to_world_ = Mat3::Identity();
   int width_ = 0, height_ = 0;
-  std::vector<Color> texels_;  ///< width*height, row-major, top row first, already scaled
+  /// A texel's radiance and its sampling weight side by side (one cache line: eval() and pdf()
+  /// of one direction, as an escaped ray's MIS weight asks, read one line where two arrays took
+  /// two; tools/bench/bench_envmap.cpp).
+  struct alignas(32) TexelRecord {
+    Color radiance;  ///< already scaled, negative channels clamped to 0
+    double weight;   ///< luminance(radiance) * sin(theta at the row centre): distribution_'s weight
+  };
+  std::vector<TexelRecord> texels_;  ///< width*height, row-major, top row first
   Distribution2D distribution_;
   Color average_ = Color::Zero();
 };

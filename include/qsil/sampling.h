@@ -107,22 +107,28 @@ class Distribution1D {
   /// Density at x in [0,1) (x outside [0,1) gives 0).
   double pdf(double x) const;
   /// Probability of bin i.
-  double pmf(int i) const { return is_zero_ ? 0.0 : f_[size_t(i)] / sum_; }
+  double pmf(int i) const { return is_zero_ ? 0.0 : bins_[size_t(i)].f / sum_; }
   /// Number of bins.
-  int size() const { return int(f_.size()); }
+  int size() const { return bins_.empty() ? 0 : int(bins_.size()) - 1; }
   /// Integral of the (unnormalised) step function over [0,1): sum(f)/n.
-  double integral() const { return sum_ / double(f_.size()); }
+  double integral() const { return sum_ / double(size()); }
   /// True when all weights are zero (nothing can be sampled).
   bool is_zero() const { return is_zero_; }
   /// Weight of bin i as given.
-  double weight(int i) const { return f_[size_t(i)]; }
-  /// The normalised CDF, n+1 values from 0 to exactly 1.
-  const std::vector<double>& cdf() const { return cdf_; }
+  double weight(int i) const { return bins_[size_t(i)].f; }
+  /// The normalised CDF, n+1 values from 0 to exactly 1 (a copy).
+  std::vector<double> cdf() const;
 
  private:
   int find_bin(double u) const;
-  std::vector<double> f_;
-  std::vector<double> cdf_;
+  /// One bin's CDF and weight side by side, so that a sample reads one cache line where two
+  /// arrays took two (an environment map's rows do not stay in cache;
+  /// tools/bench/bench_envmap.cpp).
+  struct Bin {
+    double cdf = 0;  ///< the normalised CDF at the bin's start (entry n: exactly 1)
+    double f = 0;    ///< the bin's weight as given (entry n: 0)
+  };
+  std::vector<Bin> bins_;   ///< n + 1 entries
   std::vector<int> guide_;  ///< n + 1 entries: the largest i with cdf[i] <= k/n (find_bin)
   double sum_ = 0;
   bool is_zero_ = true;
