@@ -326,6 +326,41 @@ class ReverseEstimator::Impl : public RenderSetup {
     }
   }
 
+  /// The boundary term's stream of sample `ps` from its start (its second stream).
+  Sampler boundary_stream(const PixelSample& ps) const {
+    return Sampler(ps.seed, uint64_t(ps.y) * uint64_t(scene.camera.width) + uint64_t(ps.x), uint64_t(ps.s), 1);
+  }
+
+  /// Sample `ps`'s path through `view` from the sample's first random number (every pass draws the
+  /// same numbers: the same path; its camera ray and path counted in `st`), with the secondary
+  /// boundary term (ReverseBoundaryHook<Real>: adjoint `a`, edges' shares to
+  /// `scratch.contributions`, its stream `bsampler`, left where the path ends; `edges`,
+  /// `after_probe` and `boundary_stats` as the hook's fields) when the sample has traversals.
+  /// The part trace_probe and trace_pass share.
+  template <class View>
+  ColorT<typename View::Real> trace_sample(const PixelSample& ps, const View& view, const Color& a, Sampler& bsampler,
+                                           bool edges, bool after_probe, PathStats* boundary_stats,
+                                           TileScratch& scratch, PathStats& st) const {
+    using Real = typename View::Real;
+    const Camera& cam = scene.camera;
+    const uint64_t pixel = uint64_t(ps.y) * uint64_t(cam.width) + uint64_t(ps.x);
+    Sampler sampler(ps.seed, pixel, uint64_t(ps.s));
+    const CameraRay ray = trace_camera_ray(ctx, ps.x, ps.y, sampler.next2(), st);
+    const PathRay<Real> start{lift<Real>(cam.origin()), ray.dir, ray.hit};
+    const int traversals =
+        boundary.sampler ? boundary_traversals(boundary_ctx.sppi, ps.seed, pixel, uint64_t(ps.s)) : 0;
+    if (traversals <= 0) return trace_path(ctx, view, start, sampler, st);
+    ReverseBoundaryHook<Real> hook{{&ctx, &boundary_ctx, &bsampler, traversals, &scratch.edge_choice},
+                                   &scratch.tape,
+                                   &chosen_index,
+                                   a,
+                                   edges,
+                                   &scratch.contributions};
+    hook.after_probe = after_probe;
+    hook.stats_out = boundary_stats;
+    return trace_path(ctx, view, start, sampler, st, hook);
+  }
+
   /// The probe pass of sample `ps` (ProbeView): the sample's path in doubles up to its first
   /// chosen-shape hit that scatters, with the secondary boundary term at the vertices before it
   /// (edges' shares to `scratch.contributions`, adjoint `a`; the boundary samples' counters to
@@ -335,70 +370,34 @@ class ReverseEstimator::Impl : public RenderSetup {
   /// (trace_pass), which draws the path's numbers again and continues the boundary term from
   /// that hit on (the vertices before it do not move: their terms are what this pass added).
   std::optional<Color> trace_probe(const PixelSample& ps, const Color& a, TileScratch& scratch, PathStats& st) const {
-    Tape& tape = scratch.tape;
-    const Camera& cam = scene.camera;
-    const uint64_t pixel = uint64_t(ps.y) * uint64_t(cam.width) + uint64_t(ps.x);
-    tape.reset(0);
+    scratch.tape.reset(0);
     scratch.resume.reset();
     PathStats path_stats;  // the dual pass counts the path's rays itself if the probe stops
-    Sampler sampler(ps.seed, pixel, uint64_t(ps.s));
-    const CameraRay ray = trace_camera_ray(ctx, ps.x, ps.y, sampler.next2(), path_stats);
     bool stopped = false;
     const ProbeView view{{&scene}, &chosen, &stopped};
-    const int traversals =
-        boundary.sampler ? boundary_traversals(boundary_ctx.sppi, ps.seed, pixel, uint64_t(ps.s)) : 0;
-    Color L;
-    if (traversals > 0) {
-      Sampler bsampler(ps.seed, pixel, uint64_t(ps.s), 1);
-      ReverseBoundaryHook<double> hook{{&ctx, &boundary_ctx, &bsampler, traversals, &scratch.edge_choice},
-                                       &tape,
-                                       &chosen_index,
-                                       a,
-                                       true,
-                                       &scratch.contributions};
-      hook.stats_out = &st;
-      L = trace_path(ctx, view, {cam.origin(), ray.dir, ray.hit}, sampler, path_stats, hook);
-      if (stopped) scratch.resume = bsampler;
-    } else {
-      L = trace_path(ctx, view, {cam.origin(), ray.dir, ray.hit}, sampler, path_stats);
+    Sampler bsampler = boundary_stream(ps);
+    const Color L = trace_sample(ps, view, a, bsampler, true, false, &st, scratch, path_stats);
+    if (stopped) {
+      scratch.resume = bsampler;
+      return std::nullopt;
     }
-    if (stopped) return std::nullopt;
     st += path_stats;
     return L;
   }
 
-  /// One pass of sample `ps`'s path: the path from the sample's first random number, with slots
-  /// for tape hits [window, window + kHitsPerPass) (every pass draws the same numbers: the same
-  /// path), its secondary boundary term adding to `scratch.contributions` (adjoint `a` of the
-  /// pixel, per sample; after a probe pass stopped, only from the first chosen-shape hit on, drawing
-  /// from a copy of `scratch.resume`) and its hits' adjoints added by backpropagate_hits.
+  /// One pass of sample `ps`'s path (trace_sample) with duals: slots for tape hits [window,
+  /// window + kHitsPerPass), its secondary boundary term adding to `scratch.contributions` (adjoint
+  /// `a` of the pixel, per sample; the edges' share on the first pass; after a probe pass stopped,
+  /// only from the first chosen-shape hit on, drawing from a copy of `scratch.resume`) and its
+  /// hits' adjoints added by backpropagate_hits.
   ColorT<RDual> trace_pass(const PixelSample& ps, int window, const Color& a, TileScratch& scratch,
                            PathStats& st) const {
-    Tape& tape = scratch.tape;
-    const Camera& cam = scene.camera;
-    const Vec3 origin = cam.origin();
-    const uint64_t pixel = uint64_t(ps.y) * uint64_t(cam.width) + uint64_t(ps.x);
-    tape.reset(window);
-    Sampler sampler(ps.seed, pixel, uint64_t(ps.s));
-    const CameraRay ray = trace_camera_ray(ctx, ps.x, ps.y, sampler.next2(), st);
-    const ReverseView view{&scene, &chosen, &tape};
-    const int traversals = boundary.sampler ? boundary_traversals(boundary_ctx.sppi, ps.seed, pixel, uint64_t(ps.s)) : 0;
-    ColorT<RDual> L;
-    if (traversals > 0) {
-      // After a probe pass, the boundary term continues its stream from the first chosen-shape hit.
-      Sampler bsampler = scratch.resume ? *scratch.resume : Sampler(ps.seed, pixel, uint64_t(ps.s), 1);
-      ReverseBoundaryHook<RDual> hook{{&ctx, &boundary_ctx, &bsampler, traversals, &scratch.edge_choice},
-                                      &tape,
-                                      &chosen_index,
-                                      a,
-                                      window == 0,
-                                      &scratch.contributions};
-      hook.after_probe = scratch.resume.has_value();
-      L = trace_path(ctx, view, {lift<RDual>(origin), ray.dir, ray.hit}, sampler, st, hook);
-    } else {
-      L = trace_path(ctx, view, {lift<RDual>(origin), ray.dir, ray.hit}, sampler, st);
-    }
-    backpropagate_hits(tape, L, a, scratch.contributions);
+    scratch.tape.reset(window);
+    const ReverseView view{&scene, &chosen, &scratch.tape};
+    Sampler bsampler = scratch.resume ? *scratch.resume : boundary_stream(ps);
+    const ColorT<RDual> L =
+        trace_sample(ps, view, a, bsampler, window == 0, scratch.resume.has_value(), nullptr, scratch, st);
+    backpropagate_hits(scratch.tape, L, a, scratch.contributions);
     return L;
   }
 
