@@ -234,7 +234,8 @@ struct TileScratch {
   std::vector<Contribution> contributions;
   edgetree::EdgeChoiceScratch edge_choice;
   /// The boundary term's stream where a probe pass stopped (at the path's first chosen-shape hit
-  /// that scatters): the dual passes of the sample continue it from there.
+  /// that scatters): the dual passes of the sample continue it from there. Set whenever the probe
+  /// stopped; unused by a sample without traversals (its passes build no boundary hook).
   std::optional<Sampler> resume;
 };
 
@@ -326,24 +327,32 @@ class ReverseEstimator::Impl : public RenderSetup {
     }
   }
 
-  /// The boundary term's stream of sample `ps` from its start (its second stream).
-  Sampler boundary_stream(const PixelSample& ps) const {
-    return Sampler(ps.seed, uint64_t(ps.y) * uint64_t(scene.camera.width) + uint64_t(ps.x), uint64_t(ps.s), 1);
+  /// The index of sample `ps`'s pixel in the film (row-major), which seeds its streams.
+  uint64_t pixel_index(const PixelSample& ps) const {
+    return uint64_t(ps.y) * uint64_t(scene.camera.width) + uint64_t(ps.x);
   }
+
+  /// The boundary term's stream of sample `ps` from its start (its second stream).
+  Sampler boundary_stream(const PixelSample& ps) const { return Sampler(ps.seed, pixel_index(ps), uint64_t(ps.s), 1); }
+
+  /// How one pass runs the secondary boundary term (ReverseBoundaryHook's fields of the same names).
+  struct BoundaryPass {
+    bool edges;            ///< add the edge vertices' share (the path's first pass)
+    bool after_probe;      ///< skip the vertices before the first chosen-shape hit
+    PathStats* stats_out;  ///< the boundary samples' counters (null: the path's)
+  };
 
   /// Sample `ps`'s path through `view` from the sample's first random number (every pass draws the
   /// same numbers: the same path; its camera ray and path counted in `st`), with the secondary
   /// boundary term (ReverseBoundaryHook<Real>: adjoint `a`, edges' shares to
-  /// `scratch.contributions`, its stream `bsampler`, left where the path ends; `edges`,
-  /// `after_probe` and `boundary_stats` as the hook's fields) when the sample has traversals.
-  /// The part trace_probe and trace_pass share.
+  /// `scratch.contributions`, its stream `bsampler`, left where the path ends; run as `pass` says)
+  /// when the sample has traversals. The part trace_probe and trace_pass share.
   template <class View>
   ColorT<typename View::Real> trace_sample(const PixelSample& ps, const View& view, const Color& a, Sampler& bsampler,
-                                           bool edges, bool after_probe, PathStats* boundary_stats,
-                                           TileScratch& scratch, PathStats& st) const {
+                                           const BoundaryPass& pass, TileScratch& scratch, PathStats& st) const {
     using Real = typename View::Real;
     const Camera& cam = scene.camera;
-    const uint64_t pixel = uint64_t(ps.y) * uint64_t(cam.width) + uint64_t(ps.x);
+    const uint64_t pixel = pixel_index(ps);
     Sampler sampler(ps.seed, pixel, uint64_t(ps.s));
     const CameraRay ray = trace_camera_ray(ctx, ps.x, ps.y, sampler.next2(), st);
     const PathRay<Real> start{lift<Real>(cam.origin()), ray.dir, ray.hit};
@@ -354,10 +363,10 @@ class ReverseEstimator::Impl : public RenderSetup {
                                    &scratch.tape,
                                    &chosen_index,
                                    a,
-                                   edges,
+                                   pass.edges,
                                    &scratch.contributions};
-    hook.after_probe = after_probe;
-    hook.stats_out = boundary_stats;
+    hook.after_probe = pass.after_probe;
+    hook.stats_out = pass.stats_out;
     return trace_path(ctx, view, start, sampler, st, hook);
   }
 
@@ -376,7 +385,8 @@ class ReverseEstimator::Impl : public RenderSetup {
     bool stopped = false;
     const ProbeView view{{&scene}, &chosen, &stopped};
     Sampler bsampler = boundary_stream(ps);
-    const Color L = trace_sample(ps, view, a, bsampler, true, false, &st, scratch, path_stats);
+    const Color L = trace_sample(ps, view, a, bsampler, {.edges = true, .after_probe = false, .stats_out = &st},
+                                 scratch, path_stats);
     if (stopped) {
       scratch.resume = bsampler;
       return std::nullopt;
@@ -395,8 +405,8 @@ class ReverseEstimator::Impl : public RenderSetup {
     scratch.tape.reset(window);
     const ReverseView view{&scene, &chosen, &scratch.tape};
     Sampler bsampler = scratch.resume ? *scratch.resume : boundary_stream(ps);
-    const ColorT<RDual> L =
-        trace_sample(ps, view, a, bsampler, window == 0, scratch.resume.has_value(), nullptr, scratch, st);
+    const BoundaryPass pass{.edges = window == 0, .after_probe = scratch.resume.has_value(), .stats_out = nullptr};
+    const ColorT<RDual> L = trace_sample(ps, view, a, bsampler, pass, scratch, st);
     backpropagate_hits(scratch.tape, L, a, scratch.contributions);
     return L;
   }

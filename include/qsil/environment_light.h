@@ -79,7 +79,8 @@ class EnvironmentLight {
   int width_ = 0, height_ = 0;
   /// A texel's radiance and its sampling weight side by side (one cache line: eval() and pdf()
   /// of one direction, as an escaped ray's MIS weight asks, read one line where two arrays took
-  /// two; tools/bench/bench_envmap.cpp).
+  /// two; tools/bench/bench_envmap.cpp). The weight is a copy of distribution_'s weight of the
+  /// texel (pdf() divides it by distribution_.integral(), as Distribution2D::pdf does).
   struct alignas(32) TexelRecord {
     Color radiance;  ///< already scaled, negative channels clamped to 0
     double weight;   ///< luminance(radiance) * sin(theta at the row centre): distribution_'s weight

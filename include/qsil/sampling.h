@@ -116,13 +116,14 @@ class Distribution1D {
   bool is_zero() const { return is_zero_; }
   /// Weight of bin i as given.
   double weight(int i) const { return bins_[size_t(i)].f; }
-  /// The normalised CDF, n+1 values from 0 to exactly 1 (a copy).
+  /// The normalised CDF, n+1 values from 0 to exactly 1, as a new vector (two calls give two
+  /// vectors: take iterators from one).
   std::vector<double> cdf() const;
 
  private:
   int find_bin(double u) const;
-  /// One bin's CDF and weight side by side, so that a sample reads one cache line where two
-  /// arrays took two (an environment map's rows do not stay in cache;
+  /// One bin's CDF and weight side by side, so that a sample reads one or two cache lines where
+  /// two arrays took two or three (an environment map's rows do not stay in cache;
   /// tools/bench/bench_envmap.cpp).
   struct Bin {
     double cdf = 0;  ///< the normalised CDF at the bin's start (entry n: exactly 1)

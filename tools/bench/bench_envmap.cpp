@@ -53,9 +53,9 @@ int main(int argc, char** argv) {
   int count = 2000000, repeats = 5;
   app.add_option("maps", files,
                  "EXR environment maps (default: scenes/envmaps/*.exr, relative to the working directory)");
-  app.add_option("--count", count, "calls per pass")->check(CLI::PositiveNumber);
-  app.add_option("--repeats", repeats, "passes (the best is printed)")->check(CLI::PositiveNumber);
-  CLI11_PARSE(app, argc, argv);
+  app.add_option("--count", count, "calls per pass")->check(qsil::cli::positive_number());
+  app.add_option("--repeats", repeats, "passes (the best is printed)")->check(qsil::cli::positive_number());
+  if (const auto code = qsil::cli::parse_arguments(app, argc, argv)) return *code;
   if (files.empty() && std::filesystem::is_directory("scenes/envmaps"))
     for (const auto& entry : std::filesystem::directory_iterator("scenes/envmaps"))
       if (entry.path().extension() == ".exr") files.push_back(entry.path().string());
