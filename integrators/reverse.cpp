@@ -327,10 +327,10 @@ class ReverseEstimator::Impl : public RenderSetup {
     }
   }
 
-  /// The index of sample `ps`'s pixel in the film (row-major), which seeds its streams.
-  uint64_t pixel_index(const PixelSample& ps) const {
-    return uint64_t(ps.y) * uint64_t(scene.camera.width) + uint64_t(ps.x);
-  }
+  /// The index of pixel (x, y) in the film (row-major): its adjoint's place, and the seed of its
+  /// samples' streams.
+  uint64_t pixel_index(int x, int y) const { return uint64_t(y) * uint64_t(scene.camera.width) + uint64_t(x); }
+  uint64_t pixel_index(const PixelSample& ps) const { return pixel_index(ps.x, ps.y); }
 
   /// The boundary term's stream of sample `ps` from its start (its second stream).
   Sampler boundary_stream(const PixelSample& ps) const { return Sampler(ps.seed, pixel_index(ps), uint64_t(ps.s), 1); }
@@ -421,7 +421,7 @@ class ReverseEstimator::Impl : public RenderSetup {
     std::vector<Contribution>& contributions = scratch.contributions;
     for (int y = tile.y0; y < tile.y1; ++y)
       for (int x = tile.x0; x < tile.x1; ++x) {
-        const uint64_t pixel = uint64_t(y) * uint64_t(scene.camera.width) + uint64_t(x);
+        const uint64_t pixel = pixel_index(x, y);
         const Color a = Eigen::Map<const Color>(&adjoint[3 * pixel]) / double(count);
         Color sum = Color::Zero();
         for (int s = first; s < first + count; ++s) {
