@@ -24,6 +24,7 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <optional>
 #include <random>
 #include <string>
 #include <vector>
@@ -71,13 +72,15 @@ int main(int argc, char** argv) {
     qsil::Environment env;
     env.type = qsil::Environment::Type::EnvMap;
     env.filename = file;
+    std::optional<qsil::EnvironmentLight> built;  // a bad map (no R, G, B; a non-finite texel) throws
     try {
       env.texels = qsil::read_exr(file);
+      built.emplace(env);
     } catch (const std::exception& e) {
       std::fprintf(stderr, "bench_envmap: %s\n", e.what());
       return 1;
     }
-    const qsil::EnvironmentLight light(env);
+    const qsil::EnvironmentLight& light = *built;
     std::mt19937_64 rng(1);
     std::uniform_real_distribution<double> uni(0.0, 1.0);
     std::vector<qsil::Vec2> us(static_cast<size_t>(count));
