@@ -178,14 +178,20 @@ void Film::set_state(const std::vector<double>& s) {
 ImageSum Film::derivative_sum(int k) const {
   const int c = layout_.derivative_mean(k);
   ImageSum s;
-  double var = 0;
+  double var = 0, largest = 0;
   for (int y = 0; y < height_; ++y)
     for (int x = 0; x < width_; ++x) {
       s.sum += mean(c, x, y);
       const double se = standard_error(c, x, y);
       var += se * se;
+      if (se * se > largest) {
+        largest = se * se;
+        s.largest_x = x;
+        s.largest_y = y;
+      }
     }
   s.standard_error = std::sqrt(var);
+  s.largest_share = var > 0 ? largest / var : 0.0;
   return s;
 }
 

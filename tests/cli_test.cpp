@@ -159,6 +159,41 @@ TEST(CLI, GradWritesTheDocumentedChannelsAttributesAndPreviews) {
   EXPECT_NE(r.out.find("image sum"), std::string::npos);
 }
 
+// Each image sum names the pixel that holds the largest share of its variance, and grad, fd and
+// reference warn (one line on stderr, exit 0, the image written) exactly where that share is 50 % or more
+// (kDominantPixelShare): checked on a 4 x 4 film, where one pixel usually dominates, and on larger
+// ones, where none does; at least one run of each kind, or the check has no power.
+TEST(CLI, GradFdAndReferenceWarnWhereOnePixelHoldsMostOfTheImageSumsVariance) {
+  int warned = 0, quiet = 0;
+  for (const std::string cmd : {"grad", "fd", "reference"})
+    for (const char* film : {"-D res=4 --spp 4", "-D res=32 --spp 8", "-D res=48 --spp 4"}) {
+      const std::string out = tmp("qsil_dominant_pixel.exr");
+      std::filesystem::remove(out);
+      const CliRun r =
+          run_qsil(cmd + " scenes/shadow-quad.xml -q " + film + " --seed 1 --param object:translate:0,1,0 -o " + out);
+      ASSERT_EQ(r.code, 0) << cmd << " " << film << "\n" << r.err;
+      EXPECT_TRUE(std::filesystem::exists(out));
+      int x = -1, y = -1;
+      double share = -1;
+      const size_t at = r.out.find("; pixel (");
+      ASSERT_NE(at, std::string::npos) << r.out;
+      ASSERT_EQ(std::sscanf(r.out.c_str() + at, "; pixel (%d, %d) holds %lf %%", &x, &y, &share), 3) << r.out;
+      const bool warns = r.err.find("warning: dtheta0: pixel (") != std::string::npos;
+      EXPECT_EQ(warns, share >= 50.0) << cmd << " " << film << ": " << share << " %\n" << r.err;
+      if (warns) {
+        ++warned;
+        EXPECT_NE(r.err.find("pixel (" + std::to_string(x) + ", " + std::to_string(y) + ") holds"), std::string::npos)
+            << r.err;
+        EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+        EXPECT_EQ(r.err.find("--largest-samples") != std::string::npos, cmd == "grad") << r.err;
+      } else {
+        ++quiet;
+      }
+    }
+  EXPECT_GE(warned, 1);
+  EXPECT_GE(quiet, 1);
+}
+
 // --largest-samples K prints the K largest samples with their path vertices and writes the CSV
 // beside it (one row per vertex); the CSV without K is bad input.
 TEST(CLI, GradReportsTheLargestSamples) {

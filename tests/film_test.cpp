@@ -72,6 +72,53 @@ TEST(Film, ImagesMergeAndSums) {
   EXPECT_FLOAT_EQ(img.at(img.channel_index("dtheta0.B"), 1, 0), float((1 + 2 + 3 + 4) / 4.0 + 2));
 }
 
+/// ImageSum::largest_share and its pixel against brute force over the film's own standard errors
+/// (the oracle), on unit noise (no pixel dominates: the share is near 1 / pixels) and with one
+/// sample of 10^4 among 64 in pixel (5, 9) (it holds nearly all of the variance).
+TEST(Film, LargestShareOfTheImageSumsVarianceIsTheDominantPixels) {
+  const FilmLayout layout(1);
+  const int w = 16, h = 12, n = 64;
+  for (const bool huge : {false, true}) {
+    Film film(w, h, layout);
+    std::vector<double> v(size_t(layout.channels()), 0.0);
+    Sampler rng(5, 6, 7);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x)
+        for (int s = 0; s < n; ++s) {
+          double d = std::sqrt(12.0) * (rng.next() - 0.5);
+          if (huge && x == 5 && y == 9 && s == 17) d = 1e4;
+          for (int c = 0; c < 3; ++c) v[size_t(layout.derivative(0, c))] = d;
+          v[size_t(layout.derivative_mean(0))] = d;
+          film.add_sample(x, y, v.data());
+        }
+    double var = 0, largest = 0;
+    int lx = -1, ly = -1;
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const double se2 = std::pow(film.standard_error(layout.derivative_mean(0), x, y), 2);
+        var += se2;
+        if (se2 > largest) largest = se2, lx = x, ly = y;
+      }
+    const ImageSum sum = film.derivative_sum(0);
+    EXPECT_NEAR(sum.largest_share, largest / var, 1e-12) << huge;
+    EXPECT_EQ(sum.largest_x, lx) << huge;
+    EXPECT_EQ(sum.largest_y, ly) << huge;
+    EXPECT_GE(sum.largest_share, 1.0 / (w * h));  // the largest share is at least the mean share
+    if (huge) {
+      EXPECT_EQ(sum.largest_x, 5);
+      EXPECT_EQ(sum.largest_y, 9);
+      EXPECT_GT(sum.largest_share, 0.999);
+      EXPECT_GE(sum.largest_share, kDominantPixelShare);
+    } else {
+      EXPECT_LT(sum.largest_share, 2.0 / (w * h));  // 64 samples: a pixel's variance within ~±50 %
+    }
+  }
+  // A film without samples has no variance and no such pixel.
+  const ImageSum empty = Film(4, 4, layout).derivative_sum(0);
+  EXPECT_EQ(empty.largest_share, 0.0);
+  EXPECT_EQ(empty.largest_x, -1);
+}
+
 /// The spread of 4000 pixel means and the mean squared standard errors of the stratified and the
 /// pooled film, for n samples per pixel of unit-variance noise, those a stratified pick of
 /// fraction f selects (a rotation phi per pixel) shifted by 10.

@@ -309,6 +309,29 @@ int run_python_script(const std::string& who, const std::string& name, const std
   return code;
 }
 
+bool dominant_pixel(const ImageSum& s, const Film& film) {
+  return film.width() * film.height() > 1 && s.largest_x >= 0 && s.largest_share >= kDominantPixelShare;
+}
+
+std::string largest_share_note(const ImageSum& s) {
+  if (s.largest_x < 0) return "";
+  char buf[96];
+  std::snprintf(buf, sizeof buf, "; pixel (%d, %d) holds %.3g %% of its variance", s.largest_x, s.largest_y,
+                100 * s.largest_share);
+  return buf;
+}
+
+void warn_if_dominant_pixel(const std::string& command, int k, const ImageSum& s, const Film& film,
+                            bool largest_samples_hint) {
+  if (!dominant_pixel(s, film)) return;
+  std::fflush(stdout);
+  std::fprintf(stderr,
+               "qsil %s: warning: dtheta%d: pixel (%d, %d) holds %.3g %% of the image sum's variance, more than all "
+               "other pixels together: a few samples carry the sum (a heavy tail?); compare another --seed%s\n",
+               command.c_str(), k, s.largest_x, s.largest_y, 100 * s.largest_share,
+               largest_samples_hint ? ", or list the largest samples with --largest-samples" : "");
+}
+
 void write_gradient_outputs(const CommonFlags& flags, const std::vector<ParameterSpec>& params, const RenderResult& r,
                             const std::string& preview_dir, const std::string& method) {
   const int K = int(params.size());
@@ -321,8 +344,8 @@ void write_gradient_outputs(const CommonFlags& flags, const std::vector<Paramete
   if (!preview_dir.empty()) std::filesystem::create_directories(preview_dir);
   for (int k = 0; k < K; ++k) {
     const ImageSum s = r.film.derivative_sum(k);
-    std::printf("  dtheta%d (%s): image sum %.6g +- %.3g (1 s.e.)", k, params[size_t(k)].text.c_str(), s.sum,
-                s.standard_error);
+    std::printf("  dtheta%d (%s): image sum %.6g +- %.3g (1 s.e.%s)", k, params[size_t(k)].text.c_str(), s.sum,
+                s.standard_error, largest_share_note(s).c_str());
     if (!preview_dir.empty()) {
       const std::filesystem::path png =
           std::filesystem::path(preview_dir) / (FilmLayout::derivative_prefix(k) + ".png");
@@ -330,6 +353,7 @@ void write_gradient_outputs(const CommonFlags& flags, const std::vector<Paramete
       std::printf(", preview %s range +-%.4g", png.c_str(), range);
     }
     std::printf("\n");
+    warn_if_dominant_pixel(method == "fd" ? "fd" : "grad", k, s, r.film, method != "fd");
   }
   if (!preview_dir.empty()) write_preview_png(std::filesystem::path(preview_dir) / "primal.png", img, flags.exposure);
 }

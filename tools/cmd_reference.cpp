@@ -44,9 +44,13 @@ void write_reference(const Flags& flags, const std::vector<ParameterSpec>& param
       flags.scene.c_str(), r.film.width(), r.film.height(), r.spp, processes_note().c_str(), K, flags.boundary.method.c_str(),
       r.seconds + estimator.setup().seconds, mrays_per_second(r), ref.noise_floor,
       ref.mean_sq > 0 ? ref.noise_floor / ref.mean_sq : 0.0, flags.output.c_str());
-  for (int k = 0; k < K; ++k)
-    std::printf("  dtheta%d (%s): image sum %.6g +- %.3g (1 s.e.)\n", k, params[size_t(k)].text.c_str(),
-                ref.sum[size_t(k)], ref.sum_se[size_t(k)]);
+  for (int k = 0; k < K; ++k) {
+    const ImageSum s = r.film.derivative_sum(k);
+    std::printf("  dtheta%d (%s): image sum %.6g +- %.3g (1 s.e.%s)\n", k, params[size_t(k)].text.c_str(),
+                ref.sum[size_t(k)], ref.sum_se[size_t(k)], largest_share_note(s).c_str());
+    // A reference judges other estimates: one carried by a pixel's few samples cannot.
+    warn_if_dominant_pixel("reference", k, s, r.film, false);
+  }
 }
 
 const CommandRegistrar registrar{

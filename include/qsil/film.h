@@ -74,7 +74,21 @@ struct FilmSplat {
 struct ImageSum {
   double sum = 0;
   double standard_error = 0;
+  /// The largest share, in [0, 1], that one pixel's squared standard error holds of the image
+  /// sum's (standard_error squared), and that pixel (x right, y down; -1 on a film without
+  /// variance). Near 1 the image sum's error bar rests on one pixel's samples: where a heavy tail
+  /// put one huge sample in a pixel (docs/design-notes.md "Interior-term tails at grazing hits"),
+  /// this is how it shows (kDominantPixelShare).
+  double largest_share = 0;
+  int largest_x = -1, largest_y = -1;
 };
+
+/// The ImageSum::largest_share at and above which the CLI warns that one pixel carries the image
+/// sum's variance: more than all the other pixels together, so that one pixel can move the sum by
+/// more than the error bar the others give it. Healthy runs of the bundled and stability scenes
+/// stay far below it, and runs with a single 10^5 sample far above
+/// (docs/experiments/2026-11-27-dominant-pixel.md).
+inline constexpr double kDominantPixelShare = 0.5;
 
 /// A width x height film of FilmLayout::channels() channels.
 class Film {
