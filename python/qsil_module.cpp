@@ -258,6 +258,12 @@ void bind_forward(py::module_& m) {
           for (int y = 0; y < scene.camera.height; ++y)
             for (int x = 0; x < scene.camera.width; ++x)
               for (int c = 0; c < 3; ++c) a(k, y, x, c) = r->film.mean(layout.derivative(k, c), x, y);
+        for (int k = 0; k < int(specs.size()); ++k) {  // as the CLI warns (write_gradient_outputs)
+          const ImageSum s = r->film.derivative_sum(k);
+          if (!has_dominant_pixel(s, r->film)) continue;
+          const std::string text = "qsil.grad: " + dominant_pixel_warning(s, k) + " (seed=)";
+          if (PyErr_WarnEx(PyExc_RuntimeWarning, text.c_str(), 1) < 0) throw py::error_already_set();
+        }
         return py::make_tuple(film_image(r->film, [&](int c) { return layout.primal(c); }), d);
       };
   m.def("grad", grad, py::arg("scene"), py::arg("params"), py::arg("spp") = 0, py::arg("seed") = 0,
@@ -269,7 +275,9 @@ void bind_forward(py::module_& m) {
         py::arg("forest_guide_rounds") = 2, py::arg("forest_guide_resolution") = 8, py::arg("forest_guide_depth") = 3,
         py::arg("forest_guide_share") = 0.5,
         "Forward mode: (image (H, W, 3), derivatives (K, H, W, 3)) for 1-8 parameter specs "
-        "('ID:translate:X,Y,Z', 'ID:rotate:X,Y,Z', 'ID:scale', 'ID:vertex:I:X,Y,Z'). sppi: secondary "
+        "('ID:translate:X,Y,Z', 'ID:rotate:X,Y,Z', 'ID:scale', 'ID:vertex:I:X,Y,Z'); a RuntimeWarning where one "
+        "pixel holds half or more of a parameter's image-sum variance (a heavy tail's single sample, as `qsil grad` "
+        "warns). sppi: secondary "
         "boundary-term samples per shading point on average over a pixel's samples (0: the method's default, 0.5 for "
         "quadric; for boundary='projective', boundary segments per pixel sample, default 1); sppp: primary edge "
         "samples per pixel sample (`qsil grad --help`); intersection_curves=False: do not "

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 namespace qsil {
 
@@ -193,6 +194,19 @@ ImageSum Film::derivative_sum(int k) const {
   s.standard_error = std::sqrt(var);
   s.largest_share = var > 0 ? largest / var : 0.0;
   return s;
+}
+
+bool has_dominant_pixel(const ImageSum& s, const Film& film) {
+  return film.width() * film.height() > 1 && s.largest_x >= 0 && s.largest_share >= kDominantPixelShare;
+}
+
+std::string dominant_pixel_warning(const ImageSum& s, int k) {
+  char buf[256];
+  std::snprintf(buf, sizeof buf,
+                "dtheta%d: pixel (%d, %d) holds %.3g %% of the image sum's variance, more than all other pixels "
+                "together: a few samples carry the sum (a heavy tail?); compare another seed",
+                k, s.largest_x, s.largest_y, 100 * s.largest_share);
+  return buf;
 }
 
 Image Film::to_image() const {

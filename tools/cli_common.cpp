@@ -309,10 +309,6 @@ int run_python_script(const std::string& who, const std::string& name, const std
   return code;
 }
 
-bool dominant_pixel(const ImageSum& s, const Film& film) {
-  return film.width() * film.height() > 1 && s.largest_x >= 0 && s.largest_share >= kDominantPixelShare;
-}
-
 std::string largest_share_note(const ImageSum& s) {
   if (s.largest_x < 0) return "";
   char buf[96];
@@ -323,12 +319,9 @@ std::string largest_share_note(const ImageSum& s) {
 
 void warn_if_dominant_pixel(const std::string& command, int k, const ImageSum& s, const Film& film,
                             bool largest_samples_hint) {
-  if (!dominant_pixel(s, film)) return;
+  if (!has_dominant_pixel(s, film)) return;
   std::fflush(stdout);
-  std::fprintf(stderr,
-               "qsil %s: warning: dtheta%d: pixel (%d, %d) holds %.3g %% of the image sum's variance, more than all "
-               "other pixels together: a few samples carry the sum (a heavy tail?); compare another --seed%s\n",
-               command.c_str(), k, s.largest_x, s.largest_y, 100 * s.largest_share,
+  std::fprintf(stderr, "qsil %s: warning: %s (--seed)%s\n", command.c_str(), dominant_pixel_warning(s, k).c_str(),
                largest_samples_hint ? ", or list the largest samples with --largest-samples" : "");
 }
 

@@ -153,17 +153,13 @@ std::string processes_note();
 /// Mrays/s of a run (0 for a run without time).
 double mrays_per_second(const RenderResult& r);
 
-/// Whether image sum `s` of `film` has a dominant pixel: one pixel of a film of two or more holds
-/// at least kDominantPixelShare of the sum's variance (ImageSum::largest_share).
-bool dominant_pixel(const ImageSum& s, const Film& film);
-
 /// "; pixel (X, Y) holds S % of its variance" for an image-sum line (ImageSum::largest_share), or
 /// "" on a film without variance.
 std::string largest_share_note(const ImageSum& s);
 
-/// Where dominant_pixel(s, film): one warning line on stderr, "qsil COMMAND: warning: dtheta<k>:
-/// pixel (X, Y) holds S % of the image sum's variance ...", suggesting another --seed and, with
-/// `largest_samples_hint`, grad's --largest-samples. Nothing otherwise.
+/// Where has_dominant_pixel(s, film): one warning line on stderr, "qsil COMMAND: warning:
+/// " + dominant_pixel_warning(s, k), naming --seed and, with `largest_samples_hint`, grad's
+/// --largest-samples. Nothing otherwise.
 void warn_if_dominant_pixel(const std::string& command, int k, const ImageSum& s, const Film& film,
                             bool largest_samples_hint);
 
@@ -171,7 +167,7 @@ void warn_if_dominant_pixel(const std::string& command, int k, const ImageSum& s
 /// qsil:param<k>, `method` as qsil:method), and with a preview directory one diverging PNG per
 /// parameter plus the primal PNG; prints each parameter's image sum +- standard error, the pixel
 /// that holds the largest share of its variance, and preview range; warns on stderr (one line per
-/// parameter) where that pixel dominates (dominant_pixel).
+/// parameter) where that pixel dominates (has_dominant_pixel).
 void write_gradient_outputs(const CommonFlags& flags, const std::vector<ParameterSpec>& params, const RenderResult& r,
                             const std::string& preview_dir, const std::string& method);
 

@@ -90,6 +90,16 @@ struct ImageSum {
 /// (docs/experiments/2026-11-27-dominant-pixel.md).
 inline constexpr double kDominantPixelShare = 0.5;
 
+class Film;
+
+/// Whether image sum `s` of `film` has a dominant pixel: one pixel of a film of two or more holds
+/// at least kDominantPixelShare of the sum's variance (ImageSum::largest_share).
+bool has_dominant_pixel(const ImageSum& s, const Film& film);
+
+/// The warning for a dominant pixel of parameter k's image sum `s` (has_dominant_pixel), one line
+/// without a final newline: "dtheta<k>: pixel (X, Y) holds S % of the image sum's variance, ...".
+std::string dominant_pixel_warning(const ImageSum& s, int k);
+
 /// A width x height film of FilmLayout::channels() channels.
 class Film {
  public:
