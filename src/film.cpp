@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 
 namespace qsil {
 
@@ -95,7 +96,11 @@ namespace {
 /// The sample variance (n - 1 in the denominator) of n values with this sum and squared sum.
 double sample_variance(double sum, double sum_sq, double n) {
   const double m = sum / n;
-  return std::max(0.0, (sum_sq / n - m * m)) * n / (n - 1);
+  const double spread = sum_sq / n - m * m;
+  // Samples beyond 1e154 overflow their squares: the variance is beyond a double's range, not 0
+  // (std::max(0, NaN) would report a pixel of such samples as the most certain of all).
+  if (!std::isfinite(spread)) return std::numeric_limits<double>::infinity();
+  return std::max(0.0, spread) * n / (n - 1);
 }
 
 }  // namespace
@@ -192,7 +197,8 @@ ImageSum Film::derivative_sum(int k) const {
       }
     }
   s.standard_error = std::sqrt(var);
-  s.largest_share = var > 0 ? largest / var : 0.0;
+  // A pixel whose squared standard error overflowed (a sample beyond 1e154) holds it all.
+  s.largest_share = var > 0 ? (std::isfinite(largest) ? largest / var : 1.0) : 0.0;
   return s;
 }
 
@@ -203,8 +209,8 @@ bool has_dominant_pixel(const ImageSum& s, const Film& film) {
 std::string dominant_pixel_warning(const ImageSum& s, int k) {
   char buf[256];
   std::snprintf(buf, sizeof buf,
-                "dtheta%d: pixel (%d, %d) holds %.3g %% of the image sum's variance, more than all other pixels "
-                "together: a few samples carry the sum (a heavy tail?); compare another seed",
+                "dtheta%d: pixel (%d, %d) holds %.3g %% of the image sum's variance, as much as all other pixels "
+                "together or more: a few samples may carry the sum (a heavy tail?); compare another seed",
                 k, s.largest_x, s.largest_y, 100 * s.largest_share);
   return buf;
 }

@@ -119,6 +119,42 @@ TEST(Film, LargestShareOfTheImageSumsVarianceIsTheDominantPixels) {
   EXPECT_EQ(empty.largest_x, -1);
 }
 
+/// has_dominant_pixel: at a share of exactly kDominantPixelShare (two pixels of equal variance) and
+/// above, on films of two or more pixels; never on a one-pixel film, whose share is always 1; not
+/// at a third (three equal pixels).
+TEST(Film, DominantPixelIsAtLeastHalfTheVarianceOnAFilmOfTwoOrMorePixels) {
+  const FilmLayout layout(1);
+  auto film_of = [&](int w) {
+    Film film(w, 1, layout);
+    std::vector<double> v(size_t(layout.channels()), 0.0);
+    for (int x = 0; x < w; ++x)
+      for (const double d : {1.0, -1.0, 3.0}) {  // the same samples in every pixel: equal variances
+        v[size_t(layout.derivative_mean(0))] = d;
+        film.add_sample(x, 0, v.data());
+      }
+    return film;
+  };
+  const Film one = film_of(1), two = film_of(2), three = film_of(3);
+  EXPECT_EQ(one.derivative_sum(0).largest_share, 1.0);
+  EXPECT_FALSE(has_dominant_pixel(one.derivative_sum(0), one));
+  EXPECT_EQ(two.derivative_sum(0).largest_share, 0.5);
+  EXPECT_TRUE(has_dominant_pixel(two.derivative_sum(0), two));
+  EXPECT_NEAR(three.derivative_sum(0).largest_share, 1.0 / 3.0, 1e-15);
+  EXPECT_FALSE(has_dominant_pixel(three.derivative_sum(0), three));
+  const std::string text = dominant_pixel_warning(two.derivative_sum(0), 0);
+  EXPECT_EQ(text.rfind("dtheta0: pixel (0, 0) holds 50 % of the image sum's variance", 0), 0u) << text;
+  // A sample whose square overflows: that pixel's squared standard error is infinite, and it holds
+  // the whole variance (not NaN, which no threshold would catch).
+  Film overflow = film_of(3);
+  std::vector<double> v(size_t(layout.channels()), 0.0);
+  v[size_t(layout.derivative_mean(0))] = 1e200;
+  overflow.add_sample(1, 0, v.data());
+  const ImageSum big = overflow.derivative_sum(0);
+  EXPECT_EQ(big.largest_x, 1);
+  EXPECT_EQ(big.largest_share, 1.0);
+  EXPECT_TRUE(has_dominant_pixel(big, overflow));
+}
+
 /// The spread of 4000 pixel means and the mean squared standard errors of the stratified and the
 /// pooled film, for n samples per pixel of unit-variance noise, those a stratified pick of
 /// fraction f selects (a rotation phi per pixel) shifted by 10.

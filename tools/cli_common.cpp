@@ -326,7 +326,7 @@ void warn_if_dominant_pixel(const std::string& command, int k, const ImageSum& s
 }
 
 void write_gradient_outputs(const CommonFlags& flags, const std::vector<ParameterSpec>& params, const RenderResult& r,
-                            const std::string& preview_dir, const std::string& method) {
+                            const std::string& preview_dir, const std::string& command, const std::string& method) {
   const int K = int(params.size());
   Image img = r.film.to_image();
   add_render_attributes(img, flags, r);
@@ -346,9 +346,10 @@ void write_gradient_outputs(const CommonFlags& flags, const std::vector<Paramete
       std::printf(", preview %s range +-%.4g", png.c_str(), range);
     }
     std::printf("\n");
-    warn_if_dominant_pixel(method == "fd" ? "fd" : "grad", k, s, r.film, method != "fd");
   }
   if (!preview_dir.empty()) write_preview_png(std::filesystem::path(preview_dir) / "primal.png", img, flags.exposure);
+  // After every output is written: a failed write ends the command with its one-line error alone.
+  for (int k = 0; k < K; ++k) warn_if_dominant_pixel(command, k, r.film.derivative_sum(k), r.film, command == "grad");
 }
 
 }  // namespace qsil::cli

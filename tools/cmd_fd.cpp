@@ -47,7 +47,7 @@ const CommandRegistrar registrar{
                        r.film.width(), r.film.height(), r.spp, processes_note().c_str(), params.size(),
                        estimator->setup().seconds + r.seconds, estimator->setup().seconds, flags->output.c_str());
            for (size_t k = 0; k < params.size(); ++k) std::printf("  h%zu = %.6g\n", k, estimator->fd_steps()[k]);
-           write_gradient_outputs(*flags, params, r, flags->preview_dir, "fd");
+           write_gradient_outputs(*flags, params, r, flags->preview_dir, "fd", "fd");
          });
          return 0;
        };

@@ -68,7 +68,8 @@ const CommandRegistrar registrar{
                (unsigned long long)r.traversals,
                r.traversals ? 100.0 * double(r.zero_traversals) / double(r.traversals) : 0.0, flags->output.c_str());
            std::printf("  set-up: %s\n", setup.describe().c_str());
-           write_gradient_outputs(*flags, estimator->config().params, r, flags->preview_dir, "grad/" + flags->boundary.method);
+           write_gradient_outputs(*flags, estimator->config().params, r, flags->preview_dir, "grad",
+                                  "grad/" + flags->boundary.method);
            if (flags->render.largest_samples > 0) {
              print_largest_samples(*set_up.scene, estimator->config().params, r.largest);
              if (!flags->largest_csv.empty()) write_largest_samples_csv(flags->largest_csv, *set_up.scene, r.largest);

@@ -87,8 +87,8 @@ def run(cmd, check=True):
     t = time.time()
     p = subprocess.run(cmd, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     sys.stdout.write(p.stdout)
+    sys.stderr.write(p.stderr)  # its warnings too (a reference one pixel carries, cli_common.h)
     if check and p.returncode != 0:
-        sys.stderr.write(p.stderr)
         raise SystemExit(f"references: command failed with exit code {p.returncode}: {' '.join(cmd)}")
     return p.returncode, p.stdout, time.time() - t
 
