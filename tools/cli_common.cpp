@@ -348,7 +348,8 @@ void write_gradient_outputs(const CommonFlags& flags, const std::vector<Paramete
     std::printf("\n");
   }
   if (!preview_dir.empty()) write_preview_png(std::filesystem::path(preview_dir) / "primal.png", img, flags.exposure);
-  // After every output is written: a failed write ends the command with its one-line error alone.
+  // After the EXR and previews are written: a failed write ends the command with its one-line error
+  // alone (grad's --largest-samples CSV, written later by its caller, is the exception).
   for (int k = 0; k < K; ++k) warn_if_dominant_pixel(command, k, r.film.derivative_sum(k), r.film, command == "grad");
 }
 

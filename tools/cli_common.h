@@ -166,8 +166,8 @@ void warn_if_dominant_pixel(const std::string& command, int k, const ImageSum& s
 /// Writes a gradient EXR (R,G,B + dtheta<k>.R/G/B, each parameter spec as attribute
 /// qsil:param<k>, `method` as qsil:method), and with a preview directory one diverging PNG per
 /// parameter plus the primal PNG; prints each parameter's image sum +- standard error, the pixel
-/// that holds the largest share of its variance, and preview range; then, once every output is
-/// written, warns on stderr (warn_if_dominant_pixel, as `qsil COMMAND`: "grad" or "fd") where that
+/// that holds the largest share of its variance, and preview range; then, once the EXR and
+/// previews are written, warns on stderr (warn_if_dominant_pixel, as `qsil COMMAND`: "grad" or "fd") where that
 /// pixel dominates.
 void write_gradient_outputs(const CommonFlags& flags, const std::vector<ParameterSpec>& params, const RenderResult& r,
                             const std::string& preview_dir, const std::string& command, const std::string& method);
