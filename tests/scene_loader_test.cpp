@@ -5,6 +5,7 @@
 
 #include "qsil/bsdf.h"
 #include "qsil/error.h"
+#include "qsil/parameters.h"
 #include "qsil/scene.h"
 #include "ray_hits.h"
 
@@ -398,6 +399,36 @@ TEST(SceneLoaderTest, SpotMirrorShowsSpotOnlyInTheMirror) {
 // lies on that far side too, so the face is seen only in the mirrors. The mirrors' normals are the
 // header's. A bunny behind the camera (no direct view), mirror views of one side, or a bunny facing
 // the camera fail it.
+/// Every scene of the stability study (scenes/stability/params.txt: name, parameter, question per
+/// line) loads, with every mesh and map it names (some are test assets used in place), and its
+/// parameter names a shape of it and is the one its XML header says it studies.
+TEST(SceneLoaderTest, EveryStabilitySceneLoadsWithItsParameter) {
+  std::ifstream list(bundled("stability/params.txt"));
+  ASSERT_TRUE(list) << bundled("stability/params.txt");
+  int scenes = 0;
+  for (std::string line; std::getline(list, line);) {
+    if (line.empty()) continue;
+    const size_t tab1 = line.find('\t'), tab2 = line.find('\t', tab1 + 1);
+    ASSERT_NE(tab2, std::string::npos) << line;
+    const std::string name = line.substr(0, tab1), param = line.substr(tab1 + 1, tab2 - tab1 - 1);
+    EXPECT_GT(line.size(), tab2 + 1) << name << ": no question";
+    const std::string file = bundled("stability/" + name + ".xml");
+    std::optional<Scene> scene;
+    try {
+      scene.emplace(load_scene(file, {{"res", "8"}}));
+      EXPECT_EQ(parse_parameters({param}, *scene).size(), 1u) << name;
+    } catch (const Error& e) {
+      ADD_FAILURE() << name << ": " << e.what();
+      continue;
+    }
+    std::ifstream xml(file);
+    const std::string text((std::istreambuf_iterator<char>(xml)), std::istreambuf_iterator<char>());
+    EXPECT_THAT(text, HasSubstr("Parameter studied: " + param)) << name;
+    ++scenes;
+  }
+  EXPECT_GE(scenes, 14);  // the 13 of the first study and thin-metal
+}
+
 TEST(SceneLoaderTest, TwoMirrorsShowTheBunnyFromThreeSides) {
   const Scene s = load_scene(bundled("two-mirrors.xml"));
   const TriangleMesh& bunny = shape(s, "bunny").mesh;
