@@ -389,16 +389,6 @@ TEST(SceneLoaderTest, SpotMirrorShowsSpotOnlyInTheMirror) {
   EXPECT_GE(reflected_hits, 0.2 * pixels) << "Spot should fill a good part of the mirror";
 }
 
-// The inverse-rendering set-up of [QSS] 5.5: the camera sees the bunny directly from behind, and its
-// face side in each of the two mirrors, from three sides. Pixel-centre rays of a 64 x 64 grid over
-// the film that reach the bunny directly, or after one reflection in a mirror (whichever of bunny
-// and mirrors the ray meets first), give each view at least 2.5 % of the grid; the mean directions
-// along which the three views see the bunny lie more than 90 degrees apart; at least 2/3 of each
-// mirror view's points lie on the far side of the bunny's box centre from the camera (z < centre),
-// which the direct view cannot show; and the head (the vertices in the top quarter of the height)
-// lies on that far side too, so the face is seen only in the mirrors. The mirrors' normals are the
-// header's. A bunny behind the camera (no direct view), mirror views of one side, or a bunny facing
-// the camera fail it.
 /// Every scene of the stability study (scenes/stability/params.txt: name, parameter, question per
 /// line) loads, with every mesh and map it names (some are test assets used in place), and its
 /// parameter names a shape of it and is the one its XML header says it studies.
@@ -429,6 +419,16 @@ TEST(SceneLoaderTest, EveryStabilitySceneLoadsWithItsParameter) {
   EXPECT_GE(scenes, 14);  // the 13 of the first study and thin-metal
 }
 
+// The inverse-rendering set-up of [QSS] 5.5: the camera sees the bunny directly from behind, and its
+// face side in each of the two mirrors, from three sides. Pixel-centre rays of a 64 x 64 grid over
+// the film that reach the bunny directly, or after one reflection in a mirror (whichever of bunny
+// and mirrors the ray meets first), give each view at least 2.5 % of the grid; the mean directions
+// along which the three views see the bunny lie more than 90 degrees apart; at least 2/3 of each
+// mirror view's points lie on the far side of the bunny's box centre from the camera (z < centre),
+// which the direct view cannot show; and the head (the vertices in the top quarter of the height)
+// lies on that far side too, so the face is seen only in the mirrors. The mirrors' normals are the
+// header's. A bunny behind the camera (no direct view), mirror views of one side, or a bunny facing
+// the camera fail it.
 TEST(SceneLoaderTest, TwoMirrorsShowTheBunnyFromThreeSides) {
   const Scene s = load_scene(bundled("two-mirrors.xml"));
   const TriangleMesh& bunny = shape(s, "bunny").mesh;

@@ -335,8 +335,10 @@ void write_gradient_outputs(const CommonFlags& flags, const std::vector<Paramete
   write_exr(flags.output, img);
   if (!flags.preview.empty()) write_preview_png(flags.preview, img, flags.exposure);
   if (!preview_dir.empty()) std::filesystem::create_directories(preview_dir);
+  std::vector<ImageSum> sums;
+  for (int k = 0; k < K; ++k) sums.push_back(r.film.derivative_sum(k));
   for (int k = 0; k < K; ++k) {
-    const ImageSum s = r.film.derivative_sum(k);
+    const ImageSum& s = sums[size_t(k)];
     std::printf("  dtheta%d (%s): image sum %.6g +- %.3g (1 s.e.%s)", k, params[size_t(k)].text.c_str(), s.sum,
                 s.standard_error, largest_share_note(s).c_str());
     if (!preview_dir.empty()) {
@@ -350,7 +352,7 @@ void write_gradient_outputs(const CommonFlags& flags, const std::vector<Paramete
   if (!preview_dir.empty()) write_preview_png(std::filesystem::path(preview_dir) / "primal.png", img, flags.exposure);
   // After the EXR and previews are written: a failed write ends the command with its one-line error
   // alone (grad's --largest-samples CSV, written later by its caller, is the exception).
-  for (int k = 0; k < K; ++k) warn_if_dominant_pixel(command, k, r.film.derivative_sum(k), r.film, command == "grad");
+  for (int k = 0; k < K; ++k) warn_if_dominant_pixel(command, k, sums[size_t(k)], r.film, command == "grad");
 }
 
 }  // namespace qsil::cli
