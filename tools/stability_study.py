@@ -110,7 +110,7 @@ def merge_images(per, work, img_root, name, param):
         resj["rows"], resj["methods"] = rows, methods
         json.dump(resj, open(os.path.join(merged, "results.json"), "w"))
         subprocess.run([sys.executable, os.path.join("tools", "plot_compare.py"), merged, "--title",
-                        f"stability/{name}: {param}"], check=False)
+                        f"stability/{name}: {param}"], check=True)
         os.makedirs(os.path.join(img_root, name), exist_ok=True)
         if os.path.exists(os.path.join(merged, "grid.png")):
             shutil.copy(os.path.join(merged, "grid.png"), os.path.join(img_root, name, "grid.png"))
@@ -202,6 +202,11 @@ def main():
                     help="re-render the FD references even where a cached one matches")
     args = ap.parse_args()
     args.qsil = os.path.abspath(args.qsil)
+    # The grids need matplotlib in this interpreter: fail now, not after the study, with the last
+    # study's grids left beside a new table.
+    if subprocess.run([sys.executable, "-c", "import matplotlib"], stderr=subprocess.DEVNULL).returncode != 0:
+        sys.exit(f"stability_study: {sys.executable} has no matplotlib (tools/install-deps.sh installs "
+                 "python3-matplotlib for /usr/bin/python3)")
     os.chdir(ROOT)  # qsil gets repository-relative paths
     sdir = os.path.join("scenes", "stability")
     cases = [l.rstrip("\n").split("\t") for l in open(os.path.join(sdir, "params.txt")) if l.strip()]
