@@ -342,6 +342,15 @@ WHY_MISSED = {
         "0.074 at 192 spp in this one (13000 spp, Intel Xeon), while quadric's stayed at 0.010–0.0095. At k = 1 on "
         "the same scene vsphere / quadric is 10.4 (met), vsphere's own error spreading 0.10–0.14 between runs. "
         "Judging it needs a lower floor and several runs of vsphere."),
+    "sun FD": (
+        "Not the estimator: measured 2026-11-27 on one AMD EPYC VM, the binaries of 3efa0b7 (the last study) and "
+        "4536e51 (this one) side by side, `qsil grad` and `qsil fd` at 48², 128 spp, seeds 1-3, 2 threads: the same "
+        "image sums and standard errors from both (-41.25 ± 7.74, -53.84 ± 9.8, -39.83 ± 7.65), grad in 1.49-1.57 s "
+        "(old) and 1.29-1.81 s (new), FD in 1.12-1.33 s (old) and 1.00-1.06 s (new, the environment map's memory "
+        "layout). The last study's 0.617 was one run at 2 s on a machine its record does not name; this study's quadric reached 170 spp "
+        "in its 2 s there (264 then) at the same error per sample, and FD 295 (376 then). What holds quadric's error "
+        "on this scene (the sun's long, sharp shadows of Spot) has not been decomposed; `tools/tail_report.py` on it "
+        "is the next step, and the cell is one run of a heavy-tailed estimate."),
     "teapot FD": (
         "Its gap is the interior term's tail (about 9× FD's variance per sample). Decomposed 2026-11-25 "
         "(`tools/tail_report.py`, `docs/experiments/2026-11-25-tail-decomposition.md`): the interior term holds 65 % "
