@@ -346,9 +346,10 @@ WHY_MISSED = {
         "Not the estimator: measured 2026-11-27 on one AMD EPYC VM, the binaries of 3efa0b7 (the last study) and "
         "4536e51 (this one) side by side, `qsil grad` and `qsil fd` at 48², 128 spp, seeds 1-3, 2 threads: the same "
         "image sums and standard errors from both (-41.25 ± 7.74, -53.84 ± 9.8, -39.83 ± 7.65), grad in 1.49-1.57 s "
-        "(old) and 1.29-1.81 s (new), FD in 1.12-1.33 s (old) and 1.00-1.06 s (new, the environment map's memory "
-        "layout). The last study's 0.617 was one run at 2 s on a machine its record does not name; this study's quadric reached 170 spp "
-        "in its 2 s there (264 then) at the same error per sample, and FD 295 (376 then). What holds quadric's error "
+        "(old) and 1.29-1.81 s (new), FD in 1.12-1.33 s (old) and 1.00-1.06 s (new; most likely the environment "
+        "map's memory layout, not isolated). The last study's 0.617 was one run at 2 s on a machine its record does "
+        "not name; this study's quadric reached 170 spp in its 2 s there (264 then) at the same error per sample, "
+        "and FD 295 (376 then). What holds quadric's error "
         "on this scene (the sun's long, sharp shadows of Spot) has not been decomposed; `tools/tail_report.py` on it "
         "is the next step, and the cell is one run of a heavy-tailed estimate."),
     "teapot FD": (
