@@ -40,15 +40,16 @@ edgetree::LightSphere light_sphere(const Shape& s, int index) {
 /// The contour index (the quadric method in a scene with a glossy BSDF or an area light) and the
 /// sampler of an edge forest's method over `forest`, into `out` (both point into the forest).
 void make_forest_sampler(const Scene& scene, Method method, std::span<const edgetree::ForestShapeInput> inputs,
-                         const edgetree::EdgeForest& forest, BoundarySetup& out) {
+                         const edgetree::EdgeForest& forest, bool sun, BoundarySetup& out) {
   // Contour sets for narrow lobes and small area lights: the quadric method only (quadric-box
   // is the paper's ablation, kept as the paper traverses), in scenes with a glossy BSDF on some
-  // shape or an area light (a quad or a mesh emitter: set_light_importance's lights).
+  // shape or an area light (a quad or a mesh emitter, or the environment's sun:
+  // set_light_importance's lights).
   const bool glossy = std::any_of(scene.shapes.begin(), scene.shapes.end(), [&](const Shape& s) {
     return s.bsdf >= 0 && scene.bsdfs[size_t(s.bsdf)].type == BSDFDesc::Type::RoughConductor;
   });
   const bool area_light =
-      std::any_of(scene.shapes.begin(), scene.shapes.end(), [](const Shape& s) { return s.is_emitter; });
+      sun || std::any_of(scene.shapes.begin(), scene.shapes.end(), [](const Shape& s) { return s.is_emitter; });
   if (method == Method::Quadric && (glossy || area_light))
     out.contours = std::make_unique<edgetree::ContourIndex>(edgetree::ContourIndex::build(inputs, forest));
   out.sampler = std::make_unique<edgetree::QuadricEdgeSampler>(forest, node_test(method));
@@ -73,17 +74,19 @@ void attach_boundary(const Scene& scene, const RayTracer& tracer, Method method,
     auto moves = [&](int s) { return s >= 0 && s < int(moving.size()) && moving[size_t(s)]; };
     boundary_ctx.moving[id] = moves(g.shape0) || moves(g.shape1);
   }
-  set_light_importance(scene, environment, boundary_ctx);
+  set_light_importance(scene, environment, boundary.sun, boundary_ctx);
   primary = find_primary_edges(scene, *boundary.edges, boundary_ctx.moving, tracer);
   describe_boundary_setup(boundary, method, int(primary.edges.size()), setup);
 }
 
 }  // namespace
 
-BoundarySetup build_boundary_setup(const Scene& scene, Method method, bool intersection_curves) {
+BoundarySetup build_boundary_setup(const Scene& scene, Method method, bool intersection_curves,
+                                   const EnvironmentLight* environment) {
   QSIL_CHECK_MSG(uses_edge_set(method), "no edge set for method " << method_name(method));
   const auto t0 = std::chrono::steady_clock::now();
   BoundarySetup out;
+  if (environment) out.sun = find_environment_sun(*environment);
   const std::vector<edgetree::ForestShapeInput> inputs = edgetree::forest_inputs(scene);
   if (uses_edge_forest(method)) {
     // quadric-box uses the dual box only: its forest fits no quadric (the box test reads nothing
@@ -92,7 +95,7 @@ BoundarySetup build_boundary_setup(const Scene& scene, Method method, bool inter
     options.fit.fit_quadrics = uses_quadrics(method);
     options.intersection_curves = intersection_curves;
     auto forest = std::make_unique<edgetree::EdgeForest>(edgetree::EdgeForest::build(inputs, options));
-    make_forest_sampler(scene, method, inputs, *forest, out);
+    make_forest_sampler(scene, method, inputs, *forest, out.sun.has_value(), out);
     out.edges = std::move(forest);
   } else {
     edgetree::EdgeSetOptions options;
@@ -112,7 +115,19 @@ BoundarySetup build_boundary_setup(const Scene& scene, Method method, bool inter
   return out;
 }
 
-void set_light_importance(const Scene& scene, const EnvironmentLight& environment, BoundaryContext& context) {
+bool sun_light_sphere(const EnvironmentSun& sun, const Box3& scene_bounds, edgetree::LightSphere& out) {
+  const double R = 0.5 * scene_bounds.diagonal();
+  if (!(R > 0) || !std::isfinite(R) || !scene_bounds.center().allFinite()) return false;
+  const double D = kSunDistance * R;
+  out.centre = scene_bounds.center() + D * sun.axis;
+  out.radius = D * std::sin(sun.half_angle) + R;
+  out.weight = sun.radiance;
+  out.shape = -1;
+  return true;
+}
+
+void set_light_importance(const Scene& scene, const EnvironmentLight& environment,
+                          const std::optional<EnvironmentSun>& sun, BoundaryContext& context) {
   context.lights.clear();
   context.light_spheres.clear();
   for (const Shape& s : scene.shapes) {
@@ -137,6 +152,11 @@ void set_light_importance(const Scene& scene, const EnvironmentLight& environmen
       context.velocity_scale[size_t(k)] = vmax > 0 ? 1.0 / vmax : 0.0;
     }
   context.env_weight = environment.present() ? luminance(environment.average_radiance()) : 0.0;
+  edgetree::LightSphere sun_sphere;
+  if (sun && sun_light_sphere(*sun, scene.bounds(), sun_sphere)) {
+    context.light_spheres.push_back(sun_sphere);
+    context.env_weight *= 1.0 - sun->share;  // the rest of the map
+  }
   // Without any light: plain [QSS 3.5] importance.
   if (context.lights.empty() && context.light_spheres.empty() && context.env_weight == 0) context.env_weight = 1.0;
 }
@@ -161,6 +181,8 @@ void describe_boundary_setup(const BoundarySetup& boundary, Method method, int p
   setup.primary_edges = primary_edges;
   setup.crossing_segments = int(boundary.edges->crossings().size());
   setup.crossing_seconds = boundary.edges->crossing_stats().seconds;
+  setup.sun_share = boundary.sun ? boundary.sun->share : 0.0;
+  setup.sun_half_angle_degrees = boundary.sun ? boundary.sun->half_angle * 180.0 / kPi : 0.0;
   if (boundary.forest) {
     for (const auto& st : boundary.forest->stats()) {
       setup.fitted_nodes += st.fitted;
@@ -178,7 +200,7 @@ void set_up_boundary_term(const Scene& scene, const RayTracer& tracer, Method me
                           const std::vector<bool>& moving, double sppi, const EnvironmentLight& environment,
                           BoundarySetup& boundary, BoundaryContext& boundary_ctx, PrimaryEdges& primary, SetupReport& setup,
                           bool intersection_curves) {
-  boundary = build_boundary_setup(scene, method, intersection_curves);
+  boundary = build_boundary_setup(scene, method, intersection_curves, &environment);
   boundary_ctx.velocities = velocities;
   boundary_ctx.sppi = sppi > 0 ? sppi : default_sppi(method);
   boundary_ctx.split_speed = default_split_speed(method);
@@ -205,7 +227,7 @@ edgetree::RefitReport update_boundary_term(const Scene& scene, const RayTracer& 
       boundary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     }
   }
-  if (report.rebuild_advised()) boundary = build_boundary_setup(scene, method, intersection_curves);
+  if (report.rebuild_advised()) boundary = build_boundary_setup(scene, method, intersection_curves, &environment);
   attach_boundary(scene, tracer, method, moving, environment, boundary, boundary_ctx, primary, setup);
   return report;
 }

@@ -9,12 +9,14 @@
 #include "qsil/edgetree/contour_set.h"
 #include "qsil/edgetree/edge_forest.h"
 #include "qsil/edgetree/edge_sampler.h"
+#include "qsil/environment_sun.h"
 #include "qsil/integrators/boundary_term.h"
 #include "qsil/integrators/estimator.h"
 #include "qsil/integrators/method.h"
 #include "qsil/scene.h"
 
 #include <memory>
+#include <optional>
 #include <vector>
 
 namespace qsil {
@@ -29,6 +31,10 @@ struct BoundarySetup {
   const edgetree::EdgeForest* forest = nullptr;    ///< `edges` as a forest (quadric methods), else null
   /// Mesh adjacency for contour sets (Method::Quadric in a scene with a glossy BSDF), else null.
   std::unique_ptr<edgetree::ContourIndex> contours;
+  /// The environment map's sun (find_environment_sun of the environment given to
+  /// build_boundary_setup), a light of the light-aware importance (set_light_importance); none
+  /// without one.
+  std::optional<EnvironmentSun> sun;
   double seconds = 0;                              ///< wall time of the build
 };
 
@@ -36,18 +42,34 @@ struct BoundarySetup {
 /// alone, no sampler) over every shape of `scene`
 /// (a moving shading point sees static edges move too, docs/architecture.md §5), with the
 /// segments of the intersection curves among the always-candidates unless `intersection_curves`
-/// is false. The v-sphere tree's Hough origin is the camera centre. The scene must outlive the
-/// result.
-BoundarySetup build_boundary_setup(const Scene& scene, Method method, bool intersection_curves = true);
+/// is false. The v-sphere tree's Hough origin is the camera centre. `environment` (null: none) gives
+/// the sun (BoundarySetup::sun), which makes the quadric method build its contour index as an
+/// area light does. The scene must outlive the result.
+BoundarySetup build_boundary_setup(const Scene& scene, Method method, bool intersection_curves = true,
+                                   const EnvironmentLight* environment = nullptr);
 
 /// The importance inputs of the boundary term [QSS 3.6]: every rectangle emitter as a light
 /// polygon weighted by the luminance of its radiance, every other emitter (a mesh) as a light
-/// sphere that bounds its vertices (edgetree::LightSphere), and the environment's weight
-/// (luminance of its mean radiance; 1 when the scene has no light of either kind and no
-/// environment, i.e. plain [QSS 3.5] importance); every
+/// sphere that bounds its vertices (edgetree::LightSphere), the environment map's `sun` (if any)
+/// as a light sphere far beyond the scene (sun_light_sphere), and the environment's weight
+/// (luminance of its mean radiance without the sun's share; 1 when the scene has no light of
+/// either kind and no environment, i.e. plain [QSS 3.5] importance); every
 /// shape's emitted luminance (the outline of any emitter weighs it); and, from
 /// context.velocities (set it first; none: no scale), each parameter's velocity scale.
-void set_light_importance(const Scene& scene, const EnvironmentLight& environment, BoundaryContext& context);
+void set_light_importance(const Scene& scene, const EnvironmentLight& environment,
+                          const std::optional<EnvironmentSun>& sun, BoundaryContext& context);
+
+/// The light sphere that stands for `sun` in the light-aware importance: centred at distance
+/// D = kSunDistance x R along the sun's axis from the centre c of `scene_bounds` (R its half
+/// diagonal), of radius D sin(half_angle) + R, so that from any point p of the box every
+/// direction within the sun's cone meets it (the cone's ray from p runs parallel to the one from
+/// c, at most R from it), with the sun's radiance and no shape. False (`out` untouched) for an
+/// empty or non-finite box, or one of zero size.
+bool sun_light_sphere(const EnvironmentSun& sun, const Box3& scene_bounds, edgetree::LightSphere& out);
+
+/// How far the sun's stand-in lies (sun_light_sphere), in half diagonals of the scene's box: its
+/// parallax from the scene is at most 1 / kSunDistance radians, which its radius covers.
+inline constexpr double kSunDistance = 1000.0;
 
 /// Throws qsil::Error unless `sppi` (EstimatorConfig::sppi) is 0 (the method's
 /// default) or in [1/1024, 1024].

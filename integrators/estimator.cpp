@@ -445,12 +445,16 @@ void RenderResult::merge(const RenderResult& other) {
 }
 
 std::string SetupReport::describe() const {
-  char buf[320], crossings[96] = "";
+  char buf[448], crossings[96] = "", sun[112] = "";
   if (crossing_segments > 0)
     std::snprintf(crossings, sizeof crossings, ", %d intersection-curve segments (%.3f s)", crossing_segments,
                   crossing_seconds);
-  std::snprintf(buf, sizeof buf, "%s: %d edges, %d fitted nodes (%d with quadrics), %d primary edges%s, %.3f s",
-                structure.c_str(), edges, fitted_nodes, quadric_nodes, primary_edges, crossings, seconds);
+  if (sun_share > 0)
+    std::snprintf(sun, sizeof sun,
+                  ", the environment's sun (%.2f deg, %.0f %% of its power) a light of the edge choice",
+                  sun_half_angle_degrees, 100.0 * sun_share);
+  std::snprintf(buf, sizeof buf, "%s: %d edges, %d fitted nodes (%d with quadrics), %d primary edges%s%s, %.3f s",
+                structure.c_str(), edges, fitted_nodes, quadric_nodes, primary_edges, crossings, sun, seconds);
   return buf;
 }
 

@@ -17,6 +17,7 @@
 #include "qsil/image.h"
 
 #include "chi2.h"
+#include "env_map_images.h"
 #include "test_data.h"
 
 #include <gtest/gtest.h>
@@ -34,31 +35,11 @@ using test::TestRng;
 const double kSignificance = test::sidak(0.01, 2);
 
 // ---- the convention, written out independently of the class (Mitsuba 3 envmap.cpp)
-Vec3 ref_uv_to_dir(double u, double v) {
-  const double theta = kPi * v, phi = 2 * kPi * u;
-  return {std::sin(theta) * std::sin(phi), std::cos(theta), -std::sin(theta) * std::cos(phi)};
-}
+Vec3 ref_uv_to_dir(double u, double v) { return test::envmap_direction(u, v); }
 Vec2 ref_dir_to_uv(const Vec3& d) {
   double u = std::atan2(d.x(), -d.z()) / (2 * kPi);
   if (u < 0) u += 1;
   return {u, std::acos(std::clamp(d.y(), -1.0, 1.0)) / kPi};
-}
-
-/// An RGB Image with channels stored in B, G, R order (as in the bundled EXRs).
-Image make_image(int w, int h, const std::function<Color(int, int)>& texel) {
-  Image img;
-  img.width = w;
-  img.height = h;
-  img.channel_names = {"B", "G", "R"};
-  img.planes.assign(3, std::vector<float>(size_t(w) * size_t(h)));
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) {
-      const Color c = texel(x, y);
-      img.at(0, x, y) = float(c[2]);
-      img.at(1, x, y) = float(c[1]);
-      img.at(2, x, y) = float(c[0]);
-    }
-  return img;
 }
 
 /// A rotation about a tilted axis (so that no axis of the map frame is a world axis).
@@ -70,7 +51,7 @@ Environment synthetic_env() {
   env.type = Environment::Type::EnvMap;
   env.scale = 1.5;
   env.to_world = some_rotation();
-  env.texels = make_image(16, 8, [](int x, int y) {
+  env.texels = test::envmap_image(16, 8, [](int x, int y) {
     if (y == 3 || (x + y) % 5 == 0) return Color(0, 0, 0);
     if (x == 11 && y == 5) return Color(40, 30, 10);
     return Color(0.1 + 0.05 * x, 0.2 + 0.1 * y, 0.3);
@@ -280,7 +261,7 @@ TEST(EnvironmentLightKinds, ConstantNoneAndBlack) {
   EXPECT_TRUE((c.average_radiance() == constant.radiance).all());
 
   Environment black = synthetic_env();
-  black.texels = make_image(8, 4, [](int, int) { return Color(0, 0, 0); });
+  black.texels = test::envmap_image(8, 4, [](int, int) { return Color(0, 0, 0); });
   const EnvironmentLight b(black);
   EXPECT_TRUE(b.present());
   EXPECT_EQ(b.sample(Vec2(0.5, 0.5)).pdf, 0.0);  // nothing to sample

@@ -148,8 +148,13 @@ struct SetupReport {
   /// finding them (broad and narrow phase; part of edge_seconds).
   int crossing_segments = 0;
   double crossing_seconds = 0;
+  /// The environment map's sun as a light of the edge importance (find_environment_sun): its
+  /// half-angle (degrees) and share of the map's power; share 0: none.
+  double sun_half_angle_degrees = 0;
+  double sun_share = 0;
   /// One line: "STRUCTURE: E edges, F fitted nodes (Q with quadrics), P primary edges, T s", with
-  /// ", C intersection-curve segments (T s)" before the time when there are any.
+  /// ", C intersection-curve segments (T s)" before the time when there are any, and
+  /// ", the environment's sun (A deg, S % of its power) a light of the edge choice" when one is.
   std::string describe() const;
 };
 
