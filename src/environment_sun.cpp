@@ -41,7 +41,7 @@ std::optional<EnvironmentSun> find_environment_sun(const EnvironmentLight& env) 
   int xm = 0, ym = 0;
   for (int y = 0; y < H; ++y)
     for (int x = 0; x < W; ++x) {
-      const double l = luminance(env.texel_radiance(x, y));
+      const double l = luminance(env.texel(x, y));
       power += l * row_omega[size_t(y)];
       if (l > l_max) {
         l_max = l;
@@ -56,12 +56,12 @@ std::optional<EnvironmentSun> find_environment_sun(const EnvironmentLight& env) 
   const Vec3 seed = centre(xm, ym);
   const double cos_search = std::cos(kSunSearchHalfAngle);
   const auto is_sun = [&](int x, int y) {
-    return seed.dot(centre(x, y)) >= cos_search && luminance(env.texel_radiance(x, y)) >= kSunCoreRatio * l_max;
+    return seed.dot(centre(x, y)) >= cos_search && luminance(env.texel(x, y)) >= kSunCoreRatio * l_max;
   };
   Vec3 sum = Vec3::Zero();
   for (int y = 0; y < H; ++y)
     for (int x = 0; x < W; ++x)
-      if (is_sun(x, y)) sum += luminance(env.texel_radiance(x, y)) * row_omega[size_t(y)] * centre(x, y);
+      if (is_sun(x, y)) sum += luminance(env.texel(x, y)) * row_omega[size_t(y)] * centre(x, y);
   const Vec3 axis = sum.norm() > 0 ? Vec3(sum.normalized()) : seed;
   double half_angle = 0;
   for (int y = 0; y < H; ++y)
@@ -74,7 +74,7 @@ std::optional<EnvironmentSun> find_environment_sun(const EnvironmentLight& env) 
   double cone_power = 0;
   for (int y = 0; y < H; ++y)
     for (int x = 0; x < W; ++x)
-      if (axis.dot(centre(x, y)) >= cos_cone) cone_power += luminance(env.texel_radiance(x, y)) * row_omega[size_t(y)];
+      if (axis.dot(centre(x, y)) >= cos_cone) cone_power += luminance(env.texel(x, y)) * row_omega[size_t(y)];
   const double radiance = cone_power / (2.0 * kPi * (1.0 - cos_cone));
   // An arc through the sun gathers about radiance x 2 half_angle; a half great circle of the
   // mean map, pi x power / (4 pi).

@@ -71,13 +71,11 @@ class EnvironmentLight {
   int height() const { return height_; }
   /// The radiance of texel (x, y) (column x in [0, width()), row y in [0, height()), top row
   /// first), as eval() returns it: scaled, negative channels clamped to 0. EnvMap only.
-  Color texel_radiance(int x, int y) const { return texel(x, y); }
+  Color texel(int x, int y) const;
   /// The map's rotation, map frame -> world (identity unless EnvMap).
   const Mat3& to_world() const { return to_world_; }
 
  private:
-  Color texel(int x, int y) const;
-
   Environment::Type type_ = Environment::Type::None;
   Color constant_ = Color::Zero();
   Mat3 to_world_ = Mat3::Identity();

@@ -6,8 +6,9 @@
 ///   than the disc, and its share and radiance are the brute-force sums over the texels;
 /// - a broad glow, a large softbox, a flat sky and a sun too small for its sky are not suns, and
 ///   the same sun in a darker sky is (the arc criterion, kSunMinArcRatio, on both sides);
-/// - the sun of scenes/stability/envmaps/sunset.exr is found, small and near the horizon, and the
-///   bundled maps without one (forest, courtyard, the studio of the tests) have none;
+/// - the suns of scenes/stability/envmaps/sunset.exr (small, near the horizon), sunrise.exr and
+///   city.exr are found, and the bundled maps without one (forest, courtyard, the studio of the
+///   tests) have none;
 /// - from every point of the scene's box, every direction of the sun's cone meets the light sphere
 ///   (the oracle: the ray's distance to the centre), and a sphere without the box's half diagonal
 ///   in its radius fails that (the test has power).
@@ -131,6 +132,14 @@ TEST(EnvironmentSun, TheBundledMaps) {
   ASSERT_TRUE(sun.has_value());
   EXPECT_LT(sun->half_angle, 2 * kDegree);
   EXPECT_LT(std::abs(sun->axis.y()), std::sin(10 * kDegree));  // a low sun
+  // Two clear skies with a sun (scenes/sun/): sunrise's holds most of the power, city's a quarter.
+  for (const auto& [path, min_share] : {std::pair<const char*, double>{"scenes/stability/envmaps/sunrise.exr", 0.5},
+                                        {"scenes/stability/envmaps/city.exr", 0.2}}) {
+    const std::optional<EnvironmentSun> s = find_environment_sun(EnvironmentLight(bundled_map(path)));
+    ASSERT_TRUE(s.has_value()) << path;
+    EXPECT_LT(s->half_angle, 2 * kDegree) << path;
+    EXPECT_GT(s->share, min_share) << path;
+  }
   for (const char* path :
        {"scenes/envmaps/forest.exr", "scenes/envmaps/courtyard.exr", "tests/data/envmaps/studio.exr"})
     EXPECT_FALSE(find_environment_sun(EnvironmentLight(bundled_map(path))).has_value()) << path;

@@ -21,8 +21,12 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <string>
+
+#include <unistd.h>
 
 namespace qsil {
 namespace {
@@ -56,7 +60,9 @@ const char* kScene = R"(<scene version="3.0.0">
 </scene>)";
 
 TEST(SunShadowVsFD, OccluderUnderTheSunOfAnEnvironmentMap) {
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "qsil_sun_shadow_vs_fd";
+  // A folder of this process's own: two test processes may run at once.
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("qsil_sun_shadow_vs_fd_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   // The sun 60 degrees high toward +x: the occluder's edge x = 0.5 (height 0.5) casts the
   // shadow's edge to x = 0.5 - 0.5 / tan(60 deg) = 0.21 on the floor, where the camera looks from
@@ -78,6 +84,7 @@ TEST(SunShadowVsFD, OccluderUnderTheSunOfAnEnvironmentMap) {
   std::printf("sun shadow: grad %.5g +- %.3g, fd %.5g +- %.3g\n", g.value, g.se, f.value, f.se);
   EXPECT_NEAR(g.value, f.value, 3 * se);
   EXPECT_LT(se, 0.06 * std::abs(f.value)) << "no power to see a 20 % bias";
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace
