@@ -17,11 +17,14 @@ namespace qsil {
 
 /// A sun of an environment map, in the world frame.
 struct EnvironmentSun {
-  Vec3 axis = Vec3::UnitZ();  ///< unit world direction toward the sun (the direction one looks along to see it)
-  double half_angle = 0;  ///< radians: the cone about `axis` that holds every texel of the sun, texel extent included
-  double radiance =
-      0;             ///< luminance: the power of the map's texels whose centres lie in the cone, over its solid angle
-  double share = 0;  ///< that power over the whole map's power, in (0, 1]
+  /// Unit world direction toward the sun (the direction one looks along to see it).
+  Vec3 axis = Vec3::UnitZ();
+  /// Radians: the cone about `axis` that holds every texel of the sun, texel extent included.
+  double half_angle = 0;
+  /// Luminance: the power of the map's texels whose centres lie in the cone, over its solid angle.
+  double radiance = 0;
+  /// That power over the whole map's power, in (0, 1].
+  double share = 0;
 };
 
 /// A texel belongs to the sun when its luminance is at least kSunCoreRatio times the brightest
@@ -42,10 +45,9 @@ inline constexpr double kSunMinArcRatio = 1.0;
 /// first in row-major order among equals) has luminance > 0, the cone about the power-weighted mean
 /// direction of the sun's texels (kSunCoreRatio, kSunSearchHalfAngle; texel centres) whose
 /// half-angle is the largest angle to the centre of a sun texel plus that texel's angular radius
-/// (half its diagonal in angle), kept where
-/// it is at most kSunMaxHalfAngle and passes kSunMinArcRatio. Power: luminance times solid angle
-/// over the texels whose centres the cone holds. None for a constant or absent environment.
-/// O(texels).
+/// (half its diagonal in angle), kept where it is at most kSunMaxHalfAngle and passes
+/// kSunMinArcRatio. Power: luminance times solid angle over the texels whose centres the cone
+/// holds. None for a constant or absent environment. O(texels).
 std::optional<EnvironmentSun> find_environment_sun(const EnvironmentLight& env);
 
 }  // namespace qsil
