@@ -38,9 +38,10 @@ edgetree::LightSphere light_sphere(const Shape& s, int index) {
 }
 
 /// The contour index (the quadric method in a scene with a glossy BSDF or an area light) and the
-/// sampler of an edge forest's method over `forest`, into `out` (both point into the forest).
+/// sampler of an edge forest's method over `forest`, into `out` (both point into the forest; out.sun
+/// set first).
 void make_forest_sampler(const Scene& scene, Method method, std::span<const edgetree::ForestShapeInput> inputs,
-                         const edgetree::EdgeForest& forest, bool sun, BoundarySetup& out) {
+                         const edgetree::EdgeForest& forest, BoundarySetup& out) {
   // Contour sets for narrow lobes and small area lights: the quadric method only (quadric-box
   // is the paper's ablation, kept as the paper traverses), in scenes with a glossy BSDF on some
   // shape or an area light (a quad or a mesh emitter, or the environment's sun:
@@ -49,7 +50,7 @@ void make_forest_sampler(const Scene& scene, Method method, std::span<const edge
     return s.bsdf >= 0 && scene.bsdfs[size_t(s.bsdf)].type == BSDFDesc::Type::RoughConductor;
   });
   const bool area_light =
-      sun || std::any_of(scene.shapes.begin(), scene.shapes.end(), [](const Shape& s) { return s.is_emitter; });
+      out.sun || std::any_of(scene.shapes.begin(), scene.shapes.end(), [](const Shape& s) { return s.is_emitter; });
   if (method == Method::Quadric && (glossy || area_light))
     out.contours = std::make_unique<edgetree::ContourIndex>(edgetree::ContourIndex::build(inputs, forest));
   out.sampler = std::make_unique<edgetree::QuadricEdgeSampler>(forest, node_test(method));
@@ -95,7 +96,7 @@ BoundarySetup build_boundary_setup(const Scene& scene, Method method, bool inter
     options.fit.fit_quadrics = uses_quadrics(method);
     options.intersection_curves = intersection_curves;
     auto forest = std::make_unique<edgetree::EdgeForest>(edgetree::EdgeForest::build(inputs, options));
-    make_forest_sampler(scene, method, inputs, *forest, out.sun.has_value(), out);
+    make_forest_sampler(scene, method, inputs, *forest, out);
     out.edges = std::move(forest);
   } else {
     edgetree::EdgeSetOptions options;
