@@ -76,8 +76,15 @@ void attach_boundary(const Scene& scene, const RayTracer& tracer, Method method,
     boundary_ctx.moving[id] = moves(g.shape0) || moves(g.shape1);
   }
   set_light_importance(scene, environment, boundary.sun, boundary_ctx);
-  primary = find_primary_edges(scene, *boundary.edges, boundary_ctx.moving, tracer);
+  primary = find_primary_edges(scene, *boundary.edges, boundary_ctx.moving, tracer, kPrimaryHiddenShare,
+                               boundary_ctx.camera_hits);
   describe_boundary_setup(boundary, method, int(primary.edges.size()), setup);
+  setup.attached_vertices = setup.moving_vertices = 0;
+  for (size_t i = 0; i < scene.shapes.size() && i < moving.size(); ++i)
+    if (moving[i]) setup.moving_vertices += scene.shapes[i].mesh.num_vertices();
+  for (const std::vector<double>& a : primary.attachment.strength)
+    setup.attached_vertices += int(std::count_if(a.begin(), a.end(), [](double v) { return v > 0; }));
+  setup.static_primary_edges = primary.static_edges;
 }
 
 }  // namespace

@@ -7,15 +7,16 @@
 #include "forest_guide_training.h"
 #include "pixel_loop.h"
 #include "projective_boundary.h"
-#include "render_setup.h"
-#include "vertex_recorder.h"
 #include "qsil/check.h"
 #include "qsil/error.h"
+#include "qsil/integrators/attached_camera.h"
 #include "qsil/integrators/boundary_hook.h"
 #include "qsil/integrators/geometry_view.h"
 #include "qsil/integrators/path_tracer.h"
 #include "qsil/integrators/regularized_tracer.h"
 #include "qsil/integrators/warp_field.h"
+#include "render_setup.h"
+#include "vertex_recorder.h"
 
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/task_arena.h>
@@ -140,6 +141,7 @@ class GradientEstimator final : public Estimator::Impl, private RenderSetup {
       : Impl(s, std::move(c)), RenderSetup(s), vel(compute_velocities(s, config.params)) {
     // ---- The boundary method's structures, only when something moves.
     if (uses_edge_set(config.method) && vel.any_moving()) {
+      boundary_ctx.camera_hits = config.camera_hits;
       set_up_boundary_term(s, tracer, config.method, &vel, vel.moving, config.sppi, lights.environment,
                            boundary, boundary_ctx, primary, setup, config.intersection_curves);
       // Projective sampling: no secondary edge sampler, its boundary sample space instead.
@@ -210,13 +212,18 @@ class GradientEstimator final : public Estimator::Impl, private RenderSetup {
             // and 4), so they leave the path's decisions unchanged.
             Sampler aux(options.seed, pixel, uint64_t(s), 3), border(options.seed, pixel, uint64_t(s), 4);
             L = warped_pixel_sample(ctx, view, config.warped_area, x, y, ray, sampler, aux, border, st);
-          } else if (traversals > 0) {
-            // The boundary term draws from a stream of its own, so it leaves the path's decisions unchanged.
-            Sampler bsampler(options.seed, pixel, uint64_t(s), 1);
-            const BoundaryHook<N> hook{{&ctx, &boundary_ctx, &bsampler, traversals, &scratch.local()}};
-            L = trace_path(ctx, view, {lift<Dual<N>>(origin), ray.dir, ray.hit}, sampler, st, hook);
           } else {
-            L = trace_path(ctx, view, {lift<Dual<N>>(origin), ray.dir, ray.hit}, sampler, st);
+            const AttachedCameraRay<N> attached = camera_ray_form(ray, Vec2(x + u.x(), y + u.y()), x, y);
+            const PathRay<Dual<N>> path_ray{lift<Dual<N>>(origin), ray.dir, ray.hit, 0, 0, attached.moving_dir()};
+            if (traversals > 0) {
+              // The boundary term draws from a stream of its own, so it leaves the path's decisions unchanged.
+              Sampler bsampler(options.seed, pixel, uint64_t(s), 1);
+              const BoundaryHook<N> hook{{&ctx, &boundary_ctx, &bsampler, traversals, &scratch.local()}};
+              L = trace_path(ctx, view, path_ray, sampler, st, hook);
+            } else {
+              L = trace_path(ctx, view, path_ray, sampler, st);
+            }
+            attached.apply_jacobian(L);
           }
           for (int c = 0; c < 3; ++c) out[layout.primal(c)] = L[c].value();
           for (int k = 0; k < K; ++k) {
@@ -301,10 +308,26 @@ class GradientEstimator final : public Estimator::Impl, private RenderSetup {
     for (SampleTrace& trace : r.largest) {
       Sampler sampler(options.seed, uint64_t(trace.y) * cam.width + trace.x, uint64_t(trace.sample));
       PathStats st;
-      const CameraRay ray = trace_camera_ray(ctx, trace.x, trace.y, sampler.next2(), st);
+      const Vec2 u = sampler.next2();
+      const CameraRay ray = trace_camera_ray(ctx, trace.x, trace.y, u, st);
+      const AttachedCameraRay<N> attached =
+          camera_ray_form(ray, Vec2(trace.x + u.x(), trace.y + u.y()), trace.x, trace.y);
       const VertexRecorder<N> recorder{&trace, trace.param};
-      recorder.finish(trace_path(ctx, view, {lift<Dual<N>>(cam.origin()), ray.dir, ray.hit}, sampler, st, recorder));
+      ColorT<Dual<N>> L =
+          trace_path(ctx, view, {lift<Dual<N>>(cam.origin()), ray.dir, ray.hit, 0, 0, attached.moving_dir()}, sampler,
+                     st, recorder);
+      attached.apply_jacobian(L);
+      recorder.finish(L);
     }
+  }
+
+  /// The camera ray of a sample at film position `film` in pixel (px, py): attached
+  /// (attached_camera_ray) when the primary term carries the attached flux, else fixed.
+  AttachedCameraRay<N> camera_ray_form(const CameraRay& ray, const Vec2& film, int px, int py) const {
+    if (primary.attached) return attached_camera_ray<N>(scene, vel, primary.attachment, ray, film, px, py);
+    AttachedCameraRay<N> r{lift<Dual<N>>(ray.dir), Dual<N>(1.0), false};
+    r.jacobian.derivatives().setZero();
+    return r;
   }
 
   SceneVelocities vel;
@@ -445,7 +468,7 @@ void RenderResult::merge(const RenderResult& other) {
 }
 
 std::string SetupReport::describe() const {
-  char buf[448], crossings[96] = "", sun[112] = "";
+  char buf[576], crossings[96] = "", sun[112] = "", attached[112] = "";
   if (crossing_segments > 0)
     std::snprintf(crossings, sizeof crossings, ", %d intersection-curve segments (%.3f s)", crossing_segments,
                   crossing_seconds);
@@ -453,8 +476,13 @@ std::string SetupReport::describe() const {
     std::snprintf(sun, sizeof sun,
                   ", the environment's sun (%.2f deg, %.0f %% of its power) a light of the edge choice",
                   sun_half_angle_degrees, 100.0 * sun_share);
-  std::snprintf(buf, sizeof buf, "%s: %d edges, %d fitted nodes (%d with quadrics), %d primary edges%s%s, %.3f s",
-                structure.c_str(), edges, fitted_nodes, quadric_nodes, primary_edges, crossings, sun, seconds);
+  if (attached_vertices > 0)
+    std::snprintf(attached, sizeof attached,
+                  ", camera hits attached at %d of %d moving vertices (%d static primary edges)", attached_vertices,
+                  moving_vertices, static_primary_edges);
+  std::snprintf(buf, sizeof buf, "%s: %d edges, %d fitted nodes (%d with quadrics), %d primary edges%s%s%s, %.3f s",
+                structure.c_str(), edges, fitted_nodes, quadric_nodes, primary_edges, crossings, sun, attached,
+                seconds);
   return buf;
 }
 

@@ -6,6 +6,7 @@
 #include "pixel_loop.h"
 #include "qsil/edgetree/mesh_edges.h"
 #include "qsil/error.h"
+#include "qsil/integrators/attached_camera.h"
 #include "qsil/integrators/boundary_term.h"
 #include "sample_chunks.h"
 
@@ -19,6 +20,14 @@
 namespace qsil {
 
 namespace {
+
+/// Where a primary sample lies on the film (pixels), its weight W per_sample / pdf without the
+/// jump, and the jump's two sides (PrimaryEdges::attached) or null.
+struct PrimaryPoint {
+  Vec2 film;
+  double scale = 0;
+  const EdgeSides* sides = nullptr;
+};
 
 /// Clips the camera-space segment c0 + t (c1 - c0), t in [ta, tb], to the half space n.c >= d.
 bool clip(const Vec3& c0, const Vec3& c1, const Vec3& n, double d, double& ta, double& tb) {
@@ -35,9 +44,11 @@ bool clip(const Vec3& c0, const Vec3& c1, const Vec3& n, double d, double& ta, d
 
 /// Draws `count` primary edge samples of chunk `chunk` from Sampler(seed, chunk, 0, 2) and
 /// evaluates them: `accept(edge, t, g)` sees the Jacobian's linear form g (edge_jump_with) before
-/// any ray; `emit(px, py, edge, t, weight, g)` receives each contributing sample, weight = jump W
-/// per_sample / pdf (so the pixel's derivative gains weight (g . v_t)). Shared by forward mode
-/// (add_primary_boundary) and reverse mode (for_each_primary_sample).
+/// any ray; `emit(px, py, edge, t, weight, g, point)` receives each contributing sample, weight =
+/// jump W per_sample / pdf (so the pixel's derivative gains weight (g . v_t)), and `point`: where
+/// it lies on the film, W per_sample / pdf, and the jump's two sides (PrimaryEdges::attached only;
+/// else null). Shared by forward mode (add_primary_boundary) and reverse mode
+/// (for_each_primary_sample).
 template <class Accept, class Emit>
 void sample_chunk(const PathContext& ctx, const PrimaryEdges& primary, long long count, double per_sample,
                   uint64_t seed, long long chunk, PathStats& stats, Accept&& accept, Emit&& emit) {
@@ -73,6 +84,7 @@ void sample_chunk(const PathContext& ctx, const PrimaryEdges& primary, long long
     }
     const double W = fx * fy / (cos_theta * cos_theta * cos_theta);
     Vec3 g;
+    EdgeSides sides;
     // Seen from the camera centre: no surface to offset from or pass below, no own face, depth 0.
     const EdgeJumpInputs in{.edge = *pe.edge,
                             .t = t,
@@ -80,21 +92,57 @@ void sample_chunk(const PathContext& ctx, const PrimaryEdges& primary, long long
                             .vis_origin = o,
                             .through_back_faces = false,
                             .own = OwnFace{},
-                            .segments = 0};
+                            .segments = 0,
+                            .sides = primary.attached ? &sides : nullptr};
     const std::optional<Color> jump = edge_jump_with(ctx, in, sampler, stats, [&](const Vec3& gv) {
       g = gv;
       return accept(*pe.edge, t, gv);
     });
-    if (!jump || (*jump == 0).all()) {
+    const bool sides_differ = primary.attached && sides.count == 2;
+    if (!jump || ((*jump == 0).all() && !sides_differ)) {
       ++stats.boundary_zero;
       continue;
     }
-    emit(px, py, *pe.edge, t, Color(*jump * (W * per_sample / pdf)), g);
+    const PrimaryPoint point{film, W * per_sample / pdf, primary.attached ? &sides : nullptr};
+    emit(px, py, *pe.edge, t, Color(*jump * point.scale), g, point);
   }
 }
 
+/// The attached form's flux through a primary discontinuity (attached_camera.h), per parameter
+/// and colour: - sum over the sides of sign L w (g . v_side), v_side the velocity of the side's
+/// hit point carried to the edge point's depth along the same ray (a point at distance r from
+/// the camera that moves at v turns its ray as a point at distance r' moving at v r' / r), w the
+/// attachment weight of the side's sample position. `xe`: the edge point (world).
+template <int N>
+Eigen::Matrix<double, 3, N> attached_flux(const Scene& scene, const SceneVelocities& vel,
+                                          const CameraAttachment& attachment, const EdgeSides& sides, const Vec3& g,
+                                          const Vec3& xe, const Vec2& film, int px, int py) {
+  Eigen::Matrix<double, 3, N> flux = Eigen::Matrix<double, 3, N>::Zero();
+  const double b = attached_bump_1d(film.x() - px) * attached_bump_1d(film.y() - py);
+  if (!(b > 0)) return flux;
+  const Vec3 o = scene.camera.origin();
+  for (int i = 0; i < sides.count; ++i) {
+    const EdgeSides::Side& side = sides.side[i];
+    if (!side.hit.valid() || !vel.moving[size_t(side.hit.shape)]) continue;
+    const double a = attachment.at(scene, side.hit.shape, side.hit.triangle, side.hit.u, side.hit.v);
+    if (!(a > 0)) continue;
+    const Shape& shape = scene.shapes[size_t(side.hit.shape)];
+    const Eigen::Vector3i& tri = shape.mesh.triangles[size_t(side.hit.triangle)];
+    const Vec3 y = (1.0 - side.hit.u - side.hit.v) * shape.mesh.positions[size_t(tri[0])] +
+                   side.hit.u * shape.mesh.positions[size_t(tri[1])] +
+                   side.hit.v * shape.mesh.positions[size_t(tri[2])];
+    const double r = (y - o).norm();
+    if (!(r > 0)) continue;
+    const Eigen::Matrix<double, 1, N> gv =
+        g.transpose() * material_velocity<N>(vel, scene, side.hit.shape, side.hit.triangle, side.hit.u, side.hit.v) *
+        ((xe - o).norm() / r);
+    flux -= (side.sign * a * b) * side.L.matrix() * gv;
+  }
+  return flux;
+}
+
 /// Forward mode: the splats of one chunk, J[k] = g . (velocity of the edge point) (the camera
-/// does not move).
+/// does not move), plus the attached form's flux (PrimaryEdges::attached).
 template <int N>
 void run_chunk(const PathContext& ctx, const SceneVelocities& vel, const PrimaryEdges& primary, long long count,
                double per_sample, uint64_t seed, long long chunk, std::vector<FilmSplat>& out,
@@ -103,14 +151,20 @@ void run_chunk(const PathContext& ctx, const SceneVelocities& vel, const Primary
   const FilmLayout layout(K);
   Eigen::Matrix<double, 1, N> J;
   const Eigen::Matrix<double, 3, N> dp = Eigen::Matrix<double, 3, N>::Zero();  // the camera does not move
+  // Attached camera hits: a static edge (J = 0) can bound an attached shape's flux.
   auto accept = [&](const edgetree::Edge& e, double t, const Vec3& g) {
     J = edge_point_jacobian<N>(vel, e, t, g, dp);
-    return !J.isZero(0.0);
+    return primary.attached || !J.isZero(0.0);
   };
-  auto emit = [&](int px, int py, const edgetree::Edge&, double, const Color& weight, const Vec3&) {
+  auto emit = [&](int px, int py, const edgetree::Edge& e, double t, const Color& weight, const Vec3& g,
+                  const PrimaryPoint& point) {
+    Eigen::Matrix<double, 3, N> flux = Eigen::Matrix<double, 3, N>::Zero();
+    if (point.sides)
+      flux = point.scale * attached_flux<N>(*ctx.scene, vel, primary.attachment, *point.sides, g,
+                                            Vec3(e.p0 + t * (e.p1 - e.p0)), point.film, px, py);
     for (int k = 0; k < K; ++k) {
-      for (int c = 0; c < 3; ++c) out.push_back({px, py, layout.derivative(k, c), weight[c] * J[k]});
-      out.push_back({px, py, layout.derivative_mean(k), weight.mean() * J[k]});
+      for (int c = 0; c < 3; ++c) out.push_back({px, py, layout.derivative(k, c), weight[c] * J[k] + flux(c, k)});
+      out.push_back({px, py, layout.derivative_mean(k), weight.mean() * J[k] + flux.col(k).mean()});
     }
   };
   sample_chunk(ctx, primary, count, per_sample, seed, chunk, stats, accept, emit);
@@ -155,19 +209,27 @@ double PrimaryEdges::density(int edge, double s) const {
 }
 
 PrimaryEdges find_primary_edges(const Scene& scene, const edgetree::EdgeSet& edges, const std::vector<bool>& moving,
-                                const RayTracer& tracer, double hidden_share) {
+                                const RayTracer& tracer, double hidden_share, CameraHits hits) {
   QSIL_CHECK(hidden_share > 0 && hidden_share <= 1);
   const Camera& cam = scene.camera;
   const Vec3 o = cam.origin();
   const Vec2 tf = cam.tan_half_fov();
   PrimaryEdges out;
+  out.attachment = camera_attachment(scene, moving, hits);
+  out.attached = out.attachment.any();
+  const bool attached = out.attached;
+  std::vector<bool> fixed;  // per edge of out.edges: of a static shape
   // Silhouettes and boundary edges from o, and every crease of a flat-shaded shape (its two
   // faces both seen: the shading jumps across it).
   auto consider = [&](const edgetree::Edge& e) {
-    // Only moving shapes' edges (and crossing groups with a moving shape); an index `moving`
-    // does not cover is kept (SilhouetteQuery::eligible's rule: never a false reject).
-    if (e.shape < 0 || (e.shape < int(moving.size()) && !moving[size_t(e.shape)])) return;
+    // Moving shapes' edges (and crossing groups with a moving shape); an index `moving` does not
+    // cover is kept (SilhouetteQuery::eligible's rule: never a false reject). Attached: static
+    // shapes' silhouettes and boundary edges too.
+    if (e.shape < 0) return;
+    const bool is_static = e.shape < int(moving.size()) && !moving[size_t(e.shape)];
+    if (is_static && (!attached || e.crossing)) return;
     if (!edgetree::is_discontinuity(e, o)) return;
+    if (is_static && e.crease && !edgetree::edge_is_silhouette(e, o)) return;
     const Vec3 c0 = cam.to_camera(e.p0), c1 = cam.to_camera(e.p1);
     PrimaryEdge pe;
     pe.edge = &e;
@@ -181,7 +243,10 @@ PrimaryEdges find_primary_edges(const Scene& scene, const edgetree::EdgeSet& edg
     pe.b = cam.project(e.p0 + pe.tb * (e.p1 - e.p0), &pe.zb);
     pe.length = (pe.b - pe.a).norm();
     pe.weight = pe.length * (e.crease ? std::max(e.angle, 1e-3) / kPi : 1.0);
-    if (pe.weight > 0 && pe.za > 0 && pe.zb > 0) out.edges.push_back(pe);
+    if (pe.weight > 0 && pe.za > 0 && pe.zb > 0) {
+      out.edges.push_back(pe);
+      fixed.push_back(is_static);
+    }
   };
   for (const auto& e : edges.edges()) consider(e);
   for (const auto& e : edges.always_edges()) consider(e);
@@ -192,16 +257,24 @@ PrimaryEdges find_primary_edges(const Scene& scene, const edgetree::EdgeSet& edg
     const PrimaryEdge& pe = out.edges[i];
     const int k = std::clamp(int(std::ceil(pe.length / kPrimaryPieceLength)), 1, kPrimaryMaxPieces);
     bool prev = primary_point_visible(tracer, o, pe, 0.0);
+    // A static edge: does the ray through the point, past the edge, meet a moving shape?
+    const auto moving_behind = [&](double s) {
+      const Vec3 x = pe.point_at(s);
+      const Hit h = tracer.intersect(o, (x - o).normalized(), kInf, edge_faces(*pe.edge, false));
+      return h.valid() && (h.shape >= int(moving.size()) || moving[size_t(h.shape)]);
+    };
     for (int j = 0; j < k; ++j) {
       const double s0 = double(j) / k, s1 = j + 1 == k ? 1.0 : double(j + 1) / k;
       const bool mid = primary_point_visible(tracer, o, pe, 0.5 * (s0 + s1));
       const bool end = primary_point_visible(tracer, o, pe, s1);
-      const bool visible = prev || mid || end;
+      bool visible = prev || mid || end;
+      if (fixed[i] && visible) visible = moving_behind(s0) || moving_behind(0.5 * (s0 + s1)) || moving_behind(s1);
       per_edge[i].push_back({int(i), s0, s1, pe.weight * (s1 - s0) * (visible ? 1.0 : hidden_share), visible});
       prev = end;
     }
   });
   out.cdf.assign(1, 0.0);
+  out.static_edges = int(std::count(fixed.begin(), fixed.end(), true));
   for (size_t i = 0; i < out.edges.size(); ++i) {
     out.edges[i].first_piece = int(out.pieces.size());
     out.edges[i].piece_count = int(per_edge[i].size());
@@ -248,7 +321,8 @@ void for_each_primary_sample(const PathContext& ctx, const PrimaryEdges& edges, 
           sample_chunk(
               ctx, edges, count, plan.per_sample, seed, c, chunk_stats[size_t(j - j0)],
               [](const edgetree::Edge&, double, const Vec3&) { return true; },
-              [&](int px, int py, const edgetree::Edge& e, double t, const Color& weight, const Vec3& g) {
+              [&](int px, int py, const edgetree::Edge& e, double t, const Color& weight, const Vec3& g,
+                  const PrimaryPoint&) {
                 out.push_back({px, py, &e, t, weight, g});
               });
         },

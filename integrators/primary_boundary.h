@@ -16,6 +16,7 @@
 
 #include "qsil/edgetree/edge_set.h"
 #include "qsil/film.h"
+#include "qsil/integrators/attached_camera.h"
 #include "qsil/integrators/estimator.h"
 #include "qsil/integrators/path_tracer.h"
 #include "qsil/parameters.h"
@@ -72,6 +73,12 @@ struct PrimaryEdges {
   std::vector<PrimaryPiece> pieces;  ///< every edge's pieces, edge by edge, in order of s
   std::vector<double> cdf;           ///< cumulative piece weights (size pieces + 1, cdf[0] = 0)
   int hidden_pieces = 0;             ///< pieces found hidden (tests)
+  /// Found for attached camera hits (attached_camera.h): the silhouettes and boundary edges of
+  /// static shapes are among the edges (the flux of an attached shape seen past them), and every
+  /// sample adds the attached form's flux (add_primary_boundary).
+  bool attached = false;
+  CameraAttachment attachment;  ///< the attachment of camera hits (attached only)
+  int static_edges = 0;         ///< of the edges, those of static shapes (attached only)
   bool empty() const { return pieces.empty(); }
   /// The density of s on edge `edge` at `s` (per unit s): the weight of its piece that contains s
   /// (the larger one at an end two pieces share) over the piece's length, divided by the total
@@ -88,8 +95,15 @@ struct PrimaryEdges {
 /// §6 "How many primary samples"). The camera is fixed, so this is done once per set-up.
 /// `hidden_share` in (0, 1] replaces kPrimaryHiddenShare (tests; 1 weighs every piece by its length
 /// alone).
+/// `hits` (attached camera hits, attached_camera.h): the attachment (camera_attachment), and,
+/// when some vertex is attached (else as for CameraHits::Detached), also the silhouettes and boundary edges of
+/// static shapes (not their creases, which have nothing behind them), whose samples carry only the
+/// flux of an attached shape seen just past them: a piece of such an edge keeps its full weight
+/// when one of its three test points is visible and the ray through it, past the edge, meets a
+/// moving shape, else `hidden_share` of it (small, never 0).
 PrimaryEdges find_primary_edges(const Scene& scene, const edgetree::EdgeSet& edges, const std::vector<bool>& moving,
-                                const RayTracer& tracer, double hidden_share = kPrimaryHiddenShare);
+                                const RayTracer& tracer, double hidden_share = kPrimaryHiddenShare,
+                                CameraHits hits = CameraHits::Detached);
 
 /// Primary edge samples per sample index for a W x H image at `ratio` samples per pixel sample:
 /// ratio W H rounded up to a whole chunk of 1024 (at least one chunk), so that runs over ranges

@@ -95,6 +95,14 @@ void add_boundary_flags(CLI::App& app, BoundaryFlags& flags, const std::string& 
   add_warped_area_options(app, flags.warped_area, "--boundary was");
   add_projective_guiding_options(app, flags.projective_guiding, "--boundary projective");
   add_forest_guiding_options(app, flags.forest_guiding, "--boundary quadric, quadric-box");
+  app.add_option("--camera-hits", flags.camera_hits,
+                 "Interior term of camera samples on moving shapes: adaptive (attached where the shading normal "
+                 "turns by more than a lobe width across a pixel: thin curved glossy objects), attached (the sample "
+                 "follows the surface point it hits everywhere, with the matching flux in the primary boundary term; "
+                 "docs/architecture.md §4) or detached (the camera ray fixed, as before 2026-11-28). Methods with a "
+                 "primary boundary term only")
+      ->check(CLI::IsMember({"adaptive", "attached", "detached"}))
+      ->capture_default_str();
   if (!curves_flag) return;
   bool& intersection_curves = flags.intersection_curves;
   app.add_flag_callback(
@@ -193,6 +201,7 @@ EstimatorConfig gradient_config(const Scene& scene, std::vector<ParameterSpec> p
                                 const BoundaryFlags& flags) {
   EstimatorConfig config = EstimatorConfig::gradient(std::move(params), method, flags.sppi, flags.sppp);
   config.intersection_curves = flags.intersection_curves;
+  config.camera_hits = camera_hits_named(flags.camera_hits);
   if (method == Method::Regularized)
     config.regularization = Regularization::for_scene(scene, flags.reg_width);
   config.warped_area = flags.warped_area;

@@ -6,6 +6,7 @@
 #include "qsil/edgetree/contour_set.h"
 #include "qsil/edgetree/edge_sampler.h"
 #include "qsil/edgetree/silhouette_sampler.h"
+#include "qsil/integrators/attached_camera.h"
 #include "qsil/parameters.h"
 
 #include <array>
@@ -40,6 +41,9 @@ struct BoundaryContext {
   /// Per parameter: 1 / the largest |dx/dtheta_k| over all vertices (0: unused parameter), so that
   /// the leaves' normal-velocity factor weighs parameters of different units alike.
   std::array<double, kMaxParameters> velocity_scale{};
+  /// Attached camera hits (attached_camera.h): the primary edges include static shapes' outlines
+  /// (find_primary_edges' `attached`). Set before set_up_boundary_term.
+  CameraHits camera_hits = CameraHits::Detached;
   /// The forest guide of the quadric methods (edgetree::ForestGuide; SilhouetteQuery::guide), or
   /// null: unguided.
   const edgetree::ForestGuide* guide = nullptr;

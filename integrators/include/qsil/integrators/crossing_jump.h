@@ -114,7 +114,9 @@ struct CrossingRays {
     const double len = dir.norm();
     h.inward = len > 0 ? Vec3(dir * (reach / len)) : Vec3::Zero();
     const PrimalView pv{&scene};
-    return Color(trace_path(ctx, pv, {in.p, at.sight.w, h, in.segments}, rng, stats));
+    const Color L(trace_path(ctx, pv, {in.p, at.sight.w, h, in.segments}, rng, stats));
+    if (in.sides) in.sides->record(L, h);
+    return L;
   }
   /// Both crossing triangles, for rays that pass back faces iff `through`.
   IgnoreSet ignore(bool through) const {
@@ -129,7 +131,9 @@ struct CrossingRays {
     ++stats.rays;
     const Hit h = ctx.tracer->intersect(origin, at.sight.w, kInf, ignore(through));
     const PrimalView pv{ctx.scene};
-    return Color(trace_path(ctx, pv, {origin, at.sight.w, h, in.segments}, rng, stats));
+    const Color L(trace_path(ctx, pv, {origin, at.sight.w, h, in.segments}, rng, stats));
+    if (in.sides) in.sides->record(L, h);
+    return L;
   }
   /// point_visible, where the point is not the origin (a ray is traced and counted).
   bool visible(const Vec3& origin, const Vec3& target, bool through) const {
@@ -165,6 +169,14 @@ inline std::optional<CrossingSight> crossing_sight(const EdgeJumpInputs& in) {
   return at;
 }
 
+/// The signs of the two sides recorded in in.sides (when set): `first` for the first, minus it for
+/// the second.
+inline void set_side_signs(const EdgeJumpInputs& in, double first) {
+  if (!in.sides || in.sides->count != 2) return;
+  in.sides->side[0].sign = first;
+  in.sides->side[1].sign = -first;
+}
+
 /// The jump when p lies in the plane of triangle X (rays.at.in_plane[X]; see the file comment):
 /// both sides see the other triangle, Y. Nothing (a zero contribution) when x_e is hidden.
 inline std::optional<Color> in_plane_crossing_jump(const CrossingRays& rays, int X, Sampler& sampler) {
@@ -184,7 +196,9 @@ inline std::optional<Color> in_plane_crossing_jump(const CrossingRays& rays, int
   const Color L_up = rays.face_radiance(Y, dir_up, sampler);
   const Color L_down =
       y_transparent ? rays.beyond(at.xe - offset * u, true, same) : rays.face_radiance(Y, -dir_up, same);
-  return at.sight.n01.dot(u) > 0 ? Color(L_down - L_up) : Color(L_up - L_down);
+  const double up_sign = at.sight.n01.dot(u) > 0 ? -1.0 : 1.0;
+  set_side_signs(rays.in, up_sign);
+  return up_sign < 0 ? Color(L_down - L_up) : Color(L_up - L_down);
 }
 
 /// The jump in the general case (p in neither plane; see the file comment): A's visible half on
@@ -211,6 +225,7 @@ inline std::optional<Color> general_crossing_jump(const CrossingRays& rays, Samp
     return rays.beyond(at.xe, true, rng);
   };
   const Color LA = side_radiance(0, sampler), LB = side_radiance(1, same);
+  set_side_signs(rays.in, sideA > 0 ? -1.0 : 1.0);
   return sideA > 0 ? Color(LB - LA) : Color(LA - LB);
 }
 

@@ -145,6 +145,7 @@ inline double plane_side(const Vec3& n01, const TriangleMesh& mesh, const edgetr
 /// point toward p, along the unit direction w from p, continued with the remaining depth and the
 /// random numbers of `rng`. The point is known: barycentrics (1-t at v0, t at v1) in the face's
 /// vertex order (the face may be seen edge-on from p, where a ray-plane intersection degenerates).
+/// Recorded in in.sides when set.
 inline Color edge_face_radiance(const PathContext& ctx, const EdgeJumpInputs& in, const Vec3& w, int face, Sampler& rng,
                                 PathStats& stats) {
   const edgetree::Edge& e = in.edge;
@@ -158,7 +159,9 @@ inline Color edge_face_radiance(const PathContext& ctx, const EdgeJumpInputs& in
   h.u = weight(1);
   h.v = weight(2);
   h.exact = true;
-  return Color(trace_path(ctx, pv, {in.p, w, h, in.segments}, rng, stats));
+  const Color L(trace_path(ctx, pv, {in.p, w, h, in.segments}, rng, stats));
+  if (in.sides) in.sides->record(L, h);
+  return L;
 }
 
 /// The jump across a crease (edgetree::CreaseSet; both faces facing p) at edge point `in` seen
@@ -175,6 +178,10 @@ inline std::optional<Color> crease_jump(const PathContext& ctx, const EdgeJumpIn
   Sampler same = sampler;
   const Color L0 = edge_face_radiance(ctx, in, sight.w, e.f0, sampler, stats),
               L1 = edge_face_radiance(ctx, in, sight.w, e.f1, same, stats);
+  if (in.sides) {
+    in.sides->side[0].sign = s0 > 0 ? -1.0 : 1.0;
+    in.sides->side[1].sign = -in.sides->side[0].sign;
+  }
   return s0 > 0 ? Color(L1 - L0) : Color(L0 - L1);
 }
 
@@ -203,6 +210,11 @@ inline std::optional<Color> silhouette_jump(const PathContext& ctx, const EdgeJu
   const Hit bg = ctx.tracer->intersect(bg_origin, sight.w, kInf, rays.ignore);
   const PrimalView pv{ctx.scene};
   const Color L_bg = trace_path(ctx, pv, {bg_origin, sight.w, bg, in.segments}, sampler, stats);
+  if (in.sides) {
+    in.sides->record(L_bg, bg);
+    in.sides->side[0].sign = -s;  // the foreground, recorded by edge_face_radiance
+    in.sides->side[1].sign = s;
+  }
   return Color(s * (L_bg - L_fg));
 }
 
@@ -239,6 +251,7 @@ template <class Accept>
 std::optional<Color> edge_jump_with(const PathContext& ctx, const EdgeJumpInputs& in, Sampler& sampler,
                                     PathStats& stats, Accept&& accept) {
   const edgetree::Edge& e = in.edge;
+  if (in.sides) *in.sides = EdgeSides{};
   if (e.crossing) return crossing_jump(ctx, in, sampler, stats, accept);
   const Vec3& p = in.p;
   const std::optional<EdgeSight> sight = edge_sight(e, in.t, p);

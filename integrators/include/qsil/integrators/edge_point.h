@@ -36,6 +36,24 @@ struct OwnFace {
                            ///< segment of an intersection curve always set at a path vertex (crossing_jump)
 };
 
+/// The two sides of a jump as the boundary term evaluated them (EdgeJumpInputs::sides): for each,
+/// the radiance, its sign in the jump (jump = sign[0] L[0] + sign[1] L[1]) and the first hit of
+/// its path (shape -1: the ray escaped). The primary term of attached camera hits
+/// (attached_camera.h) weighs each side by its own film velocity. World coordinates.
+struct EdgeSides {
+  struct Side {
+    Color L = Color::Zero();
+    double sign = 0;
+    Hit hit;  ///< u, v: barycentrics of the hit point on hit.triangle
+  };
+  int count = 0;  ///< sides recorded (2 after a non-zero jump)
+  Side side[2];
+  /// Records the radiance of the next side and its first hit (its sign is set by the jump).
+  void record(const Color& L, const Hit& hit) {
+    if (count < 2) side[count++] = Side{L, 0, hit};
+  }
+};
+
 /// The inputs of one evaluation of the boundary term's integrand at an edge point (edge_jump_with,
 /// crossing_jump) that travel together: which point of which edge, seen from where, how its rays
 /// start and pass back faces, the face rule for an edge in p's plane, and the path depth. World
@@ -54,6 +72,8 @@ struct EdgeJumpInputs {
   /// Segments of the path before p (trace_path's `segments`; 0 for the camera): the radiance
   /// paths started at the edge point continue with the remaining depth.
   int segments = 0;
+  /// Or null: where the jump's evaluation records its two sides (EdgeSides), cleared first.
+  EdgeSides* sides = nullptr;
 };
 
 /// The point at t of edge e seen from p (world, scene units): w0, w1 the edge's ends relative to p,

@@ -20,6 +20,7 @@
 ///   the merged film equals its film up to the rounding of the sums.
 
 #include "qsil/film.h"
+#include "qsil/integrators/attached_camera.h"
 #include "qsil/integrators/forest_guiding.h"
 #include "qsil/integrators/method.h"
 #include "qsil/integrators/projective_sampling.h"
@@ -65,6 +66,13 @@ struct EstimatorConfig {
   /// (qsil/edgetree/intersection_curves.h) as discontinuities. Off only to measure what they add
   /// (`--no-intersection-curves`): where surfaces cross, the derivative is then biased.
   bool intersection_curves = true;
+  /// Camera hits attached to the surface (qsil/integrators/attached_camera.h; `--camera-hits`):
+  /// the interior term of a camera sample that hits a moving shape follows the surface point it
+  /// hits, and the primary boundary term carries the matching flux. Methods with the primary
+  /// boundary term only (every edge-sampling method and projective sampling). Adaptive: where the
+  /// normal turns by more than a lobe width across a pixel; Attached: everywhere; Detached: the
+  /// camera ray fixed.
+  CameraHits camera_hits = CameraHits::Adaptive;
   /// Regularised visibility (qsil/integrators/regularized_visibility.h; absolute, from
   /// Regularization::for_scene of the scene as loaded). Method::Regularized requires it enabled;
   /// enabled with Method::FiniteDifferences or without parameters, the differences and the image
@@ -152,9 +160,14 @@ struct SetupReport {
   /// half-angle (degrees) and share of the map's power; share 0: none.
   double sun_half_angle_degrees = 0;
   double sun_share = 0;
+  /// Attached camera hits (EstimatorConfig::camera_hits): vertices of moving shapes with a non-zero
+  /// attachment strength, of all moving vertices, and the static shapes' primary edges sampled
+  /// for the attached form's flux (0 when nothing is attached).
+  int attached_vertices = 0, moving_vertices = 0, static_primary_edges = 0;
   /// One line: "STRUCTURE: E edges, F fitted nodes (Q with quadrics), P primary edges, T s", with
   /// ", C intersection-curve segments (T s)" before the time when there are any, and
-  /// ", the environment's sun (A deg, S % of its power) a light of the edge choice" when one is.
+  /// ", the environment's sun (A deg, S % of its power) a light of the edge choice" when one is,
+  /// and ", camera hits attached at A of V moving vertices (S static primary edges)" when some are.
   std::string describe() const;
 };
 

@@ -344,6 +344,10 @@ struct PathRay {
   Hit first_hit;
   int segments_before = 0;
   double bsdf_pdf = 0;
+  /// Or null: the first segment's direction over T (attached camera hits, attached_camera.h), whose
+  /// value is `dir`; the first hit and its viewer direction then move with it. The caller
+  /// multiplies the radiance by the warp's Jacobian.
+  const Vec3T<T>* moving_dir = nullptr;
 };
 
 /// The directions of a path are fixed (qsil's parametrization): trace_path's default `Warp`.
@@ -390,8 +394,11 @@ ColorT<typename View::Real> trace_path(const PathContext& ctx, const View& view,
       if (ctx.environment && ctx.environment->present()) L += beta * lift<T>(escaped_radiance(ctx, d, bsdf_pdf_prev));
       break;
     }
+    const bool first_moves = !Warp::enabled && ray.moving_dir && seg == ray.segments_before + 1;
     SurfaceInteraction<T> si = Warp::enabled ? make_interaction(view, hit, o, d_warped, ctx.tracer->local_origin())
-                                             : make_interaction(view, hit, o, d, ctx.tracer->local_origin());
+                               : first_moves
+                                   ? make_interaction(view, hit, o, *ray.moving_dir, ctx.tracer->local_origin())
+                                   : make_interaction(view, hit, o, d, ctx.tracer->local_origin());
     // A view with a tape (reverse mode, qsil/integrators/reverse.h) records the hit and gives its
     // point and shading normal derivative slots of their own; the other views have no attach().
     // attach() returns false to end the path here (L as it stands): reverse mode's probe stops at
@@ -415,8 +422,9 @@ ColorT<typename View::Real> trace_path(const PathContext& ctx, const View& view,
     }
     if (seg >= ctx.max_depth) break;
 
-    const VertexBSDF<T> vertex =
-        Warp::enabled ? vertex_bsdf(ctx, si, Vec3T<T>(-d_warped)) : vertex_bsdf(ctx, si, wo_world);
+    const VertexBSDF<T> vertex = Warp::enabled ? vertex_bsdf(ctx, si, Vec3T<T>(-d_warped))
+                                 : first_moves ? vertex_bsdf(ctx, si, Vec3T<T>(-*ray.moving_dir))
+                                               : vertex_bsdf(ctx, si, wo_world);
     const ShadingPoint<T>& sp = vertex.sp;
     const Vec3& wo_value = vertex.wo_value;
     // f_s cos toward w; under a warp, along the warped w and times the warp's Jacobian.

@@ -1,0 +1,297 @@
+#pragma once
+/// @file attached_camera.h
+/// Camera hits attached to the surface (docs/architecture.md §4 "Attached camera hits"): the
+/// interior term of a camera sample that hits a moving shape is taken along a warp of the film
+/// that carries the sample with the surface point it hits, instead of along the fixed camera ray.
+///
+/// Why: along a fixed ray the hit point slides over the surface at 1/cos of the surface's speed,
+/// and the shading normal turns with it at the surface's curvature; under a glossy lobe the
+/// per-sample derivative then has a heavy tail (docs/experiments/2026-11-28-attached-camera.md).
+/// A hit attached to its material point does not slide: its normal only moves as the surface does.
+///
+/// The estimator (Reynolds transport over the pixel; Loubet et al. 2019 and Bangaru et al. 2020 use
+/// the same identity for warps of the whole sphere, Zeltner et al. 2021 §4 calls the two forms
+/// detached and attached). The pixel integral I = ∫ L(u) du over film position u (pixels) is
+/// the same after the change of variables S(u) = u + theta w(u) V(u):
+///   dI/dtheta = ∫ [∂L/∂theta + ∇L · (w V) + L div(w V)] du + Σ_discontinuities ∫ Δ[L (v_∂ - w V)]·n dl,
+/// - V(u): the film velocity (pixels per unit theta) of the material point that the ray through u
+///   hits, that point moving with its triangle's vertices (fixed barycentrics); 0 on a static
+///   shape and where the ray escapes;
+/// - w(u) = b(u) a(x): b a bump over the pixel, 1 inside, falling smoothly (C1) to 0 on the
+///   pixel's border within kAttachedBorder of it, so that the warp maps the pixel onto itself (no
+///   border term); a(x) in [0, 1] at the hit point x, continuous over the mesh (CameraAttachment);
+/// - the first two terms are the path's derivative along the warped camera direction (its hit
+///   then moves by (1 - w) of its slide along the ray plus w of the material point's velocity),
+///   the third the warp's Jacobian;
+/// - the last sum is the primary boundary term with, on each side of a discontinuity, the edge's
+///   film velocity less the side's own w V (primary_boundary.cpp): where w V is continuous,
+///   nothing changes; at a silhouette of the attached shape, its side's part is (1 - w) of what it
+///   was; at a static silhouette with an attached shape behind it, a flux appears that the
+///   detached form does not have, so the primary term samples static edges too.
+/// w V is continuous inside every region of continuity of L (V is continuous across the edges of
+/// a mesh whose vertices move, b is smooth, a is interpolated from the vertices), so no other term
+/// exists.
+/// Pdfs carry no derivative: the sample is placed at u by the detached pixel sampler, as every
+/// sample is; only the integrand is transformed.
+
+#include "qsil/dual.h"
+#include "qsil/error.h"
+#include "qsil/integrators/geometry_view.h"
+#include "qsil/integrators/path_tracer.h"
+#include "qsil/scene.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <type_traits>
+#include <vector>
+
+namespace qsil {
+
+/// Width (fraction of a pixel) of the band along each pixel border where the attachment bump b
+/// falls from 1 to 0. Chosen by measurement (docs/experiments/2026-11-28-attached-camera.md): the
+/// detached form keeps 1 - b of the tail, the warp's Jacobian grows as 1/width.
+inline constexpr double kAttachedBorder = 0.15;
+
+/// The bump b over a pixel along one axis at offset s in [0, 1]: 1 on [k, 1 - k], 0 at 0 and 1,
+/// smoothstep (C1) in between (k = kAttachedBorder). Over T (double, or a dual over film position).
+template <class T>
+T attached_bump_1d(const T& s) {
+  constexpr double k = kAttachedBorder;
+  double sv;
+  if constexpr (std::is_same_v<T, double>)
+    sv = s;
+  else
+    sv = s.value();
+  auto step = [](const T& t) -> T { return T(t * t * (T(3.0) - T(2.0) * t)); };
+  if (sv < k) return step(s / k);
+  if (sv > 1.0 - k) return step((T(1.0) - s) / k);
+  return T(1.0);
+}
+
+/// Which camera samples are attached (EstimatorConfig::camera_hits, `--camera-hits`).
+enum class CameraHits {
+  Detached,  ///< none: the camera ray fixed (qsil's parametrization before 2026-11-28)
+  Adaptive,  ///< where the normal turns fast under a narrow lobe (camera_attachment): the default
+  Attached,  ///< every hit on a moving shape (strength 1): to compare, and to test the flux terms
+};
+
+/// The CameraHits named `name` ("adaptive", "attached", "detached"); throws qsil::Error naming it
+/// otherwise.
+inline CameraHits camera_hits_named(const std::string& name) {
+  if (name == "adaptive") return CameraHits::Adaptive;
+  if (name == "attached") return CameraHits::Attached;
+  if (name == "detached") return CameraHits::Detached;
+  throw Error("camera hits must be adaptive, attached or detached (got '" + name + "')");
+}
+
+/// Where the normal turns by at least kAttachedTurnStart lobe widths across a pixel, camera hits
+/// start to be attached; from kAttachedTurnFull on, fully (attachment_strength; measured in
+/// docs/experiments/2026-11-28-attached-camera.md).
+inline constexpr double kAttachedTurnStart = 1.5;
+inline constexpr double kAttachedTurnFull = 3.0;
+
+/// The attachment a(x) of camera hits on each shape: a per-vertex strength in [0, 1], interpolated
+/// over each triangle (so a is continuous across the mesh's edges, piecewise linear).
+///
+/// Why per vertex and where: the detached form's tail is the shading normal turning as the hit
+/// slides, large where the normal turns by more than a lobe width across one pixel (a thin, curved,
+/// glossy object); elsewhere the attached form only adds the noise of the warp's Jacobian (about
+/// L |V| / kAttachedBorder per sample, on every attached pixel). So a vertex's strength is
+/// smoothstep((m - kAttachedTurnStart) / (kAttachedTurnFull - kAttachedTurnStart)) with
+/// m = kappa s / alpha: kappa the largest angle between its vertex normal and a neighbour's per
+/// unit length (radians per scene unit), s the width of a pixel at its depth (scene units), alpha
+/// the lobe width (GGX alpha). 0 on static shapes, on flat-shaded ones (their normal does not turn
+/// within a face) and on diffuse ones: the trade was measured on rough metal only, and a diffuse
+/// lobe's derivative in the normal is bounded (thin-metal with a diffuse ring: grad's error was
+/// already within 0.8-1.1x FD's at 1/4 of its spp).
+struct CameraAttachment {
+  std::vector<std::vector<double>> strength;  ///< [shape][vertex]; empty for a shape never attached
+  /// Whether any vertex has a non-zero strength.
+  bool any() const {
+    for (const auto& s : strength)
+      for (double v : s)
+        if (v > 0) return true;
+    return false;
+  }
+  /// The strength on triangle `triangle` of shape `shape` at barycentrics (b1, b2), over T.
+  template <class T>
+  T at(const Scene& scene, int shape, int triangle, const T& b1, const T& b2) const {
+    if (shape < 0 || size_t(shape) >= strength.size() || strength[size_t(shape)].empty()) return T(0.0);
+    const Eigen::Vector3i& tri = scene.shapes[size_t(shape)].mesh.triangles[size_t(triangle)];
+    const auto& a = strength[size_t(shape)];
+    return (T(1.0) - b1 - b2) * T(a[size_t(tri[0])]) + b1 * T(a[size_t(tri[1])]) + b2 * T(a[size_t(tri[2])]);
+  }
+};
+
+/// The attachment of `scene`'s camera hits on its `moving` shapes (above) for CameraHits::Adaptive;
+/// strength 1 on every moving shape for CameraHits::Attached; none for CameraHits::Detached.
+inline CameraAttachment camera_attachment(const Scene& scene, const std::vector<bool>& moving, CameraHits hits) {
+  CameraAttachment out;
+  out.strength.resize(scene.shapes.size());
+  const Camera& cam = scene.camera;
+  const double pixel_angle = 2.0 * cam.tan_half_fov().x() / cam.width;  // pixel width per unit depth
+  if (hits == CameraHits::Detached) return out;
+  for (size_t s = 0; s < scene.shapes.size(); ++s) {
+    const Shape& shape = scene.shapes[s];
+    if (s >= moving.size() || !moving[s]) continue;
+    if (hits == CameraHits::Attached) {
+      out.strength[s].assign(shape.mesh.positions.size(), 1.0);
+      continue;
+    }
+    if (shape.face_normals || shape.mesh.normals.empty() || shape.bsdf < 0) continue;
+    const BSDFDesc& b = scene.bsdfs[size_t(shape.bsdf)];
+    if (b.type != BSDFDesc::Type::RoughConductor) continue;  // measured on glossy metal only
+    const double alpha = std::max(b.alpha, 1e-3);
+    const TriangleMesh& m = shape.mesh;
+    std::vector<double> kappa(m.positions.size(), 0.0);
+    for (const Eigen::Vector3i& t : m.triangles)
+      for (int e = 0; e < 3; ++e) {
+        const int i = t[e], j = t[(e + 1) % 3];
+        const double len = (m.positions[size_t(i)] - m.positions[size_t(j)]).norm();
+        const Vec3 &ni = m.normals[size_t(i)], &nj = m.normals[size_t(j)];
+        const double angle = std::atan2(ni.cross(nj).norm(), ni.dot(nj));
+        if (!(len > 0)) continue;
+        kappa[size_t(i)] = std::max(kappa[size_t(i)], angle / len);
+        kappa[size_t(j)] = std::max(kappa[size_t(j)], angle / len);
+      }
+    std::vector<double> a(m.positions.size(), 0.0);
+    bool any = false;
+    for (size_t v = 0; v < a.size(); ++v) {
+      const double depth = cam.to_camera(m.positions[v]).z();
+      if (!(depth > 0)) continue;
+      const double turn = kappa[v] * depth * pixel_angle / alpha;
+      const double x = std::clamp((turn - kAttachedTurnStart) / (kAttachedTurnFull - kAttachedTurnStart), 0.0, 1.0);
+      a[v] = x * x * (3.0 - 2.0 * x);
+      any = any || a[v] > 0;
+    }
+    if (any) out.strength[s] = std::move(a);
+  }
+  return out;
+}
+
+/// The film velocity (pixels per unit theta, per parameter) of a material point `y` (world) that
+/// moves at `dy` (3 x N, world units per unit theta), seen by `camera`: d/dtheta Camera::project.
+template <int N>
+Eigen::Matrix<double, 2, N> film_velocity(const Camera& camera, const Vec3& y, const Eigen::Matrix<double, 3, N>& dy) {
+  const Eigen::Matrix3d Rt = camera.to_world.block<3, 3>(0, 0).transpose();
+  const Vec3 c = Rt * (y - camera.origin());
+  const Eigen::Matrix<double, 3, N> dc = Rt * dy;
+  const Vec2 t = camera.tan_half_fov();
+  Eigen::Matrix<double, 2, N> v;
+  v.row(0) = -(0.5 * camera.width / t.x()) * (dc.row(0) * c.z() - c.x() * dc.row(2)) / (c.z() * c.z());
+  v.row(1) = -(0.5 * camera.height / t.y()) * (dc.row(1) * c.z() - c.y() * dc.row(2)) / (c.z() * c.z());
+  return v;
+}
+
+/// The velocity (3 x N) of the material point at barycentrics (b1, b2) of triangle `triangle` of
+/// shape `shape`: its vertices' velocities interpolated.
+template <int N>
+Eigen::Matrix<double, 3, N> material_velocity(const SceneVelocities& vel, const Scene& scene, int shape, int triangle,
+                                              double b1, double b2) {
+  const Eigen::Vector3i& tri = scene.shapes[size_t(shape)].mesh.triangles[size_t(triangle)];
+  const auto& P = vel.position[size_t(shape)];
+  return (1.0 - b1 - b2) * P[size_t(tri[0])].template leftCols<N>() + b1 * P[size_t(tri[1])].template leftCols<N>() +
+         b2 * P[size_t(tri[2])].template leftCols<N>();
+}
+
+/// A camera sample's warped direction: unit in value (the camera ray's own), its derivatives
+/// d(direction)/du · w V per parameter; and the warp's Jacobian, value 1, derivatives div(w V).
+template <int N>
+struct AttachedCameraRay {
+  Vec3T<Dual<N>> dir;
+  Dual<N> jacobian;
+  bool moves = false;  ///< false: the detached sample (zero derivatives, Jacobian 1)
+  /// The direction for PathRay::moving_dir: &dir, or null for the detached sample.
+  const Vec3T<Dual<N>>* moving_dir() const { return moves ? &dir : nullptr; }
+  /// L times the Jacobian (L unchanged for the detached sample).
+  void apply_jacobian(ColorT<Dual<N>>& L) const {
+    if (moves)
+      for (int c = 0; c < 3; ++c) L[c] = L[c] * jacobian;
+  }
+};
+
+/// The attached camera ray of the sample at film position `film` (pixels) in pixel (px, py), whose
+/// camera ray `ray` (trace_camera_ray) was traced, w = b(u) a(x) (`attachment`). Where the ray
+/// escapes, hits a static shape or a triangle whose three vertices have strength 0, or meets its triangle's plane at a
+/// grazing angle where the arithmetic overflows (a set of measure zero), the direction is fixed and the Jacobian 1: the
+/// detached sample. `vel`: the velocities the view's duals carry.
+template <int N>
+AttachedCameraRay<N> attached_camera_ray(const Scene& scene, const SceneVelocities& vel,
+                                         const CameraAttachment& attachment, const CameraRay& ray, const Vec2& film,
+                                         int px, int py) {
+  using D = Dual<N>;
+  AttachedCameraRay<N> r{lift<D>(ray.dir), D(1.0), false};
+  r.jacobian.derivatives().setZero();
+  if (!ray.hit.valid() || !vel.moving[size_t(ray.hit.shape)]) return r;
+  {
+    const auto& st = attachment.strength[size_t(ray.hit.shape)];
+    if (st.empty()) return r;
+    const Eigen::Vector3i& t = scene.shapes[size_t(ray.hit.shape)].mesh.triangles[size_t(ray.hit.triangle)];
+    if (!(st[size_t(t[0])] > 0 || st[size_t(t[1])] > 0 || st[size_t(t[2])] > 0)) return r;
+  }
+  // Over film position u = (u_x, u_y): A is a dual in the two film coordinates.
+  using A = Eigen::AutoDiffScalar<Eigen::Vector2d>;
+  using V3 = Eigen::Matrix<A, 3, 1>;
+  const Camera& cam = scene.camera;
+  const A ux(film.x(), 2, 0), uy(film.y(), 2, 1);
+  const Vec2 tf = cam.tan_half_fov();
+  const Eigen::Matrix3d R = cam.to_world.block<3, 3>(0, 0);
+  V3 q_local((A(1.0) - A(2.0 / cam.width) * ux) * A(tf.x()), (A(1.0) - A(2.0 / cam.height) * uy) * A(tf.y()), A(1.0));
+  V3 q;
+  for (int i = 0; i < 3; ++i) q[i] = A(R(i, 0)) * q_local[0] + A(R(i, 1)) * q_local[1] + A(R(i, 2)) * q_local[2];
+  // ---- The ray through u meets the plane of the hit triangle (Moller-Trumbore, barycentrics
+  // extrapolated off the triangle: a smooth function of u).
+  const Shape& shape = scene.shapes[size_t(ray.hit.shape)];
+  const Eigen::Vector3i& tri = shape.mesh.triangles[size_t(ray.hit.triangle)];
+  const Vec3 &X0 = shape.mesh.positions[size_t(tri[0])], &X1 = shape.mesh.positions[size_t(tri[1])],
+             &X2 = shape.mesh.positions[size_t(tri[2])];
+  const Vec3 e1 = X1 - X0, e2 = X2 - X0, tv = cam.origin() - X0, qv = tv.cross(e1);
+  auto lift_a = [](const Vec3& v) { return V3(A(v.x()), A(v.y()), A(v.z())); };
+  const V3 pvec = q.cross(lift_a(e2));
+  const A inv_det = A(1.0) / lift_a(e1).dot(pvec);
+  const A b1 = lift_a(tv).dot(pvec) * inv_det;
+  const A b2 = q.dot(lift_a(qv)) * inv_det;
+  const A b0 = A(1.0) - b1 - b2;
+  const V3 y = lift_a(X0) + lift_a(e1) * b1 + lift_a(e2) * b2;
+  // ---- w(u) and the film velocity of the material point, as duals in u.
+  const A w = attached_bump_1d(A(ux - A(double(px)))) * attached_bump_1d(A(uy - A(double(py)))) *
+              attachment.at(scene, ray.hit.shape, ray.hit.triangle, b1, b2);
+  const Eigen::Matrix3d Rt = R.transpose();
+  V3 c;
+  const Vec3 o = cam.origin();
+  for (int i = 0; i < 3; ++i)
+    c[i] = A(Rt(i, 0)) * (y[0] - A(o.x())) + A(Rt(i, 1)) * (y[1] - A(o.y())) + A(Rt(i, 2)) * (y[2] - A(o.z()));
+  const auto& P = vel.position[size_t(ray.hit.shape)];
+  // d(unit direction)/du (3 x 2) at u: from q, whose norm does not change what it points at.
+  const Vec3 qv0(q[0].value(), q[1].value(), q[2].value());
+  const double qn = qv0.norm();
+  Eigen::Matrix<double, 3, 2> dq;
+  for (int i = 0; i < 3; ++i) dq.row(i) = q[i].derivatives().transpose();
+  const Eigen::Matrix<double, 3, 2> ddir = (Eigen::Matrix3d::Identity() - qv0 * qv0.transpose() / (qn * qn)) * dq / qn;
+  Eigen::Matrix<double, N, 1> div;
+  Eigen::Matrix<double, 3, N> dd;
+  for (int k = 0; k < vel.num_params; ++k) {
+    V3 dy;
+    for (int i = 0; i < 3; ++i)
+      dy[i] = b0 * A(P[size_t(tri[0])](i, k)) + b1 * A(P[size_t(tri[1])](i, k)) + b2 * A(P[size_t(tri[2])](i, k));
+    V3 dc;
+    for (int i = 0; i < 3; ++i) dc[i] = A(Rt(i, 0)) * dy[0] + A(Rt(i, 1)) * dy[1] + A(Rt(i, 2)) * dy[2];
+    const A vx = A(-0.5 * cam.width / tf.x()) * (dc[0] * c[2] - c[0] * dc[2]) / (c[2] * c[2]);
+    const A vy = A(-0.5 * cam.height / tf.y()) * (dc[1] * c[2] - c[1] * dc[2]) / (c[2] * c[2]);
+    const A fx = w * vx, fy = w * vy;
+    div[k] = fx.derivatives()[0] + fy.derivatives()[1];
+    dd.col(k) = ddir * Vec2(fx.value(), fy.value());
+  }
+  for (int k = vel.num_params; k < N; ++k) {
+    div[k] = 0;
+    dd.col(k).setZero();
+  }
+  if (!div.allFinite() || !dd.allFinite()) return r;
+  for (int i = 0; i < 3; ++i) r.dir[i].derivatives() = dd.row(i).transpose();
+  r.jacobian.derivatives() = div;
+  r.moves = true;
+  return r;
+}
+
+}  // namespace qsil
