@@ -325,9 +325,7 @@ class GradientEstimator final : public Estimator::Impl, private RenderSetup {
   /// (attached_camera_ray) when the primary term carries the attached flux, else fixed.
   AttachedCameraRay<N> camera_ray_form(const CameraRay& ray, const Vec2& film, int px, int py) const {
     if (primary.attached) return attached_camera_ray<N>(scene, vel, primary.attachment, ray, film, px, py);
-    AttachedCameraRay<N> r{lift<Dual<N>>(ray.dir), Dual<N>(1.0), false};
-    r.jacobian.derivatives().setZero();
-    return r;
+    return AttachedCameraRay<N>::detached(ray.dir);
   }
 
   SceneVelocities vel;

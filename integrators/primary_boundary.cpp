@@ -126,11 +126,7 @@ Eigen::Matrix<double, 3, N> attached_flux(const Scene& scene, const SceneVelocit
     if (!side.hit.valid() || !vel.moving[size_t(side.hit.shape)]) continue;
     const double a = attachment.at(scene, side.hit.shape, side.hit.triangle, side.hit.u, side.hit.v);
     if (!(a > 0)) continue;
-    const Shape& shape = scene.shapes[size_t(side.hit.shape)];
-    const Eigen::Vector3i& tri = shape.mesh.triangles[size_t(side.hit.triangle)];
-    const Vec3 y = (1.0 - side.hit.u - side.hit.v) * shape.mesh.positions[size_t(tri[0])] +
-                   side.hit.u * shape.mesh.positions[size_t(tri[1])] +
-                   side.hit.v * shape.mesh.positions[size_t(tri[2])];
+    const Vec3 y = scene.shapes[size_t(side.hit.shape)].mesh.point(side.hit.triangle, side.hit.u, side.hit.v);
     const double r = (y - o).norm();
     if (!(r > 0)) continue;
     const Eigen::Matrix<double, 1, N> gv =

@@ -5,7 +5,7 @@ docs/images/compare/<scene>-<k>/).
 
 Usage: python3 tools/references.py ...              # first: make or reuse the references
        python3 tools/results_report.py [--qsil PATH] [--res 256] [--budgets 4,15,60]
-       [--k8-res 128] [--k8-budgets 2,8,15] [--k8-scenes LIST] [--threads 2] [--only NAMES]
+       [--k8-res 128] [--k8-budgets 2,8,15] [--k8-scenes LIST] [--threads 2] [--only NAMES | --from-records]
 
 For each scene: the cached FD reference of tools/references.py (out/references/index.json; the
 report stops if it is missing), then `qsil compare` with quadric, vsphere, uniform and fd at each
@@ -19,7 +19,9 @@ Each section's record is committed beside its charts: docs/images/compare/<scene
 qsil that made the comparison). With --only spot-mirror-k1,... only those sections are re-run; the
 others are rebuilt from their committed records (an error if one is missing or was made at other
 budgets or another resolution), so a change that leaves some scenes' images pixel-identical needs
-only the affected scenes' references and comparisons (out/ is a cache, not a record).
+only the affected scenes' references and comparisons (out/ is a cache, not a record). With
+--from-records no section is re-run: the report is rebuilt from the records alone (its targets read
+the stability study's and the cost benchmark's records, so a new study needs no new comparisons).
 """
 import argparse
 import json
@@ -530,7 +532,12 @@ def main():
     ap.add_argument("--only", default="",
                     help="re-run only these sections (e.g. spot-mirror-k1,spot-mirror-k8); the others come from "
                          "their committed records in docs/images/compare/")
+    ap.add_argument("--from-records", action="store_true",
+                    help="re-run no section: rebuild the report from the committed records (after a new "
+                         "stability study or cost benchmark, whose records feed the targets)")
     args = ap.parse_args()
+    if args.from_records and args.only:
+        raise SystemExit("results_report: --from-records and --only exclude each other")
     args.qsil = os.path.abspath(args.qsil)
     index_path = os.path.join(ROOT, "out", "references", "index.json")
     index = json.load(open(index_path)) if os.path.exists(index_path) else {}
@@ -545,7 +552,7 @@ def main():
     results = {}
     kept = {}
     for scene, kset, res, budgets in jobs:
-        if only and f"{scene}-{kset}" not in only:
+        if args.from_records or (only and f"{scene}-{kset}" not in only):
             kept[(scene, kset)] = kept_section(f"{scene}-{kset}", res, budgets)
     for scene, kset, res, budgets in jobs:
         if (scene, kset) in kept:

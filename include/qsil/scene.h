@@ -41,6 +41,12 @@ struct TriangleMesh {
     return (positions[t[1]] - positions[t[0]]).cross(positions[t[2]] - positions[t[0]]);
   }
   double area(int f) const { return 0.5 * face_cross(f).norm(); }
+  /// The point of triangle f at barycentrics (b1, b2) of its vertices 1 and 2 (Hit::u, Hit::v):
+  /// (1 - b1 - b2) p0 + b1 p1 + b2 p2, world.
+  Vec3 point(int f, double b1, double b2) const {
+    const auto& t = triangles[size_t(f)];
+    return (1.0 - b1 - b2) * positions[size_t(t[0])] + b1 * positions[size_t(t[1])] + b2 * positions[size_t(t[2])];
+  }
   /// Axis-aligned box of triangle f's vertices.
   Box3 triangle_bounds(int f) const {
     Box3 b;

@@ -170,20 +170,6 @@ inline CameraAttachment camera_attachment(const Scene& scene, const std::vector<
   return out;
 }
 
-/// The film velocity (pixels per unit theta, per parameter) of a material point `y` (world) that
-/// moves at `dy` (3 x N, world units per unit theta), seen by `camera`: d/dtheta Camera::project.
-template <int N>
-Eigen::Matrix<double, 2, N> film_velocity(const Camera& camera, const Vec3& y, const Eigen::Matrix<double, 3, N>& dy) {
-  const Eigen::Matrix3d Rt = camera.to_world.block<3, 3>(0, 0).transpose();
-  const Vec3 c = Rt * (y - camera.origin());
-  const Eigen::Matrix<double, 3, N> dc = Rt * dy;
-  const Vec2 t = camera.tan_half_fov();
-  Eigen::Matrix<double, 2, N> v;
-  v.row(0) = -(0.5 * camera.width / t.x()) * (dc.row(0) * c.z() - c.x() * dc.row(2)) / (c.z() * c.z());
-  v.row(1) = -(0.5 * camera.height / t.y()) * (dc.row(1) * c.z() - c.y() * dc.row(2)) / (c.z() * c.z());
-  return v;
-}
-
 /// The velocity (3 x N) of the material point at barycentrics (b1, b2) of triangle `triangle` of
 /// shape `shape`: its vertices' velocities interpolated.
 template <int N>
@@ -204,6 +190,12 @@ struct AttachedCameraRay {
   bool moves = false;  ///< false: the detached sample (zero derivatives, Jacobian 1)
   /// The direction for PathRay::moving_dir: &dir, or null for the detached sample.
   const Vec3T<Dual<N>>* moving_dir() const { return moves ? &dir : nullptr; }
+  /// The detached sample along unit direction `d`: fixed direction, Jacobian 1.
+  static AttachedCameraRay detached(const Vec3& d) {
+    AttachedCameraRay r{lift<Dual<N>>(d), Dual<N>(1.0), false};
+    r.jacobian.derivatives().setZero();
+    return r;
+  }
   /// L times the Jacobian (L unchanged for the detached sample).
   void apply_jacobian(ColorT<Dual<N>>& L) const {
     if (moves)
@@ -220,9 +212,7 @@ template <int N>
 AttachedCameraRay<N> attached_camera_ray(const Scene& scene, const SceneVelocities& vel,
                                          const CameraAttachment& attachment, const CameraRay& ray, const Vec2& film,
                                          int px, int py) {
-  using D = Dual<N>;
-  AttachedCameraRay<N> r{lift<D>(ray.dir), D(1.0), false};
-  r.jacobian.derivatives().setZero();
+  AttachedCameraRay<N> r = AttachedCameraRay<N>::detached(ray.dir);
   if (!ray.hit.valid() || !vel.moving[size_t(ray.hit.shape)]) return r;
   {
     const auto& st = attachment.strength[size_t(ray.hit.shape)];
