@@ -169,14 +169,6 @@ inline std::optional<CrossingSight> crossing_sight(const EdgeJumpInputs& in) {
   return at;
 }
 
-/// The signs of the two sides recorded in in.sides (when set): `first` for the first, minus it for
-/// the second.
-inline void set_side_signs(const EdgeJumpInputs& in, double first) {
-  if (!in.sides || in.sides->count != 2) return;
-  in.sides->side[0].sign = first;
-  in.sides->side[1].sign = -first;
-}
-
 /// The jump when p lies in the plane of triangle X (rays.at.in_plane[X]; see the file comment):
 /// both sides see the other triangle, Y. Nothing (a zero contribution) when x_e is hidden.
 inline std::optional<Color> in_plane_crossing_jump(const CrossingRays& rays, int X, Sampler& sampler) {
@@ -197,7 +189,7 @@ inline std::optional<Color> in_plane_crossing_jump(const CrossingRays& rays, int
   const Color L_down =
       y_transparent ? rays.beyond(at.xe - offset * u, true, same) : rays.face_radiance(Y, -dir_up, same);
   const double up_sign = at.sight.n01.dot(u) > 0 ? -1.0 : 1.0;
-  set_side_signs(rays.in, up_sign);
+  if (rays.in.sides) rays.in.sides->set_signs(up_sign);
   return up_sign < 0 ? Color(L_down - L_up) : Color(L_up - L_down);
 }
 
@@ -225,7 +217,7 @@ inline std::optional<Color> general_crossing_jump(const CrossingRays& rays, Samp
     return rays.beyond(at.xe, true, rng);
   };
   const Color LA = side_radiance(0, sampler), LB = side_radiance(1, same);
-  set_side_signs(rays.in, sideA > 0 ? -1.0 : 1.0);
+  if (rays.in.sides) rays.in.sides->set_signs(sideA > 0 ? -1.0 : 1.0);
   return sideA > 0 ? Color(LB - LA) : Color(LA - LB);
 }
 

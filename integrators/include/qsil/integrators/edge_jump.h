@@ -178,10 +178,7 @@ inline std::optional<Color> crease_jump(const PathContext& ctx, const EdgeJumpIn
   Sampler same = sampler;
   const Color L0 = edge_face_radiance(ctx, in, sight.w, e.f0, sampler, stats),
               L1 = edge_face_radiance(ctx, in, sight.w, e.f1, same, stats);
-  if (in.sides) {
-    in.sides->side[0].sign = s0 > 0 ? -1.0 : 1.0;
-    in.sides->side[1].sign = -in.sides->side[0].sign;
-  }
+  if (in.sides) in.sides->set_signs(s0 > 0 ? -1.0 : 1.0);
   return s0 > 0 ? Color(L1 - L0) : Color(L0 - L1);
 }
 
@@ -212,8 +209,7 @@ inline std::optional<Color> silhouette_jump(const PathContext& ctx, const EdgeJu
   const Color L_bg = trace_path(ctx, pv, {bg_origin, sight.w, bg, in.segments}, sampler, stats);
   if (in.sides) {
     in.sides->record(L_bg, bg);
-    in.sides->side[0].sign = -s;  // the foreground, recorded by edge_face_radiance
-    in.sides->side[1].sign = s;
+    in.sides->set_signs(-s);  // the first side: the foreground, recorded by edge_face_radiance
   }
   return Color(s * (L_bg - L_fg));
 }

@@ -52,6 +52,12 @@ struct EdgeSides {
   void record(const Color& L, const Hit& hit) {
     if (count < 2) side[count++] = Side{L, 0, hit};
   }
+  /// Once both sides are recorded: the first side's sign is `first`, the second's minus it.
+  void set_signs(double first) {
+    if (count != 2) return;
+    side[0].sign = first;
+    side[1].sign = -first;
+  }
 };
 
 /// The inputs of one evaluation of the boundary term's integrand at an edge point (edge_jump_with,
