@@ -215,14 +215,16 @@ PrimaryEdges find_primary_edges(const Scene& scene, const edgetree::EdgeSet& edg
   out.attached = out.attachment.any();
   const bool attached = out.attached;
   std::vector<bool> fixed;  // per edge of out.edges: of a static shape
+  // An index `moving` does not cover counts as moving (SilhouetteQuery::eligible's rule: never a
+  // false reject).
+  const auto moves = [&](int shape) { return shape >= int(moving.size()) || moving[size_t(shape)]; };
   // Silhouettes and boundary edges from o, and every crease of a flat-shaded shape (its two
   // faces both seen: the shading jumps across it).
   auto consider = [&](const edgetree::Edge& e) {
-    // Moving shapes' edges (and crossing groups with a moving shape); an index `moving` does not
-    // cover is kept (SilhouetteQuery::eligible's rule: never a false reject). Attached: static
-    // shapes' silhouettes and boundary edges too.
+    // Moving shapes' edges (and crossing groups with a moving shape). Attached: static shapes'
+    // silhouettes and boundary edges too.
     if (e.shape < 0) return;
-    const bool is_static = e.shape < int(moving.size()) && !moving[size_t(e.shape)];
+    const bool is_static = !moves(e.shape);
     if (is_static && (!attached || e.crossing)) return;
     if (!edgetree::is_discontinuity(e, o)) return;
     if (is_static && e.crease && !edgetree::edge_is_silhouette(e, o)) return;
@@ -257,7 +259,7 @@ PrimaryEdges find_primary_edges(const Scene& scene, const edgetree::EdgeSet& edg
     const auto moving_behind = [&](double s) {
       const Vec3 x = pe.point_at(s);
       const Hit h = tracer.intersect(o, (x - o).normalized(), kInf, edge_faces(*pe.edge, false));
-      return h.valid() && (h.shape >= int(moving.size()) || moving[size_t(h.shape)]);
+      return h.valid() && moves(h.shape);
     };
     for (int j = 0; j < k; ++j) {
       const double s0 = double(j) / k, s1 = j + 1 == k ? 1.0 : double(j + 1) / k;
