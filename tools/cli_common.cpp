@@ -97,8 +97,9 @@ void add_boundary_flags(CLI::App& app, BoundaryFlags& flags, const std::string& 
   add_forest_guiding_options(app, flags.forest_guiding, "--boundary quadric, quadric-box");
   app.add_option("--camera-hits", flags.camera_hits,
                  "Interior term of camera samples on moving shapes: adaptive (attached where the shading normal "
-                 "turns by more than a lobe width across a pixel: thin curved glossy objects), attached (the sample "
-                 "follows the surface point it hits everywhere, with the matching flux in the primary boundary term; "
+                 "turns by more than a lobe width across a pixel: thin curved glossy objects, smoothed creases of "
+                 "diffuse meshes), attached (the sample follows the surface point it hits everywhere, with the "
+                 "matching flux in the primary boundary term; "
                  "docs/architecture.md §4) or detached (the camera ray fixed, as before 2026-11-28). Methods with a "
                  "primary boundary term only")
       ->check(CLI::IsMember({"adaptive", "attached", "detached"}))

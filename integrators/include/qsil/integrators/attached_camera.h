@@ -42,8 +42,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <queue>
 #include <string>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 namespace qsil {
@@ -90,21 +92,37 @@ inline CameraHits camera_hits_named(const std::string& name) {
 /// docs/experiments/2026-11-28-attached-camera.md).
 inline constexpr double kAttachedTurnStart = 1.5;
 inline constexpr double kAttachedTurnFull = 3.0;
+/// The lobe width (radians of normal turn) of a diffuse BSDF in the adaptive rule: a diffuse shape
+/// is attached where its normal turns by at least 0.75 rad (43 degrees) within a pixel, fully from
+/// 1.5 rad (measured: 0.25 attached too much and lost on `sun`, 1.0 attached nothing;
+/// docs/experiments/2026-11-28-diffuse-creases.md).
+inline constexpr double kDiffuseLobeWidth = 0.5;
+/// The strength falls by at most 1 per kAttachedRampPixels pixels of surface (the ramp, below).
+inline constexpr double kAttachedRampPixels = 1.0;
 
 /// The attachment a(x) of camera hits on each shape: a per-vertex strength in [0, 1], interpolated
 /// over each triangle (so a is continuous across the mesh's edges, piecewise linear).
 ///
 /// Why per vertex and where: the detached form's tail is the shading normal turning as the hit
-/// slides, large where the normal turns by more than a lobe width across one pixel (a thin, curved,
-/// glossy object); elsewhere the attached form only adds the noise of the warp's Jacobian (about
-/// L |V| / kAttachedBorder per sample, on every attached pixel). So a vertex's strength is
-/// smoothstep((m - kAttachedTurnStart) / (kAttachedTurnFull - kAttachedTurnStart)) with
-/// m = kappa s / alpha: kappa the largest angle between its vertex normal and a neighbour's per
-/// unit length (radians per scene unit), s the width of a pixel at its depth (scene units), alpha
-/// the lobe width (GGX alpha). 0 on static shapes, on flat-shaded ones (their normal does not turn
-/// within a face) and on diffuse ones: the trade was measured on rough metal only, and a diffuse
-/// lobe's derivative in the normal is bounded (thin-metal with a diffuse ring: grad's error was
-/// already within 0.8-1.1x FD's at 1/4 of its spp).
+/// slides, large where the normal turns by more than a lobe width across one pixel; elsewhere the
+/// attached form only adds the noise of the warp's Jacobian (about L |V| / kAttachedBorder per
+/// sample, on every attached pixel). So a vertex's strength is
+/// smoothstep((m - kAttachedTurnStart) / (kAttachedTurnFull - kAttachedTurnStart)) with m = turn /
+/// alpha, turn the largest turn of the normal within a pixel along one of its edges and alpha the
+/// lobe width:
+/// - rough conductor (a thin, curved, glossy object): turn = angle s / len, the edge's angle between
+///   its vertex normals per unit length (len) times s, the width of a pixel at the vertex's depth
+///   (scene units): a curvature sustained over the pixel; alpha the GGX alpha;
+/// - diffuse (a smoothed crease: a mesh without normals whose averaged vertex normals span a sharp
+///   edge, docs/experiments/2026-11-25-tail-decomposition.md): turn = angle min(1, s / len), the
+///   edge's angle when the edge fits in a pixel (an edge's normals cannot turn by more); alpha
+///   kDiffuseLobeWidth. kappa s would attach every small, curved detail of a diffuse shape, and
+///   under a sun that loses (docs/experiments/2026-11-28-diffuse-creases.md).
+/// Then the ramp: a vertex's strength is raised to at least a neighbour's minus len / (s
+/// kAttachedRampPixels) (a Lipschitz bound, taken by a best-first pass from the strongest
+/// vertices), so the strength never rises from 0 to 1 across a triangle much smaller than a
+/// pixel: the warp's Jacobian holds div(a V), whose term V . grad a would be that steep.
+/// 0 on static shapes and on flat-shaded ones (their normal does not turn within a face).
 struct CameraAttachment {
   std::vector<std::vector<double>> strength;  ///< [shape][vertex]; empty for a shape never attached
   /// Whether any vertex has a non-zero strength.
@@ -124,6 +142,36 @@ struct CameraAttachment {
   }
 };
 
+/// Raises `a` (per vertex of `m`, in [0, 1]) to its smallest values with a_j >= a_i - len_ij /
+/// (pixel_i kAttachedRampPixels) along every edge (i, j) of `m`, pixel_i > 0 (pixel: a pixel's
+/// width at each vertex, scene units; 0 behind the camera, where a vertex raises no neighbour).
+/// Best-first from the strongest vertex (Dijkstra's order on 1 - a), O(E log V).
+inline void attachment_ramp(const TriangleMesh& m, const std::vector<double>& pixel, std::vector<double>& a) {
+  const size_t n = m.positions.size();
+  std::vector<std::vector<int>> next(n);
+  for (const Eigen::Vector3i& t : m.triangles)
+    for (int e = 0; e < 3; ++e) {
+      next[size_t(t[e])].push_back(t[(e + 1) % 3]);
+      next[size_t(t[(e + 1) % 3])].push_back(t[e]);
+    }
+  std::priority_queue<std::pair<double, int>> queue;
+  for (size_t v = 0; v < n; ++v)
+    if (a[v] > 0) queue.push({a[v], int(v)});
+  while (!queue.empty()) {
+    const auto [value, i] = queue.top();
+    queue.pop();
+    if (value < a[size_t(i)] || !(pixel[size_t(i)] > 0)) continue;  // stale entry, or behind the camera
+    for (const int j : next[size_t(i)]) {
+      const double len = (m.positions[size_t(i)] - m.positions[size_t(j)]).norm();
+      const double raised = value - len / (pixel[size_t(i)] * kAttachedRampPixels);
+      if (raised > a[size_t(j)]) {
+        a[size_t(j)] = raised;
+        queue.push({raised, j});
+      }
+    }
+  }
+}
+
 /// The attachment of `scene`'s camera hits on its `moving` shapes (above) for CameraHits::Adaptive;
 /// strength 1 on every moving shape for CameraHits::Attached; none for CameraHits::Detached.
 inline CameraAttachment camera_attachment(const Scene& scene, const std::vector<bool>& moving, CameraHits hits) {
@@ -141,10 +189,13 @@ inline CameraAttachment camera_attachment(const Scene& scene, const std::vector<
     }
     if (shape.face_normals || shape.mesh.normals.empty() || shape.bsdf < 0) continue;
     const BSDFDesc& b = scene.bsdfs[size_t(shape.bsdf)];
-    if (b.type != BSDFDesc::Type::RoughConductor) continue;  // measured on glossy metal only
-    const double alpha = std::max(b.alpha, 1e-3);
+    const bool diffuse = b.type == BSDFDesc::Type::Diffuse;
+    const double alpha = diffuse ? kDiffuseLobeWidth : std::max(b.alpha, 1e-3);
     const TriangleMesh& m = shape.mesh;
-    std::vector<double> kappa(m.positions.size(), 0.0);
+    std::vector<double> pixel(m.positions.size(), 0.0);  // s: a pixel's width at the vertex (0 behind)
+    for (size_t v = 0; v < pixel.size(); ++v)
+      pixel[v] = std::max(0.0, cam.to_camera(m.positions[v]).z()) * pixel_angle;
+    std::vector<double> turn(m.positions.size(), 0.0);
     for (const Eigen::Vector3i& t : m.triangles)
       for (int e = 0; e < 3; ++e) {
         const int i = t[e], j = t[(e + 1) % 3];
@@ -152,19 +203,21 @@ inline CameraAttachment camera_attachment(const Scene& scene, const std::vector<
         const Vec3 &ni = m.normals[size_t(i)], &nj = m.normals[size_t(j)];
         const double angle = std::atan2(ni.cross(nj).norm(), ni.dot(nj));
         if (!(len > 0)) continue;
-        kappa[size_t(i)] = std::max(kappa[size_t(i)], angle / len);
-        kappa[size_t(j)] = std::max(kappa[size_t(j)], angle / len);
+        for (const int v : {i, j}) {
+          const double sv = pixel[size_t(v)];
+          turn[size_t(v)] = std::max(turn[size_t(v)], diffuse ? angle * std::min(1.0, sv / len) : angle * sv / len);
+        }
       }
     std::vector<double> a(m.positions.size(), 0.0);
     bool any = false;
     for (size_t v = 0; v < a.size(); ++v) {
-      const double depth = cam.to_camera(m.positions[v]).z();
-      if (!(depth > 0)) continue;
-      const double turn = kappa[v] * depth * pixel_angle / alpha;
-      const double x = std::clamp((turn - kAttachedTurnStart) / (kAttachedTurnFull - kAttachedTurnStart), 0.0, 1.0);
+      if (!(pixel[v] > 0)) continue;
+      const double x = std::clamp((turn[v] / alpha - kAttachedTurnStart) / (kAttachedTurnFull - kAttachedTurnStart),
+                                  0.0, 1.0);
       a[v] = x * x * (3.0 - 2.0 * x);
       any = any || a[v] > 0;
     }
+    if (any) attachment_ramp(m, pixel, a);
     if (any) out.strength[s] = std::move(a);
   }
   return out;
