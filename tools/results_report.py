@@ -366,14 +366,20 @@ WHY_MISSED = {
         "the surface, with their own pixel-edge and silhouette terms: a new estimator. Attached camera hits "
         "(2026-11-28, `docs/experiments/2026-11-28-attached-camera.md`) do not cure it on this diffuse mesh: attached "
         "everywhere, the image sum's standard error at equal spp falls by 10 % (48², 128 spp, seeds 1-4), far from "
-        "the 3× the gap asks, so the adaptive default leaves diffuse shapes detached."),
+        "the 3× the gap asks, so the adaptive default leaves diffuse shapes detached. "
+        "Measured before the adaptive rule attached diffuse smoothed creases (2026-11-28, later; "
+        "`docs/experiments/2026-11-28-diffuse-creases.md`): at equal spp and time, that change lowered the "
+        "summed per-pixel variance here 3.2× (48², 64 spp, 16 seeds); the study has not been re-run with it."),
     "ring-light FD": (
         "The interior term's tail on the teapot's smoothed creases, as on `teapot` (the same mesh): "
         "`docs/experiments/2026-11-25-tail-decomposition.md` gives the interior term 30 % of the squares of the "
         "largest samples, half of it where the shading normal turns at ≥ 100 rad per unit, and "
         "`docs/experiments/2026-11-25-mesh-emitters.md` the interior and boundary terms alike (1.44 and 1.38 of the "
         "mean square per pixel), 88-90 % of each in the top 1 % of pixels along the teapot's upper outline: heavy "
-        "tails, which the edge choice of the torus light does not reach (its equal-spp gain was 1.7×)."),
+        "tails, which the edge choice of the torus light does not reach (its equal-spp gain was 1.7×). "
+        "Measured before the adaptive rule attached diffuse smoothed creases (2026-11-28, later; "
+        "`docs/experiments/2026-11-28-diffuse-creases.md`): at equal spp and time, that change lowered the "
+        "summed per-pixel variance here 3.8×, not the 40× the gap asks; the study has not been re-run with it."),
     "glossy-sphere-light FD": (
         "Heavy tails: one run of 2 s gives 15-18 here (the last two studies), where three seeds gave 1.03 on "
         "2026-11-25 (`docs/experiments/2026-11-25-mesh-emitters.md`, FD 0.18). There one pixel on the wing nut's "
@@ -381,7 +387,10 @@ WHY_MISSED = {
         "squares, half of it where the smoothed creases turn the shading normal at ≥ 100 rad per unit "
         "(`docs/experiments/2026-11-25-tail-decomposition.md`). The wing nut is diffuse, so the attached camera "
         "hits (rough conductors only) leave it as it was; depth-2 hits (64 % of its interior tail: the wing nut "
-        "seen in the rough-metal floor) would need attached deeper vertices (`docs/design-notes.md`)."),
+        "seen in the rough-metal floor) would need attached deeper vertices (`docs/design-notes.md`). "
+        "Measured before the adaptive rule attached diffuse smoothed creases (2026-11-28, later; "
+        "`docs/experiments/2026-11-28-diffuse-creases.md`): at equal spp and time, that change lowered the "
+        "summed per-pixel variance here 1.28× (camera hits on the creases only); the study has not been re-run with it."),
     "wingnut FD": (
         "Not decomposed. The reference's noise floor is above 1/10 of the errors compared here, so the ratio is "
         "partly the floor's; the wing nut's smoothed sharp creases carry the interior tail of `teapot` on the "
