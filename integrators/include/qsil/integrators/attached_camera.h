@@ -94,7 +94,7 @@ inline constexpr double kAttachedTurnStart = 1.5;
 inline constexpr double kAttachedTurnFull = 3.0;
 /// The lobe width (radians of normal turn) of a diffuse BSDF in the adaptive rule: a diffuse shape
 /// is attached where its normal turns by at least 0.75 rad (43 degrees) within a pixel, fully from
-/// 1.5 rad (measured: 0.25 attached too much and lost on `sun`, 1.0 attached nothing;
+/// 1.5 rad (measured: 0.25 attached too much and lost on `sun`, 1.0 gained nothing on the creases;
 /// docs/experiments/2026-11-28-diffuse-creases.md).
 inline constexpr double kDiffuseLobeWidth = 0.5;
 /// The strength falls by at most 1 per kAttachedRampPixels pixels of surface (the ramp, below).
