@@ -296,8 +296,9 @@ class GradientEstimator final : public Estimator::Impl, private RenderSetup {
     setup.structure += buf;
   }
 
-  /// The samples kept by the threads' `largest`, largest first, each retraced without the
-  /// boundary term from its own stream (qsil/integrators/sample_trace.h), into r.largest.
+  /// The samples kept by the threads' `largest`, largest first, each retraced from its own streams
+  /// with the boundary term recorded beside the path, not added to it
+  /// (qsil/integrators/sample_trace.h), into r.largest.
   void trace_largest(const RenderOptions& options, const tbb::enumerable_thread_specific<TopSamples>& largest,
                      RenderResult& r) const {
     TopSamples all(options.largest_samples);
@@ -313,9 +314,22 @@ class GradientEstimator final : public Estimator::Impl, private RenderSetup {
       const AttachedCameraRay<N> attached =
           camera_ray_form(ray, Vec2(trace.x + u.x(), trace.y + u.y()), trace.x, trace.y);
       const VertexRecorder<N> recorder{&trace, trace.param};
-      ColorT<Dual<N>> L =
-          trace_path(ctx, view, {lift<Dual<N>>(cam.origin()), ray.dir, ray.hit, 0, 0, attached.moving_dir()}, sampler,
-                     st, recorder);
+      const PathRay<Dual<N>> path_ray{lift<Dual<N>>(cam.origin()), ray.dir, ray.hit, 0, 0, attached.moving_dir()};
+      const uint64_t pixel = uint64_t(trace.y) * cam.width + trace.x;
+      const int traversals =
+          boundary.sampler ? boundary_traversals(boundary_ctx.sppi, options.seed, pixel, uint64_t(trace.sample)) : 0;
+      ColorT<Dual<N>> L;
+      if (traversals > 0) {
+        // The boundary term's own stream and traversals, as run() drew them: the same edge points.
+        Sampler bsampler(options.seed, pixel, uint64_t(trace.sample), 1);
+        edgetree::EdgeChoiceScratch scratch;
+        const BoundaryPointRecorder<N> points{{&ctx, &boundary_ctx, &bsampler, traversals, &scratch},
+                                              &trace,
+                                              trace.param};
+        L = trace_path(ctx, view, path_ray, sampler, st, BothHooks<VertexRecorder<N>, BoundaryPointRecorder<N>>{recorder, points});
+      } else {
+        L = trace_path(ctx, view, path_ray, sampler, st, recorder);
+      }
       attached.apply_jacobian(L);
       recorder.finish(L);
     }

@@ -1,8 +1,10 @@
 #pragma once
 /// @file vertex_recorder.h
-/// The vertex hook that records a retraced sample's path (qsil/integrators/sample_trace.h).
+/// The vertex hooks that record a retraced sample's path and its secondary boundary term's largest
+/// edge point (qsil/integrators/sample_trace.h).
 
 #include "qsil/dual.h"
+#include "qsil/integrators/boundary_hook.h"
 #include "qsil/integrators/path_tracer.h"
 #include "qsil/integrators/sample_trace.h"
 #include "qsil/integrators/surface_interaction.h"
@@ -57,6 +59,65 @@ struct VertexRecorder {
     else
       trace->vertices.back().added = now - last;
     trace->interior = now;
+  }
+};
+
+/// The vertex hook of trace_path that evaluates the secondary boundary term as BoundaryHook does
+/// (the same query, stream and traversals, so the same edge points) but adds nothing to L: it
+/// records into `trace->boundary` the count and sum of the edge points' contributions to the
+/// derivative `param` and the factors of the largest (BoundaryPointTrace).
+template <int N>
+struct BoundaryPointRecorder : BoundaryHookBase {
+  SampleTrace* trace;
+  int param;
+
+  void operator()(const SurfaceInteraction<Dual<N>>& si, const ShadingPoint<Dual<N>>& sp, const Vec3& wo_local,
+                  const ColorT<Dual<N>>& beta, int seg, Sampler&, PathStats& stats, ColorT<Dual<N>>&) const {
+    Eigen::Matrix<double, 3, N> dp;
+    const edgetree::SilhouetteQuery q = forward_boundary_query<N>(*this, si, sp, wo_local, dp);
+    Eigen::Matrix<double, 1, N> J;
+    BoundaryPointTrace& b = trace->boundary;
+    for_each_boundary_sample(
+        *ctx, *boundary_ctx, vertex(si, sp, q, wo_local, beta, seg), *sampler, stats,
+        [&](const edgetree::Edge& e, double t, const Vec3& g) {
+          J = edge_point_jacobian<N>(*boundary_ctx->velocities, e, t, g, dp);
+          return !J.isZero(0.0);
+        },
+        [&](const edgetree::Edge& e, double t, const Color& weight, const Vec3&, const EdgePointFactors& f) {
+          const double added = weight.mean() * J[param];
+          ++b.points;
+          b.total += added;
+          if (b.points > 1 && !(std::abs(added) > std::abs(b.added))) return;
+          const Vec3 x = e.p0 + t * (e.p1 - e.p0);
+          const Vec3 to = x - q.p;
+          b.segments = seg;
+          b.shape = e.shape;
+          b.kind = e.crossing ? 3 : e.smooth_crease ? 2 : e.crease ? 1 : 0;
+          b.pdf = f.pdf;
+          b.rate = f.rate;
+          b.jump = f.jump.abs().mean();
+          b.bsdf = f.bsdf.abs().mean();
+          b.throughput = value(beta).abs().mean();
+          b.jacobian = J[param];
+          b.distance = to.norm();
+          b.edge_length = (e.p1 - e.p0).norm();
+          b.sin_view = b.distance > 0 && b.edge_length > 0
+                           ? to.normalized().cross((e.p1 - e.p0).normalized()).norm()
+                           : 0.0;
+          b.added = added;
+        });
+  }
+};
+
+/// Two vertex hooks called in turn at every vertex (a VertexRecorder and a BoundaryPointRecorder).
+template <class A, class B>
+struct BothHooks {
+  const A& a;
+  const B& b;
+  template <class... Args>
+  void operator()(Args&&... args) const {
+    a(args...);
+    b(args...);
   }
 };
 

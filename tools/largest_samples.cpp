@@ -21,6 +21,11 @@ std::string shape_name(const Scene& scene, int shape) {
   return name;
 }
 
+const char* edge_kind_name(int kind) {
+  static const char* const names[] = {"silhouette", "crease", "smoothed crease", "intersection curve"};
+  return kind >= 0 && kind < 4 ? names[kind] : "?";
+}
+
 }  // namespace
 
 void print_largest_samples(const Scene& scene, const std::vector<ParameterSpec>& params,
@@ -37,6 +42,13 @@ void print_largest_samples(const Scene& scene, const std::vector<ParameterSpec>&
       std::printf("      vertex %d on %s tri %d: |ng.wo| %.3g, ns.wo %.3g, dt %.4g, |dp| %.4g, |dns| %.4g, adds %.6g\n",
                   v.segments, shape_name(scene, v.shape).c_str(), v.triangle, v.cos_geometric, v.cos_shading, v.dt, v.dp,
                   v.dns, v.added);
+    const BoundaryPointTrace& b = s.boundary;
+    if (b.points > 0)
+      std::printf("      boundary: %d edge points, sum %.6g; the largest at vertex %d, on a %s of %s: pdf %.4g, rate %g, "
+                  "|jump| %.4g, f %.4g, throughput %.4g, g.v %.4g, distance %.4g, edge length %.4g, sin %.3g, adds "
+                  "%.6g\n",
+                  b.points, b.total, b.segments, edge_kind_name(b.kind), shape_name(scene, b.shape).c_str(), b.pdf,
+                  b.rate, b.jump, b.bsdf, b.throughput, b.jacobian, b.distance, b.edge_length, b.sin_view, b.added);
   }
 }
 
@@ -44,7 +56,8 @@ void write_largest_samples_csv(const std::string& path, const Scene& scene, cons
   std::ostringstream out;
   out.precision(9);
   out << "rank,x,y,sample,param,value,interior,boundary,camera_emission,segments,shape,triangle,cos_geometric,"
-         "cos_shading,dt,dp,dns,added\n";
+         "cos_shading,dt,dp,dns,added,b_points,b_total,b_segments,b_shape,b_kind,b_pdf,b_rate,b_jump,b_bsdf,"
+         "b_throughput,b_jacobian,b_distance,b_edge_length,b_sin_view,b_added\n";
   int rank = 0;
   for (const SampleTrace& s : largest) {
     ++rank;
@@ -52,14 +65,27 @@ void write_largest_samples_csv(const std::string& path, const Scene& scene, cons
       out << rank << ',' << s.x << ',' << s.y << ',' << s.sample << ',' << s.param << ',' << s.value << ','
           << s.interior << ',' << s.value - s.interior << ',' << s.camera_emission << ',';
     };
+    const BoundaryPointTrace& b = s.boundary;
+    const auto tail = [&] {
+      out << ',' << b.points << ',' << b.total;
+      if (b.points > 0)
+        out << ',' << b.segments << ',' << shape_name(scene, b.shape) << ',' << b.kind << ',' << b.pdf << ','
+            << b.rate << ',' << b.jump << ',' << b.bsdf << ',' << b.throughput << ',' << b.jacobian << ','
+            << b.distance << ',' << b.edge_length << ',' << b.sin_view << ',' << b.added;
+      else
+        out << ",,,,,,,,,,,,,";
+      out << '\n';
+    };
     if (s.vertices.empty()) {
       head();
-      out << ",,,,,,,,\n";
+      out << ",,,,,,,,";
+      tail();
     }
     for (const VertexTrace& v : s.vertices) {
       head();
       out << v.segments << ',' << shape_name(scene, v.shape) << ',' << v.triangle << ',' << v.cos_geometric << ','
-          << v.cos_shading << ',' << v.dt << ',' << v.dp << ',' << v.dns << ',' << v.added << '\n';
+          << v.cos_shading << ',' << v.dt << ',' << v.dp << ',' << v.dns << ',' << v.added;
+      tail();
     }
   }
   write_file(path, out.str());

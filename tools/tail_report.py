@@ -9,7 +9,14 @@ sum of squares says which cause to attack first:
   it), its |n_g . wo| in decades (grazing hits slide fast along their rays), the rate at which its
   shading normal turns along the slide, |dn_s/dtheta| / |dp/dtheta| in decades (per scene unit:
   large on small triangles whose vertex normals differ much, e.g. smoothed creases), and the
-  surface it lies on.
+  surface it lies on;
+- for the boundary part, the edge point that adds the most to each sample (the retrace evaluates
+  the boundary term again and records it): its vertex's depth, what the edge is (silhouette,
+  crease, smoothed crease, intersection curve), its shape and whether that is the shape the vertex
+  lies on (an edge of the vertex's own rigidly moving shape moves relative to it only by the hit's
+  slide along its ray), and in decades its pdf, its
+  distance from the vertex and |sin| of the angle at which the edge is seen. The retrace's
+  boundary sum must equal value - interior; the report prints the largest relative mismatch.
 
 Usage: /usr/bin/python3 tools/tail_report.py SCENE --param P [--qsil build/qsil] [--spp 64] [--res 48]
        [--seeds 8] [--first-seed 100] [--keep 32] [--boundary quadric] [--threads 2] [-D name=value ...]
@@ -43,6 +50,24 @@ def turn_bucket(rate):
     return ">= 100"
 
 
+def decade(x, edges):
+    """The decade of x among `edges` (ascending) as a label."""
+    for edge in edges:
+        if x < edge:
+            return f"< {edge:g}"
+    return f">= {edges[-1]:g}"
+
+
+EDGE_KINDS = {"0": "silhouette", "1": "crease", "2": "smoothed crease", "3": "intersection curve"}
+PDF_EDGES = (1e-3, 1e-2, 1e-1, 1.0, 10.0)
+DISTANCE_EDGES = (1e-3, 1e-2, 1e-1, 1.0)
+SIN_EDGES = (1e-3, 1e-2, 1e-1)
+
+
+def order_of(edges):
+    return [f"< {e:g}" for e in edges] + [f">= {edges[-1]:g}"]
+
+
 def run_seed(args, seed, path):
     """One `qsil grad` run writing its largest samples to `path`; exits with qsil's message on failure."""
     cmd = [args.qsil, "grad", args.scene, "--param", args.param, "--spp", str(args.spp), "-D", f"res={args.res}",
@@ -73,6 +98,10 @@ def main():
     by_term = collections.Counter()
     by_depth, by_cos, by_surface = collections.Counter(), collections.Counter(), collections.Counter()
     by_turn = collections.Counter()
+    b_depth, b_kind, b_shape = collections.Counter(), collections.Counter(), collections.Counter()
+    b_pdf, b_distance, b_sin = collections.Counter(), collections.Counter(), collections.Counter()
+    b_own = collections.Counter()
+    mismatch = 0.0
     samples = 0
     largest = (0.0, None)
     with tempfile.TemporaryDirectory() as tmp:
@@ -102,6 +131,21 @@ def main():
                     by_surface[top["shape"]] += w
                     dp, dns = float(top["dp"]), float(top["dns"])
                     by_turn[turn_bucket(dns / dp if dp > 0 else math.inf)] += w
+                boundary = value - interior
+                if head.get("b_total", "") != "":
+                    scale = abs(value) + abs(interior)
+                    if scale > 0:
+                        mismatch = max(mismatch, abs(float(head["b_total"]) - boundary) / scale)
+                if boundary != 0 and head.get("b_segments", "") != "":
+                    w = boundary ** 2 * share
+                    b_depth[int(head["b_segments"])] += w
+                    b_kind[EDGE_KINDS.get(head["b_kind"], head["b_kind"])] += w
+                    b_shape[head["b_shape"]] += w
+                    at = [v for v in with_vertex if v["segments"] == head["b_segments"]]
+                    b_own[("own" if at and at[0]["shape"] == head["b_shape"] else "other")] += w
+                    b_pdf[decade(float(head["b_pdf"]), PDF_EDGES)] += w
+                    b_distance[decade(float(head["b_distance"]), DISTANCE_EDGES)] += w
+                    b_sin[decade(float(head["b_sin_view"]), SIN_EDGES)] += w
     total = sum(by_term.values())
     if total == 0:
         print("tail_report: no non-zero sample")
@@ -119,6 +163,17 @@ def main():
     print("    |dns|/|dp|: " + ", ".join(f"{k} {by_turn[k] / interior:.2f}" for k in ["< 1", "< 10", "< 100", ">= 100"]
                                        if k in by_turn))
     print("    surface: " + ", ".join(f"{k} {v / interior:.2f}" for k, v in by_surface.most_common()))
+    boundary = by_term["boundary"] or math.inf
+    print("  boundary, by the edge point that adds the most:")
+    print("    depth:   " + ", ".join(f"{k} {v / boundary:.2f}" for k, v in sorted(b_depth.items())))
+    print("    edge:    " + ", ".join(f"{k} {v / boundary:.2f}" for k, v in b_kind.most_common()))
+    print("    shape:   " + ", ".join(f"{k} {v / boundary:.2f}" for k, v in b_shape.most_common()))
+    print("    edge on the vertex's own shape: " + ", ".join(f"{k} {v / boundary:.2f}" for k, v in b_own.most_common()))
+    for label, counter, edges in (("pdf", b_pdf, PDF_EDGES), ("distance", b_distance, DISTANCE_EDGES),
+                                  ("|sin|", b_sin, SIN_EDGES)):
+        print(f"    {label + ':':9}" + ", ".join(f"{k} {counter[k] / boundary:.2f}" for k in order_of(edges)
+                                               if k in counter))
+    print(f"  retrace check: largest |boundary sum - (value - interior)| / (|value| + |interior|) = {mismatch:.2g}")
     return 0
 
 

@@ -67,6 +67,34 @@ TEST(LargestSamples, RetraceReproducesTheInteriorTerm) {
   EXPECT_EQ(compared, 64);
 }
 
+// The retrace evaluates the sample's secondary boundary term again, from its own stream, beside
+// the path (BoundaryPointRecorder): the sum of its edge points is the sample's value - interior
+// (a wrong stream, traversal count or query gives other points and fails this), and the largest
+// point's recorded factors are those of a contributing point (pdf, jump, g . v nonzero).
+TEST(LargestSamples, RetraceRecordsTheBoundaryTerm) {
+  const DirectRun quadric = run_direct(Method::Quadric, 2, 64, CameraHits::Detached);
+  int with_points = 0;
+  for (const SampleTrace& s : quadric.result.largest) {
+    const BoundaryPointTrace& b = s.boundary;
+    const double boundary = s.value - s.interior;
+    EXPECT_NEAR(b.total, boundary, 1e-9 * (std::abs(s.value) + std::abs(s.interior)))
+        << "pixel (" << s.x << ", " << s.y << ") sample " << s.sample;
+    if (b.points == 0) {
+      EXPECT_EQ(boundary, 0.0);
+      continue;
+    }
+    ++with_points;
+    EXPECT_GT(b.pdf, 0.0);
+    EXPECT_GT(b.rate, 0.0);
+    EXPECT_GT(b.jump, 0.0);
+    EXPECT_NE(b.jacobian, 0.0);
+    EXPECT_GT(b.distance, 0.0);
+    EXPECT_GE(b.segments, 1);
+    EXPECT_GE(b.shape, 0);
+  }
+  EXPECT_GE(with_points, 8) << "the test needs samples with a boundary part";
+}
+
 TEST(LargestSamples, LargestFirstBoundEveryPixelAndIndependentOfThreads) {
   const DirectRun a = run_direct(Method::Quadric, 1), b = run_direct(Method::Quadric, 2);
   ASSERT_EQ(a.result.largest.size(), 8u);

@@ -8,20 +8,31 @@
 
 namespace qsil {
 
+/// Forward mode's boundary query at a path vertex (si, sp, viewer direction wo_local):
+/// boundary_query with the scene's velocities and p's, dp = dp/dtheta (3 x N, world units per
+/// unit of theta, from si.p's duals; written to `dp`), and the eligible edges: every shape's when
+/// p moves (dp != 0: static edges move relative to it), else the moving shapes'.
+template <int N>
+edgetree::SilhouetteQuery forward_boundary_query(const BoundaryHookBase& hook, const SurfaceInteraction<Dual<N>>& si,
+                                                 const ShadingPoint<Dual<N>>& sp, const Vec3& wo_local,
+                                                 Eigen::Matrix<double, 3, N>& dp) {
+  for (int i = 0; i < 3; ++i) dp.row(i) = si.p[i].derivatives().transpose();
+  edgetree::SilhouetteQuery q = boundary_query(*hook.boundary_ctx, si, sp, wo_local, hook.scratch);
+  q.eligible = !dp.isZero(0.0) ? &hook.boundary_ctx->all : &hook.boundary_ctx->moving;
+  q.velocities = hook.boundary_ctx->velocities;
+  q.dp.setZero();
+  q.dp.template leftCols<N>() = dp;
+  q.velocity_scale = hook.boundary_ctx->velocity_scale;
+  return q;
+}
+
 /// The vertex hook of trace_path that adds the secondary boundary term (DualView<N> paths only).
 template <int N>
 struct BoundaryHook : BoundaryHookBase {
   void operator()(const SurfaceInteraction<Dual<N>>& si, const ShadingPoint<Dual<N>>& sp, const Vec3& wo_local,
                   const ColorT<Dual<N>>& beta, int seg, Sampler&, PathStats& stats, ColorT<Dual<N>>& L) const {
-    // ---- dp/dtheta: does the shading point move?
     Eigen::Matrix<double, 3, N> dp;
-    for (int i = 0; i < 3; ++i) dp.row(i) = si.p[i].derivatives().transpose();
-    edgetree::SilhouetteQuery q = boundary_query(*boundary_ctx, si, sp, wo_local, scratch);
-    q.eligible = !dp.isZero(0.0) ? &boundary_ctx->all : &boundary_ctx->moving;
-    q.velocities = boundary_ctx->velocities;
-    q.dp.setZero();
-    q.dp.template leftCols<N>() = dp;
-    q.velocity_scale = boundary_ctx->velocity_scale;
+    const edgetree::SilhouetteQuery q = forward_boundary_query<N>(*this, si, sp, wo_local, dp);
     Eigen::Matrix<double, 1, N> J;  // of the sample being evaluated
     for_each_boundary_sample(
         *ctx, *boundary_ctx, vertex(si, sp, q, wo_local, beta, seg), *sampler, stats,

@@ -25,6 +25,7 @@
 
 #include <chrono>
 #include <optional>
+#include <type_traits>
 #include <vector>
 
 namespace qsil {
@@ -71,6 +72,15 @@ struct ContourEdgesBuffer {
   std::vector<const edgetree::Edge*> edges;
 };
 
+/// The factors of one edge point's weight (for_each_boundary_sample), for a visit that asks for
+/// them: the largest samples' decomposition (integrators/vertex_recorder.h).
+struct EdgePointFactors {
+  double pdf = 0;               ///< the point's pdf: discrete edge probability times density of t (per unit t)
+  Color jump = Color::Zero();   ///< the radiance's jump across the edge at the point (edge_jump_with)
+  Color bsdf = Color::Zero();   ///< f_s toward the point (cosine included as bsdf_eval gives it)
+  double rate = 0;              ///< r m: edge points per unit of the estimate (boundary_ctx.sppi times the split)
+};
+
 /// The secondary boundary term's samples at one path vertex (shared by forward mode, BoundaryHook,
 /// and reverse mode, integrators/reverse.cpp) `vertex` (BoundaryVertex): vertex.traversals
 /// traversals of boundary_ctx.sampler (boundary_traversals) for query q = vertex.query (set up by the
@@ -79,7 +89,8 @@ struct ContourEdgesBuffer {
 /// `sampler`; for each edge point with f_s != 0, `accept(edge, t, g)` decides before any ray
 /// whether it can contribute (edge_jump_with), and each contributing one is handed to
 /// `visit(edge, t, weight, g)` with weight = T f_s jump / (pdf r m), r = boundary_ctx.sppi
-/// and T the detached throughput (the vertex's derivative gains weight (g . v_t)). Counts
+/// and T the detached throughput (the vertex's derivative gains weight (g . v_t)); a visit that
+/// takes a fifth argument gets the weight's factors too (EdgePointFactors). Counts
 /// traversals (the split ones each), zero traversals and thread time.
 template <class T, class Accept, class Visit>
 void for_each_boundary_sample(const PathContext& ctx, const BoundaryContext& boundary_ctx, const BoundaryVertex<T>& vertex,
@@ -138,7 +149,11 @@ void for_each_boundary_sample(const PathContext& ctx, const BoundaryContext& bou
         for (int l = 0; l < s.guide_levels; ++l)
           vertex.guide_records->push_back({q.p, s.guide_slots[size_t(l)], v / s.guide_pu[size_t(l)]});
       }
-      visit(e, s.t, weight, g);
+      if constexpr (std::is_invocable_v<Visit&, const edgetree::Edge&, double, const Color&, const Vec3&,
+                                        const EdgePointFactors&>)
+        visit(e, s.t, weight, g, EdgePointFactors{s.pdf, *jump, f, rate});
+      else
+        visit(e, s.t, weight, g);
     }
     stats.boundary_zero += !contributed;
   }

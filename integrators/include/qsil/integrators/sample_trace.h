@@ -5,11 +5,13 @@
 /// which one sample in a million is worth 1e5, and the first question about such a tail is which
 /// term, which path vertex, and at what cosine. The estimator keeps, per thread, the K samples of
 /// largest |derivative| (TopSamples), then traces each one's path again from its own sampler
-/// stream with a recording hook (VertexRecorder) and no boundary term: the path's decisions do not
-/// depend on the boundary term (it draws from a stream of its own), so the retrace is the same
-/// path, and its derivative is the sample's interior term exactly; the rest of the sample is its
-/// secondary boundary term. Primary boundary-term samples (splats) are not samples of a pixel
-/// and are not among them. The recording hook is integrators/vertex_recorder.h.
+/// stream with a recording hook (VertexRecorder) that adds no boundary term to the path: the
+/// path's decisions do not depend on the boundary term (it draws from a stream of its own), so the
+/// retrace is the same path, and its derivative is the sample's interior term exactly; the rest of
+/// the sample is its secondary boundary term, whose edge points the hook evaluates again from
+/// their own stream and records beside the path (BoundaryPointTrace). Primary boundary-term
+/// samples (splats) are not samples of a pixel and are not among them. The recording hook is
+/// integrators/vertex_recorder.h.
 
 #include <algorithm>
 #include <cmath>
@@ -34,6 +36,34 @@ struct VertexTrace {
   double added = 0;
 };
 
+/// The edge point that adds the most to a sample's secondary boundary term (derivatives with
+/// respect to the sample's parameter), and the count and sum of all its edge points: the retrace
+/// evaluates the boundary term again from its own stream, so `total` equals the sample's
+/// value - interior (a check of the retrace). Its contribution is
+/// throughput * bsdf * jump / (pdf * rate) * jacobian (channel means of the colours).
+struct BoundaryPointTrace {
+  int points = 0;     ///< contributing edge points of the sample (0: none; the fields below unset)
+  double total = 0;   ///< the sum of their contributions
+  int segments = 0;   ///< segments of the path before the vertex at which the point was sampled
+  int shape = -1;     ///< the edge's shape (scene index)
+  /// What the edge is: 0 a mesh edge that is a silhouette from the vertex, 1 a shading crease
+  /// (Edge::crease, not smooth), 2 a smoothed crease (Edge::smooth_crease), 3 a segment of an
+  /// intersection curve.
+  int kind = 0;
+  double pdf = 0;          ///< the point's pdf (per unit t of the edge)
+  double rate = 0;         ///< edge points per unit of the estimate (sppi times the split)
+  double jump = 0;         ///< |radiance jump| across the edge (channel mean)
+  double bsdf = 0;         ///< f_s |cos| toward the point (channel mean)
+  double throughput = 0;   ///< the path's throughput to the vertex (channel mean)
+  double jacobian = 0;     ///< d(boundary measure)/d(theta) at the point: g . (v_edge - dp/dtheta)
+  double distance = 0;     ///< from the vertex to the edge point (scene units)
+  double edge_length = 0;  ///< the edge's length (scene units)
+  /// |sin| of the angle between the edge and the direction toward the point: an edge seen
+  /// end-on projects to a short arc, and the Jacobian of t grows as its inverse.
+  double sin_view = 0;
+  double added = 0;  ///< this point's contribution
+};
+
 /// One sample of a gradient run and its path.
 struct SampleTrace {
   int x = 0, y = 0;   ///< pixel
@@ -43,6 +73,7 @@ struct SampleTrace {
   double interior = 0;  ///< of which the interior term (the retraced path's derivative)
   double camera_emission = 0;  ///< the derivative of emission seen directly by the camera ray
   std::vector<VertexTrace> vertices;  ///< in path order
+  BoundaryPointTrace boundary;        ///< its secondary boundary term's largest edge point
 };
 
 /// Keeps the `capacity` samples of largest |value| offered to it (by (|value|, pixel, sample) so
