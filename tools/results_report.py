@@ -442,7 +442,9 @@ def stability_rows(record):
         return [judged_row(f"{name} FD", f"FD / quadric ≥ {goal:g}", f"stability: {name}", "–", "no record", missing,
                            missing) for name, goal in STABILITY_FD_TARGETS]
     scenes = {s["name"]: s for s in record["scenes"]}
-    source = f"`docs/stability.md` ({record['commit']}, {record['date']}; {record['budget']:g} s, {record['res']}²)"
+    repeats = record.get("repeats", 1)
+    source = (f"`docs/stability.md` ({record['commit']}, {record['date']}; {record['budget']:g} s"
+              + (f" × {repeats} runs" if repeats > 1 else "") + f", {record['res']}²)")
     rows = []
     for name, goal in STABILITY_FD_TARGETS:
         m = scenes.get(name, {}).get("methods", {})
@@ -520,8 +522,8 @@ def targets_text(results, stability=None, cost=None):
              "ratio is too uncertain to judge and the cell gives the bound the ratio with the floor included is "
              "(a common floor moves a ratio away from 1: ≥ when the other method's error is the larger, ≤ "
              "otherwise), then the estimate: a bound on the target's side meets it, one on the other side leaves "
-             "it undecided. The stability targets come from `docs/stability.md` (single runs at its small budget, "
-             "against its own FD references, judged alike), the cost targets from the cost benchmark's record.",
+             "it undecided. The stability targets come from `docs/stability.md` (a few runs per method at its small budget, "
+             "their mean relative MSE, against its own FD references, judged alike), the cost targets from the cost benchmark's record.",
              "", "| target | where | measured | verdict | source |", "|---|---|---|---|---|"]
     for r in rows:
         lines.append(f"| {r['target']} | {r['where']} | {r['measured']} | {verdict_text(r)} | {r['source']} |")

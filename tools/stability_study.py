@@ -4,7 +4,7 @@ methods are known or expected to fail; writes docs/stability.md, the grids in
 docs/images/stability/<name>/ and, for a whole study (not --only), the table as data in
 docs/images/stability/results.json (write_record; tools/results_report.py reads it).
 
-Usage: python3 tools/stability_study.py [--qsil PATH] [--budget 2] [--res 48]
+Usage: python3 tools/stability_study.py [--qsil PATH] [--budget 2] [--repeats 3] [--res 48]
        [--ref-spp 32768] [--ref-step-factor 0.25] [--threads 2] [--only NAME,...]
        [--force-references]
 
@@ -12,9 +12,10 @@ Per scene (scenes/stability/params.txt lists name, parameter, question): an FD r
 (`qsil reference --method fd`, per-pixel standard errors) at --ref-step-factor times qsil's
 default step h0, so that FD in the table (at h0, what a user gets) is charged for the blur of its
 step instead of sharing it with the reference (on `teapot` FD at h0 and at h0/4 differ pixel by
-pixel by 0.059 x the mean square, docs/design-notes.md), then one `qsil compare` process per
-method at --budget seconds, so that a crash of one method is recorded and does not stop the
-others. Reported: non-finite pixels (must be 0), agreement of the image sum with the reference
+pixel by 0.059 x the mean square, docs/design-notes.md), then --repeats `qsil compare` processes
+per method at --budget seconds each, with seeds 0 .. R-1, so that a crash of one method is
+recorded and does not stop the others, and so that one lucky or unlucky run of a heavy-tailed
+estimator does not decide a row (pool_runs: the mean relative MSE). Reported: non-finite pixels (must be 0), agreement of the image sum with the reference
 (z = error / combined standard error; |z| < 3 passes; FD is biased by O(h^2)), relative MSE, and
 the zero-contribution rate of the boundary samples. qsil runs in the repository root with
 repository-relative paths, so the results.json files carry no absolute paths.
@@ -68,26 +69,57 @@ def make_reference(args, xml, common, param, steps, ref):
     return None
 
 
+def pool_runs(runs, ref_se):
+    """One method's row from its `runs` (compare rows of independent seeds against one reference whose
+    image-sum standard error is `ref_se`): rel_mse is their mean (the expected squared error, which a
+    heavy-tailed estimator's single run misjudges both ways), rel_mse_runs each run's; z is the mean
+    image-sum error over sqrt(mean se² / R + ref_se²) (the reference's error is common to the runs);
+    spp and the zero-contribution rate are means, non-finite pixels a sum."""
+    R = len(runs)
+    row = dict(runs[0])
+    row["rel_mse_runs"] = [r["rel_mse"] for r in runs]
+    row["rel_mse"] = sum(row["rel_mse_runs"]) / R
+    row["spp"] = round(sum(r["spp"] for r in runs) / R)
+    row["wall_seconds"] = sum(r["wall_seconds"] for r in runs) / R
+    row["nonfinite_pixels"] = sum(r["nonfinite_pixels"] for r in runs)
+    zr = [r.get("zero_contribution_rate") for r in runs]
+    row["zero_contribution_rate"] = None if None in zr else sum(zr) / R
+    error = sum(r["sum_error"][0] for r in runs) / R
+    se = (sum(r["sum_se"][0] ** 2 for r in runs) / R / R + ref_se ** 2) ** 0.5
+    row["z"] = error / se if se > 0 else float("nan")
+    return row
+
+
 def run_methods(args, xml, common, ref, work, img_root, name):
-    """One `qsil compare` process per method against the reference; returns {method: row or error}."""
+    """args.repeats `qsil compare` processes per method against the reference, with seeds 0 .. R-1
+    (the first one's images go to the grid); returns {method: pooled row (pool_runs) or error}."""
     per = {}
     for m in METHODS:
-        d = os.path.join(work, name, m)
-        shutil.rmtree(d, ignore_errors=True)
-        r = subprocess.run([args.qsil, "compare", xml, *common, "--methods", m, "--budgets", str(args.budget),
-                            "--reference", ref, "--no-plot", "-q", "--out", d], capture_output=True, text=True)
-        if r.returncode != 0:
-            msg = r.stderr.strip().splitlines()[-1][:120] if r.stderr.strip() else ""
-            per[m] = {"error": f"exit {r.returncode}" + (" (crash)" if r.returncode < 0 else "") + (f": {msg}" if msg else "")}
-        else:
+        runs, ref_se, error = [], 0.0, None
+        for repeat in range(args.repeats):
+            d = os.path.join(work, name, m if repeat == 0 else f"{m}-{repeat}")
+            shutil.rmtree(d, ignore_errors=True)
+            r = subprocess.run([args.qsil, "compare", xml, *common, "--methods", m, "--budgets", str(args.budget),
+                                "--reference", ref, "--seed", str(repeat), "--no-plot", "-q", "--out", d],
+                               capture_output=True, text=True)
+            if r.returncode != 0:
+                msg = r.stderr.strip().splitlines()[-1][:120] if r.stderr.strip() else ""
+                error = (f"exit {r.returncode}" + (" (crash)" if r.returncode < 0 else "") + (f": {msg}" if msg else "")
+                         + (f" (seed {repeat})" if repeat else ""))
+                break
             res = json.load(open(os.path.join(d, "results.json")))
-            row = res["rows"][0]
-            se = (row["sum_se"][0] ** 2 + res["reference"]["sum_se"][0] ** 2) ** 0.5
-            row["z"] = row["sum_error"][0] / se if se > 0 else float("nan")
-            row["rel_noise_floor"] = res["reference"]["rel_noise_floor"]
-            per[m] = row
+            runs.append(res["rows"][0])
+            ref_se = res["reference"]["sum_se"][0]
+            floor = res["reference"]["rel_noise_floor"]
+        if error:
+            per[m] = {"error": error}
+        else:
+            per[m] = pool_runs(runs, ref_se)
+            per[m]["rel_noise_floor"] = floor
             os.makedirs(os.path.join(img_root, name), exist_ok=True)
-        print(f"{name} {m}: {per[m].get('error', 'rel MSE %.3g' % per[m].get('rel_mse') if per[m].get('rel_mse') is not None else '?')}", flush=True)
+        print(f"{name} {m}: {per[m].get('error', 'rel MSE %.3g' % per[m].get('rel_mse') if per[m].get('rel_mse') is not None else '?')}"
+              + (" (runs " + ", ".join(f"{x:.3g}" for x in per[m]["rel_mse_runs"]) + ")" if "rel_mse_runs" in per[m] else ""),
+              flush=True)
     return per
 
 
@@ -117,13 +149,15 @@ def merge_images(per, work, img_root, name, param):
 
 
 def cell(row):
-    """One table cell: non-finite pixels / relative MSE / z / zero-contribution rate (spp)."""
+    """One table cell: non-finite pixels / relative MSE (the runs' range) / z / zero-contribution rate (spp)."""
     if "error" in row:
         return f"**{row['error']}**"
     zr = row.get("zero_contribution_rate")
     z = row.get("z")
     ok = "ok" if z is not None and abs(z) < 3 else "**differs**"
-    return (f"{row['nonfinite_pixels']} / {row['rel_mse']:.3g} / z={z:+.1f} {ok} / "
+    runs = row.get("rel_mse_runs") or []
+    spread = f" ({min(runs):.2g}–{max(runs):.2g})" if len(runs) > 1 else ""
+    return (f"{row['nonfinite_pixels']} / {row['rel_mse']:.3g}{spread} / z={z:+.1f} {ok} / "
             + (f"{100 * zr:.0f}%" if zr is not None else "–") + f" ({row['spp']} spp)")
 
 
@@ -147,9 +181,12 @@ def write_report(args, table, elapsed, img_root):
              "the table uses: FD's blur of moving silhouettes is charged to it, not shared with the reference), "
              "which is itself biased by O(h²) and noisy: the z-score agreement test is a bias check of moderate "
              "power, not a proof.", "",
-             "Each cell: non-finite pixels (must be 0) / relative MSE vs the reference / z = image-sum error "
-             "over its combined standard error (|z| < 3: agrees) / zero-contribution rate of the boundary samples "
-             "(spp reached). Machine: shared 2-core VM, timings noisy.", "",
+             f"Each method runs {args.repeats} times (seeds 0–{args.repeats - 1}). Each cell: non-finite pixels "
+             "(must be 0, summed over the runs) / relative MSE vs the reference, the mean over the runs (the "
+             "expected squared error; one run of a heavy-tailed estimator misjudges it both ways), with the "
+             "runs' range in brackets / z = the runs' mean image-sum error over its combined standard error "
+             "(|z| < 3: agrees) / zero-contribution rate of the boundary samples (mean spp reached per run). "
+             "Machine: shared 2-core VM, timings noisy. The grids show the first run.", "",
              "The last column is the reference's relative noise floor over the best method's relative MSE: "
              "a reference can judge where it is ≤ 0.1 (marked **high** otherwise: the smallest errors there "
              "are partly the reference's).", "",
@@ -167,7 +204,7 @@ def write_report(args, table, elapsed, img_root):
 
 
 # The fields of a method's row kept in the study's record (results.json beside the grids).
-RECORD_FIELDS = ("rel_mse", "z", "spp", "wall_seconds", "nonfinite_pixels", "zero_contribution_rate",
+RECORD_FIELDS = ("rel_mse", "rel_mse_runs", "z", "spp", "wall_seconds", "nonfinite_pixels", "zero_contribution_rate",
                  "rel_noise_floor")
 
 
@@ -176,7 +213,8 @@ def write_record(args, table, img_root, commit, date):
     stability targets from it): the settings, the commit and date of the qsil that made it, and per scene
     its parameter and per method the RECORD_FIELDS of its row (or its error). Written whole or not at
     all (a temporary file renamed over it). Returns the record."""
-    record = {"commit": commit, "date": date, "budget": args.budget, "res": args.res, "ref_spp": args.ref_spp,
+    record = {"commit": commit, "date": date, "budget": args.budget, "repeats": args.repeats, "res": args.res,
+              "ref_spp": args.ref_spp,
               "ref_step_factor": args.ref_step_factor, "threads": args.threads,
               "scenes": [{"name": name, "param": param,
                           "methods": {m: ({"error": per[m]["error"]} if "error" in per[m] else
@@ -194,6 +232,8 @@ def main():
     """Runs the study and writes docs/stability.md and its record, docs/images/stability/results.json."""
     ap = argument_parser(__doc__, res=48)
     ap.add_argument("--budget", type=float, default=2.0)
+    ap.add_argument("--repeats", type=int, default=3,
+                    help="runs per method (seeds 0 .. R-1), pooled: mean relative MSE, z of the mean sum")
     ap.add_argument("--ref-spp", type=int, default=32768)
     ap.add_argument("--ref-step-factor", type=float, default=0.25,
                     help="the reference's FD step over qsil's default step h0 (FD in the table uses h0)")

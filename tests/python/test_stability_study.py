@@ -64,9 +64,9 @@ def test_a_reference_is_reused_only_when_everything_it_was_made_from_matches(tmp
 def test_the_record_holds_every_scene_and_method_as_the_table_does(tmp_path):
     # write_record keeps what results_report judges the stability targets from: per scene and method
     # the relative MSE, z and the reference's floor, or the method's error; nothing else of the row.
-    args = argparse.Namespace(budget=2.0, res=48, ref_spp=100, ref_step_factor=0.25, threads=2)
-    row = {"rel_mse": 0.13, "z": -0.9, "spp": 358, "wall_seconds": 2.0, "nonfinite_pixels": 0,
-           "zero_contribution_rate": 0.32, "rel_noise_floor": 0.002, "sum": [1.0], "mse": 3.0}
+    args = argparse.Namespace(budget=2.0, repeats=3, res=48, ref_spp=100, ref_step_factor=0.25, threads=2)
+    row = {"rel_mse": 0.13, "rel_mse_runs": [0.1, 0.12, 0.17], "z": -0.9, "spp": 358, "wall_seconds": 2.0,
+           "nonfinite_pixels": 0, "zero_contribution_rate": 0.32, "rel_noise_floor": 0.002, "sum": [1.0], "mse": 3.0}
     per = {m: dict(row) for m in stability_study.METHODS}
     per["vsphere"] = {"error": "exit -11 (crash)"}
     table = [("teapot", "teapot:translate:0,1,0", "a question", per)]
@@ -78,7 +78,26 @@ def test_the_record_holds_every_scene_and_method_as_the_table_does(tmp_path):
     assert scene["name"] == "teapot" and scene["param"] == "teapot:translate:0,1,0"
     assert scene["methods"]["vsphere"] == {"error": "exit -11 (crash)"}
     # Named, not taken from RECORD_FIELDS: what results_report's stability targets read, and the table's cells.
-    assert scene["methods"]["quadric"] == {f: row[f] for f in ("rel_mse", "z", "spp", "wall_seconds",
+    assert scene["methods"]["quadric"] == {f: row[f] for f in ("rel_mse", "rel_mse_runs", "z", "spp", "wall_seconds",
                                                                  "nonfinite_pixels", "zero_contribution_rate",
                                                                  "rel_noise_floor")}
-    assert record["commit"] == "abc1234" and record["ref_spp"] == 100
+    assert record["commit"] == "abc1234" and record["ref_spp"] == 100 and record["repeats"] == 3
+
+
+def test_runs_pool_into_the_mean_error_and_the_z_of_the_mean_sum():
+    # pool_runs: the mean relative MSE (not one run's, nor the median, which would hide a tail), a
+    # z whose standard error divides the runs' variance by their count but not the reference's
+    # (common to all runs), summed non-finite pixels.
+    runs = [{"rel_mse": r, "spp": spp, "wall_seconds": 2.0, "nonfinite_pixels": nf, "zero_contribution_rate": 0.3,
+             "sum_error": [e], "sum_se": [se]}
+            for r, spp, nf, e, se in ((0.1, 100, 0, 1.0, 2.0), (0.1, 110, 1, 2.0, 2.0), (1.0, 120, 0, 3.0, 2.0))]
+    row = stability_study.pool_runs(runs, ref_se=1.0)
+    assert abs(row["rel_mse"] - 0.4) < 1e-12 and row["rel_mse_runs"] == [0.1, 0.1, 1.0]
+    assert row["spp"] == 110 and row["nonfinite_pixels"] == 1
+    # mean error 2, se = sqrt(4 / 3 + 1)
+    assert abs(row["z"] - 2.0 / (4.0 / 3.0 + 1.0) ** 0.5) < 1e-12
+    assert abs(row["zero_contribution_rate"] - 0.3) < 1e-12
+    one = stability_study.pool_runs(runs[:1], ref_se=1.0)
+    assert one["rel_mse"] == 0.1 and abs(one["z"] - 1.0 / 5.0 ** 0.5) < 1e-12
+    cell = stability_study.cell({**row, "z": 0.5})
+    assert "0.4 (0.1–1)" in cell and "(110 spp)" in cell
