@@ -376,8 +376,9 @@ WHY_MISSED = {
         "variance went 7393 → 5519, 5339, 9090 at up to 2.1× the time. The interior term holds the other 44 %, "
         "40 % of it at normal turns ≥ 100 rad per unit."),
     "glossy-sphere-light FD": (
-        "Heavy tails at the second vertex. The three runs give 22.3, 1.39 and 0.95 (seed 0 gave 30 in the study "
-        "before this one: the tail sample recurs in a time-budgeted run whose spp varies). "
+        "Heavy tails at the second vertex. The three runs give 22.3, 1.39 and 0.95 (seed 0 gave 30 in a first three-run "
+        "study of the same code that day, not committed: the tail sample recurs in a time-budgeted run whose spp "
+        "varies). "
         "Decomposed 2026-11-28 (`tools/tail_report.py`, 8 seeds, `docs/experiments/2026-11-28-boundary-tails.md`): "
         "the interior term holds 70 % of the largest samples' squares, 83 % of it at depth 2 on the GGX α 0.05 "
         "floor, where the shading normal turns slowly (< 1 rad per unit: 74 %): the floor's narrow lobe seen along "
@@ -392,7 +393,7 @@ WHY_MISSED = {
         "(`docs/experiments/2026-11-28-diffuse-creases.md`). The reference's noise floor is above 1/10 of the "
         "errors compared here, so the ratio is partly the floor's."),
     "partial-view FD": (
-        "One run of three (seed 1; 0.81 in the study before this one) draws a tail: 0.834 against 0.054 and "
+        "One run of three (seed 1; 0.81 in a first three-run study of the same code that day) draws a tail: 0.834 against 0.054 and "
         "0.063; FD's runs are 0.076-0.084. The single-run studies before ran seed 0 only (0.050). The tail is one "
         "interior sample: `qsil grad` with that run's seed (compare's derive_seed(1, 0)) at 150 spp puts 93 % of the "
         "image sum's variance in pixel (34, 8), whose sample 45 is 8468. It is a camera hit on Spot at |n_g·wo| "

@@ -76,7 +76,7 @@ def pool_runs(runs, ref_se):
     image-sum error over sqrt(mean se² / R + ref_se²) (the reference's error is common to the runs);
     spp and the zero-contribution rate are means, non-finite pixels a sum."""
     R = len(runs)
-    row = dict(runs[0])
+    row = {k: v for k, v in runs[0].items() if k not in ("sum_error", "sum_se")}
     row["rel_mse_runs"] = [r["rel_mse"] for r in runs]
     row["rel_mse"] = sum(row["rel_mse_runs"]) / R
     row["spp"] = round(sum(r["spp"] for r in runs) / R)
@@ -156,7 +156,7 @@ def cell(row):
     z = row.get("z")
     ok = "ok" if z is not None and abs(z) < 3 else "**differs**"
     runs = row.get("rel_mse_runs") or []
-    spread = f" ({min(runs):.2g}–{max(runs):.2g})" if len(runs) > 1 else ""
+    spread = f" ({min(runs):.3g}–{max(runs):.3g})" if len(runs) > 1 else ""
     return (f"{row['nonfinite_pixels']} / {row['rel_mse']:.3g}{spread} / z={z:+.1f} {ok} / "
             + (f"{100 * zr:.0f}%" if zr is not None else "–") + f" ({row['spp']} spp)")
 
@@ -241,6 +241,8 @@ def main():
     ap.add_argument("--force-references", action="store_true",
                     help="re-render the FD references even where a cached one matches")
     args = ap.parse_args()
+    if args.repeats < 1:
+        sys.exit(f"stability_study: --repeats {args.repeats}: at least 1 run per method")
     args.qsil = os.path.abspath(args.qsil)
     # The grids need matplotlib in this interpreter: fail now, not after the study, with the last
     # study's grids left beside a new table.

@@ -142,7 +142,8 @@ def main():
                     b_kind[EDGE_KINDS.get(head["b_kind"], head["b_kind"])] += w
                     b_shape[head["b_shape"]] += w
                     at = [v for v in with_vertex if v["segments"] == head["b_segments"]]
-                    b_own[("own" if at and at[0]["shape"] == head["b_shape"] else "other")] += w
+                    own = "curve" if head["b_kind"] == "3" else "own" if at and at[0]["shape"] == head["b_shape"] else "other"
+                    b_own[own] += w
                     b_pdf[decade(float(head["b_pdf"]), PDF_EDGES)] += w
                     b_distance[decade(float(head["b_distance"]), DISTANCE_EDGES)] += w
                     b_sin[decade(float(head["b_sin_view"]), SIN_EDGES)] += w

@@ -45,7 +45,7 @@ struct BoundaryPointTrace {
   int points = 0;     ///< contributing edge points of the sample (0: none; the fields below unset)
   double total = 0;   ///< the sum of their contributions
   int segments = 0;   ///< segments of the path before the vertex at which the point was sampled
-  int shape = -1;     ///< the edge's shape (scene index)
+  int shape = -1;     ///< the edge's shape (scene index; for an intersection curve its crossing group, no shape)
   /// What the edge is: 0 a mesh edge that is a silhouette from the vertex, 1 a shading crease
   /// (Edge::crease, not smooth), 2 a smoothed crease (Edge::smooth_crease), 3 a segment of an
   /// intersection curve.
