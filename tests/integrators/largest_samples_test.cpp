@@ -71,8 +71,12 @@ TEST(LargestSamples, RetraceReproducesTheInteriorTerm) {
 // the path (BoundaryPointRecorder): the sum of its edge points is the sample's value - interior
 // (a wrong stream, traversal count or query gives other points and fails this), and the largest
 // point's recorded factors are those of a contributing point (pdf, jump, g . v nonzero).
-TEST(LargestSamples, RetraceRecordsTheBoundaryTerm) {
-  const DirectRun quadric = run_direct(Method::Quadric, 2, 64, CameraHits::Detached);
+// Both camera-hit forms: an attached sample's derivative is L times a Jacobian of value 1, so its
+// boundary part (value 0) is unchanged by it and the sum holds alike.
+class RetraceRecordsTheBoundaryTerm : public testing::TestWithParam<CameraHits> {};
+
+TEST_P(RetraceRecordsTheBoundaryTerm, SumIsTheSamplesBoundaryPart) {
+  const DirectRun quadric = run_direct(Method::Quadric, 2, 64, GetParam());
   int with_points = 0;
   for (const SampleTrace& s : quadric.result.largest) {
     const BoundaryPointTrace& b = s.boundary;
@@ -94,6 +98,9 @@ TEST(LargestSamples, RetraceRecordsTheBoundaryTerm) {
   }
   EXPECT_GE(with_points, 8) << "the test needs samples with a boundary part";
 }
+
+INSTANTIATE_TEST_SUITE_P(LargestSamples, RetraceRecordsTheBoundaryTerm,
+                         testing::Values(CameraHits::Detached, CameraHits::Adaptive));
 
 TEST(LargestSamples, LargestFirstBoundEveryPixelAndIndependentOfThreads) {
   const DirectRun a = run_direct(Method::Quadric, 1), b = run_direct(Method::Quadric, 2);
