@@ -15,9 +15,10 @@ step instead of sharing it with the reference (on `teapot` FD at h0 and at h0/4 
 pixel by 0.059 x the mean square, docs/design-notes.md), then --repeats `qsil compare` processes
 per method at --budget seconds each, with seeds 0 .. R-1, so that a crash of one method is
 recorded and does not stop the others, and so that one lucky or unlucky run of a heavy-tailed
-estimator does not decide a row (pool_runs: the mean relative MSE). Reported: non-finite pixels (must be 0), agreement of the image sum with the reference
-(z = error / combined standard error; |z| < 3 passes; FD is biased by O(h^2)), relative MSE, and
-the zero-contribution rate of the boundary samples. qsil runs in the repository root with
+estimator does not decide a row (pool_runs: the mean relative MSE). Reported: non-finite pixels
+(must be 0), agreement of the image sum with the reference (z = error / combined standard error;
+|z| < 3 passes; FD is biased by O(h^2)), relative MSE, and the zero-contribution rate of the
+boundary samples. qsil runs in the repository root with
 repository-relative paths, so the results.json files carry no absolute paths.
 
 References are cached (most of the study's time): out/stability/<name>-ref.exr is reused when its
