@@ -208,16 +208,16 @@ class GradientEstimator final : public Estimator::Impl, private RenderSetup {
           if (near) {
             L = regularized_camera_sample(rc, view, x, y, u, sampler, st);
           } else if (warped) {
-            // The auxiliary rays and the pixel border draw from streams of their own (salts 3
-            // and 4), so they leave the path's decisions unchanged.
-            Sampler aux(options.seed, pixel, uint64_t(s), 3), border(options.seed, pixel, uint64_t(s), 4);
+            // The auxiliary rays and the pixel border draw from streams of their own, so they
+            // leave the path's decisions unchanged.
+            Sampler aux(options.seed, pixel, uint64_t(s), stream::kWasAuxiliary),
+                border(options.seed, pixel, uint64_t(s), stream::kWasBorder);
             L = warped_pixel_sample(ctx, view, config.warped_area, x, y, ray, sampler, aux, border, st);
           } else {
             const AttachedCameraRay<N> attached = camera_ray_form(ray, Vec2(x + u.x(), y + u.y()), x, y);
             const PathRay<Dual<N>> path_ray{lift<Dual<N>>(origin), ray.dir, ray.hit, 0, 0, attached.moving_dir()};
             if (traversals > 0) {
-              // The boundary term draws from a stream of its own, so it leaves the path's decisions unchanged.
-              Sampler bsampler(options.seed, pixel, uint64_t(s), 1);
+              Sampler bsampler = boundary_stream(options.seed, pixel, uint64_t(s));
               const BoundaryHook<N> hook{{&ctx, &boundary_ctx, &bsampler, traversals, &scratch.local()}};
               L = trace_path(ctx, view, path_ray, sampler, st, hook);
             } else {
@@ -321,7 +321,7 @@ class GradientEstimator final : public Estimator::Impl, private RenderSetup {
       ColorT<Dual<N>> L;
       if (traversals > 0) {
         // The boundary term's own stream and traversals, as run() drew them: the same edge points.
-        Sampler bsampler(options.seed, pixel, uint64_t(trace.sample), 1);
+        Sampler bsampler = boundary_stream(options.seed, pixel, uint64_t(trace.sample));
         edgetree::EdgeChoiceScratch scratch;
         const BoundaryPointRecorder<N> points{{&ctx, &boundary_ctx, &bsampler, traversals, &scratch},
                                               &trace,

@@ -16,9 +16,9 @@
 
 namespace qsil {
 
-/// The stream of the training passes: Sampler(kForestGuideSeed, pixel, round x spp + s, salt),
-/// salt 0 for the path, 1 for its boundary term (as a run's streams with its seed), so the guide
-/// depends on the scene and the options alone.
+/// The streams of the training passes: the path's Sampler(kForestGuideSeed, pixel, round x spp +
+/// s) and its boundary term's boundary_stream(kForestGuideSeed, pixel, round x spp + s), as a run's
+/// streams with its seed, so the guide depends on the scene and the options alone.
 inline constexpr uint64_t kForestGuideSeed = 0x51a7e5eed0f0ea57ULL;
 
 /// One training pass (round `round`) of `spp` samples per pixel over `ctx`'s camera image: the
@@ -44,7 +44,8 @@ std::vector<edgetree::GuideRecord> forest_guide_pass(const PathContext& ctx, con
         const uint64_t pixel = uint64_t(y) * cam.width + x;
         for (int s = 0; s < spp; ++s) {
           const uint64_t index = uint64_t(round) * uint64_t(spp) + uint64_t(s);
-          Sampler sampler(kForestGuideSeed, pixel, index), bsampler(kForestGuideSeed, pixel, index, 1);
+          Sampler sampler(kForestGuideSeed, pixel, index);
+          Sampler bsampler = boundary_stream(kForestGuideSeed, pixel, index);
           const int traversals = boundary_traversals(boundary_ctx.sppi, kForestGuideSeed, pixel, index);
           const CameraRay ray = trace_camera_ray(ctx, x, y, sampler.next2(), st);
           if (traversals <= 0) continue;

@@ -42,7 +42,7 @@ bool clip(const Vec3& c0, const Vec3& c1, const Vec3& n, double d, double& ta, d
   return ta < tb;
 }
 
-/// Draws `count` primary edge samples of chunk `chunk` from Sampler(seed, chunk, 0, 2) and
+/// Draws `count` primary edge samples of chunk `chunk` from its stream (stream::kPrimary) and
 /// evaluates them: `accept(edge, t, g)` sees the Jacobian's linear form g (edge_jump_with) before
 /// any ray; `emit(px, py, edge, t, weight, g, point)` receives each contributing sample, weight =
 /// jump W per_sample / pdf (so the pixel's derivative gains weight (g . v_t)), and `point`: where
@@ -58,7 +58,7 @@ void sample_chunk(const PathContext& ctx, const PrimaryEdges& primary, long long
   const Vec3 o = cam.origin();
   const Vec3 forward = cam.to_world.block<3, 1>(0, 2).normalized();
   const std::vector<double>& cdf = primary.cdf;
-  Sampler sampler(seed, uint64_t(chunk), 0, 2);
+  Sampler sampler(seed, uint64_t(chunk), 0, stream::kPrimary);
   for (long long i = 0; i < count; ++i) {
     ++stats.boundary_traversals;
     // ---- A piece of an edge by its weight (projected length, less for creases and hidden

@@ -116,7 +116,7 @@ long long primary_samples_per_index(int width, int height, double ratio);
 /// derivative channels of `film` (a gradient film of velocities.num_params parameters): n =
 /// primary_samples_per_index(W, H, ratio) edge samples per sample index. The samples are numbered
 /// globally (sample index s owns numbers [s n, (s + 1) n)) and drawn in chunks of 1024 numbers,
-/// chunk c from the stream Sampler(seed, c, 0, 2) whichever run draws it (n is a whole number of
+/// chunk c from its stream (stream::kPrimary) whichever run draws it (n is a whole number of
 /// chunks, so no chunk straddles two sample indices): the sample-range guarantees of estimator.h
 /// hold. Deterministic for a seed whatever the thread count (chunks are merged in order). Counts
 /// rays and zero contributions in `stats`.

@@ -262,7 +262,7 @@ std::optional<SegmentValue<N>> evaluate_segment(const SegmentContext& sc, const 
   return SegmentValue<N>{kept.px, kept.py, Color(kept.weight * *jump * double(found)), J};
 }
 
-/// Draws `count` boundary segments of chunk `chunk` from Sampler(seed, chunk, 0, 5), their u from
+/// Draws `count` boundary segments of chunk `chunk` from its stream (stream::kProjectiveSegments), their u from
 /// `guide`, and appends their splats (forward mode, N >= the parameter count) to `out`; returns
 /// the non-finite ones.
 template <int N>
@@ -272,7 +272,7 @@ uint64_t run_chunk(const SegmentContext& sc, const SegmentGuide& guide, long lon
   const FilmLayout layout(K);
   uint64_t nonfinite = 0;
   std::array<WalkVertex, kUnboundedDepthCap> walk;
-  Sampler sampler(seed, uint64_t(chunk), 0, 5);
+  Sampler sampler(seed, uint64_t(chunk), 0, stream::kProjectiveSegments);
   for (long long i = 0; i < count; ++i) {
     Vec3 u;
     if (guide.uniform()) {
@@ -303,13 +303,13 @@ uint64_t run_chunk(const SegmentContext& sc, const SegmentGuide& guide, long lon
   return nonfinite;
 }
 
-/// Draws `count` uniform training segments of chunk `chunk` from Sampler(kGuideSeed, chunk, 0, 6)
+/// Draws `count` uniform training segments of chunk `chunk` from its stream (stream::kProjectiveTraining)
 /// and adds each one's |value| (summed over parameters and channels) to its cell of `sums`.
 template <int N>
 void train_chunk(const SegmentContext& sc, int resolution, long long count, long long chunk, std::vector<double>& sums,
                  PathStats& stats) {
   std::array<WalkVertex, kUnboundedDepthCap> walk;
-  Sampler sampler(kGuideSeed, uint64_t(chunk), 0, 6);
+  Sampler sampler(kGuideSeed, uint64_t(chunk), 0, stream::kProjectiveTraining);
   const SegmentGuide cells(resolution, std::vector<double>(size_t(resolution) * resolution * resolution, 0.0), 1.0);
   for (long long i = 0; i < count; ++i) {
     const double ux = next53(sampler);
@@ -322,7 +322,7 @@ void train_chunk(const SegmentContext& sc, int resolution, long long count, long
   }
 }
 
-/// The seeds of `count` camera paths of chunk `chunk` from Sampler(kGuideSeed, chunk, 0, 7)
+/// The seeds of `count` camera paths of chunk `chunk` from its stream (stream::kProjectiveSeeds)
 /// (train_projected_guide): each projected seed's u and the estimator's |value| there, appended
 /// to `out` in order.
 template <int N>
@@ -333,7 +333,7 @@ void seed_chunk(const SegmentContext& sc, const TriangleEdges& tri, long long co
   const PrimalView pv{ctx.scene};
   const Vec3& local_origin = ctx.tracer->local_origin();
   std::array<WalkVertex, kUnboundedDepthCap> walk;
-  Sampler sampler(kGuideSeed, uint64_t(chunk), 0, 7);
+  Sampler sampler(kGuideSeed, uint64_t(chunk), 0, stream::kProjectiveSeeds);
   auto seed = [&](const Vec3& x, const Hit& hit) {
     const std::optional<Vec3> u = project_seed(ctx, sc.edges, tri, x, hit, sampler, stats);
     if (!u) return;

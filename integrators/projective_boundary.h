@@ -161,7 +161,7 @@ class SegmentGuide {
 
 /// Trains a grid SegmentGuide over `edges` (the file comment's estimator, its |value| summed over
 /// the parameters and channels per cell): guiding.training x W x H uniform segments in chunks,
-/// each from Sampler(0x9e3779b97f4a7c15, chunk, 0, 6), merged in chunk order (the same guide for
+/// each from its stream (stream::kProjectiveTraining), merged in chunk order (the same guide for
 /// any thread count). The uniform guide for resolution 0 or an empty sample space. Counts rays
 /// in `stats`.
 SegmentGuide train_segment_guide(const PathContext& ctx, const SceneVelocities& velocities,
@@ -204,10 +204,10 @@ long long projective_samples_per_index(int width, int height, double ratio);
 /// derivative channels of `film` (a gradient film of velocities.num_params parameters) by
 /// projective sampling (the file comment): projective_samples_per_index(W, H, ratio) boundary
 /// segments per sample index, their u drawn from `guide` (its density divides their weight), numbered and drawn in
-/// chunks as the primary term's (sample_chunks.h), chunk c from Sampler(seed, c, 0, 5), splatted where their connection
-/// lands. Deterministic for a seed whatever the thread count. Counts rays, boundary segments (as traversals) and zero
-/// contributions in `stats`; returns the number of contributions that were not finite (replaced by zero). Part `part`
-/// of `parts` and `deferred` as for add_primary_boundary.
+/// chunks as the primary term's (sample_chunks.h), chunk c from its stream (stream::kProjectiveSegments), splatted
+/// where their connection lands. Deterministic for a seed whatever the thread count. Counts rays, boundary segments (as
+/// traversals) and zero contributions in `stats`; returns the number of contributions that were not finite (replaced by
+/// zero). Part `part` of `parts` and `deferred` as for add_primary_boundary.
 uint64_t add_projective_boundary(Film& film, const PathContext& ctx, const SceneVelocities& velocities,
                                  const ProjectiveEdges& edges, const SegmentGuide& guide, double ratio,
                                  int first_sample, int spp, uint64_t seed, int threads, PathStats& stats, int part = 0,

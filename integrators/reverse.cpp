@@ -333,7 +333,9 @@ class ReverseEstimator::Impl : public RenderSetup {
   uint64_t pixel_index(const PixelSample& ps) const { return pixel_index(ps.x, ps.y); }
 
   /// The boundary term's stream of sample `ps` from its start (its second stream).
-  Sampler boundary_stream(const PixelSample& ps) const { return Sampler(ps.seed, pixel_index(ps), uint64_t(ps.s), 1); }
+  Sampler boundary_stream(const PixelSample& ps) const {
+    return qsil::boundary_stream(ps.seed, pixel_index(ps), uint64_t(ps.s));
+  }
 
   /// How one pass runs the secondary boundary term (ReverseBoundaryHook's fields of the same names).
   struct BoundaryPass {

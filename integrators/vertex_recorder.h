@@ -78,11 +78,7 @@ struct BoundaryPointRecorder : BoundaryHookBase {
     Eigen::Matrix<double, 1, N> J;
     BoundaryPointTrace& b = trace->boundary;
     for_each_boundary_sample(
-        *ctx, *boundary_ctx, vertex(si, sp, q, wo_local, beta, seg), *sampler, stats,
-        [&](const edgetree::Edge& e, double t, const Vec3& g) {
-          J = edge_point_jacobian<N>(*boundary_ctx->velocities, e, t, g, dp);
-          return !J.isZero(0.0);
-        },
+        *ctx, *boundary_ctx, vertex(si, sp, q, wo_local, beta, seg), *sampler, stats, forward_accept<N>(*this, dp, J),
         [&](const edgetree::Edge& e, double t, const Color& weight, const Vec3&, const EdgePointFactors& f) {
           const double added = weight.mean() * J[param];
           ++b.points;

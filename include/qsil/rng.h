@@ -11,12 +11,39 @@
 
 namespace qsil {
 
+/// The dimension salts of Sampler: which independent use a stream serves. Named in one place so
+/// that no two uses share a stream by accident (a shared stream correlates their decisions).
+/// kBoundarySchedule and kWasAuxiliary share a value on purpose of history (changing either would
+/// change every output): they never meet in one run, as warped-area sampling schedules no
+/// boundary traversals, and the schedule reads only sample index 0.
+namespace stream {
+/// A pixel sample's path (camera ray, BSDF and light samples).
+inline constexpr uint64_t kPath = 0;
+/// The secondary boundary term of a pixel sample's path (boundary_stream, boundary_schedule.h).
+inline constexpr uint64_t kBoundary = 1;
+/// Primary edge samples, per chunk (primary_boundary.h).
+inline constexpr uint64_t kPrimary = 2;
+/// The per-pixel phase of boundary_traversals (sample index 0).
+inline constexpr uint64_t kBoundarySchedule = 3;
+/// Warped-area sampling's auxiliary rays, per pixel sample.
+inline constexpr uint64_t kWasAuxiliary = 3;
+/// Warped-area sampling's pixel-border samples, per pixel sample.
+inline constexpr uint64_t kWasBorder = 4;
+/// Projective sampling's boundary segments, per chunk (projective_boundary.h).
+inline constexpr uint64_t kProjectiveSegments = 5;
+/// Projective sampling's grid guide: its uniform training segments, per chunk.
+inline constexpr uint64_t kProjectiveTraining = 6;
+/// Projective sampling's octree guide: its camera-path seeds, per chunk.
+inline constexpr uint64_t kProjectiveSeeds = 7;
+}  // namespace stream
+
 /// Uniform sampler over one PCG32 stream.
 class Sampler {
  public:
   /// The stream for sample `sample_index` of pixel `pixel_index` under user seed `seed`.
-  /// `dimension_salt` separates independent uses (e.g. FD's two sides share it on purpose).
-  Sampler(uint64_t seed, uint64_t pixel_index, uint64_t sample_index, uint64_t dimension_salt = 0)
+  /// `dimension_salt` (one of stream::) separates independent uses (e.g. FD's two sides share it
+  /// on purpose).
+  Sampler(uint64_t seed, uint64_t pixel_index, uint64_t sample_index, uint64_t dimension_salt = stream::kPath)
       : rng_(mix(seed ^ mix(sample_index + 0x9E3779B97F4A7C15ull * (dimension_salt + 1))), pixel_index) {}
 
   /// Uniform double in [0, 1) with 32 random bits (never 1).

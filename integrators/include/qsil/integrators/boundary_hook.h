@@ -26,6 +26,20 @@ edgetree::SilhouetteQuery forward_boundary_query(const BoundaryHookBase& hook, c
   return q;
 }
 
+/// Forward mode's accept test for for_each_boundary_sample at a vertex whose p moves by `dp`
+/// (forward_boundary_query): computes J = g . (v_edge - dp) of the edge point (1 x N, per unit of
+/// each parameter; edge_point_jacobian) into `J`, for the visit that follows, and accepts the point
+/// iff J != 0 (one with J = 0 contributes nothing). BoundaryHook and the retrace's recorder
+/// (vertex_recorder.h) share it, so that both weigh the same edge points alike.
+template <int N>
+auto forward_accept(const BoundaryHookBase& hook, const Eigen::Matrix<double, 3, N>& dp,
+                    Eigen::Matrix<double, 1, N>& J) {
+  return [&hook, &dp, &J](const edgetree::Edge& e, double t, const Vec3& g) {
+    J = edge_point_jacobian<N>(*hook.boundary_ctx->velocities, e, t, g, dp);
+    return !J.isZero(0.0);
+  };
+}
+
 /// The vertex hook of trace_path that adds the secondary boundary term (DualView<N> paths only).
 template <int N>
 struct BoundaryHook : BoundaryHookBase {
@@ -34,15 +48,11 @@ struct BoundaryHook : BoundaryHookBase {
     Eigen::Matrix<double, 3, N> dp;
     const edgetree::SilhouetteQuery q = forward_boundary_query<N>(*this, si, sp, wo_local, dp);
     Eigen::Matrix<double, 1, N> J;  // of the sample being evaluated
-    for_each_boundary_sample(
-        *ctx, *boundary_ctx, vertex(si, sp, q, wo_local, beta, seg), *sampler, stats,
-        [&](const edgetree::Edge& e, double t, const Vec3& g) {
-          J = edge_point_jacobian<N>(*boundary_ctx->velocities, e, t, g, dp);
-          return !J.isZero(0.0);
-        },
-        [&](const edgetree::Edge&, double, const Color& weight, const Vec3&) {
-          for (int c = 0; c < 3; ++c) L[c] += Dual<N>(0.0, (weight[c] * J).transpose());
-        });
+    for_each_boundary_sample(*ctx, *boundary_ctx, vertex(si, sp, q, wo_local, beta, seg), *sampler, stats,
+                             forward_accept<N>(*this, dp, J),
+                             [&](const edgetree::Edge&, double, const Color& weight, const Vec3&) {
+                               for (int c = 0; c < 3; ++c) L[c] += Dual<N>(0.0, (weight[c] * J).transpose());
+                             });
   }
 };
 

@@ -16,7 +16,7 @@ namespace qsil {
 /// How many secondary boundary traversals sample `sample` of pixel `pixel` makes at each vertex of
 /// its path, at `rate` = BoundaryContext::sppi: the whole part of the rate, plus one
 /// where a stratified pick over the pixel's samples selects it: with f the fraction of the rate
-/// and phi uniform in [0, 1) drawn once per pixel (Sampler(seed, pixel, 0, 3): the same for every
+/// and phi uniform in [0, 1) drawn once per pixel (stream::kBoundarySchedule: the same for every
 /// sample range and process split), sample s is picked iff floor(f (s + 1) + phi) > floor(f s +
 /// phi). Every sample is picked with probability f (phi is uniform, to its 32 bits), so weighting each
 /// traversal by 1 / rate is unbiased; and any n consecutive samples hold floor(f n) or ceil(f n)
@@ -29,9 +29,16 @@ inline int boundary_traversals(double rate, uint64_t seed, uint64_t pixel, uint6
   const int whole = int(rate);
   const double f = rate - double(whole);
   if (!(f > 0)) return whole;
-  const double phi = Sampler(seed, pixel, 0, 3).next();
+  const double phi = Sampler(seed, pixel, 0, stream::kBoundarySchedule).next();
   const double s = double(sample);
   return whole + int(std::floor(f * (s + 1.0) + phi) - std::floor(f * s + phi));
+}
+
+/// The stream from which the secondary boundary term of sample `sample` of pixel `pixel` draws:
+/// one of its own (stream::kBoundary), so that the boundary term leaves the path's decisions
+/// unchanged, and a retrace of the sample (sample_trace.h) draws the same edge points.
+inline Sampler boundary_stream(uint64_t seed, uint64_t pixel, uint64_t sample) {
+  return Sampler(seed, pixel, sample, stream::kBoundary);
 }
 
 /// The most traversals boundary_split makes of one.
