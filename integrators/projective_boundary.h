@@ -186,8 +186,8 @@ inline constexpr long long kMaxSeedPaths = 1LL << 24;
 /// between the vertex and the light) and the hit of the BSDF-sampled ray the path continues
 /// with; each seed projected onto a boundary segment (project_seed) and the estimator's |value|
 /// there (as train_segment_guide's) recorded; then SegmentGuide::octree over them
-/// (kOctreeMaxDepth, kOctreeMaxLeaf). Paths in chunks, each from Sampler(0x9e3779b97f4a7c15,
-/// chunk, 0, 7), merged in chunk order (the same guide for any thread count). The uniform guide
+/// (kOctreeMaxDepth, kOctreeMaxLeaf). Paths in chunks, each from its stream
+/// (stream::kProjectiveSeeds), merged in chunk order (the same guide for any thread count). The uniform guide
 /// when guiding.octree is false, the sample space is empty or no seed projects. Throws
 /// qsil::Error when the paths would be more than kMaxSeedPaths. Counts rays in `stats`; `seeds`
 /// (optional) receives the number of projected seeds.

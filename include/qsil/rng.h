@@ -13,9 +13,9 @@ namespace qsil {
 
 /// The dimension salts of Sampler: which independent use a stream serves. Named in one place so
 /// that no two uses share a stream by accident (a shared stream correlates their decisions).
-/// kBoundarySchedule and kWasAuxiliary share a value on purpose of history (changing either would
-/// change every output): they never meet in one run, as warped-area sampling schedules no
-/// boundary traversals, and the schedule reads only sample index 0.
+/// kBoundarySchedule and kWasAuxiliary share a value for history's sake (changing the first would
+/// change every run with a fractional rate, the second every warped-area run): they never meet in
+/// one run, as warped-area sampling has no edge sampler and so schedules no boundary traversals.
 namespace stream {
 /// A pixel sample's path (camera ray, BSDF and light samples).
 inline constexpr uint64_t kPath = 0;
