@@ -333,6 +333,13 @@ WHY_MISSED = {
         "by LTC integrals ([QSS] 3.5–3.6), arithmetic rather than rays; the authors' code is further from this "
         "target (gradient ≈ 19× its primal, DESIGN §11)."),
     "shadow-quad, k = 8 FD": (
+        "Re-run 2026-11-28 (d64bd34; 4.39 on a21f177, 2026-11-25): quadric's relative MSE went 0.035 → 0.087 at "
+        "15 s, FD's 0.175 → 0.184. Most of it is the adaptive camera hits of 2026-11-28, which attach 172 of the "
+        "bunny's 1839 vertices at 128² (its smoothed creases): the summed per-pixel variance of the eight parameters "
+        "is 5010 adaptive against 2572 with `--camera-hits detached` at equal time (Python bindings, 128², 16 spp, "
+        "seeds 1000–1007; at k = 1 885 against 442, seeds 2000–2007), and 1.15–1.18× at 48² and 256². The rule "
+        "was judged on 48² scenes, where shadow-quad tied (`docs/experiments/2026-11-28-diffuse-creases.md`); "
+        "on this chart it loses; the rest is fewer spp in the budget (177 against 256). Earlier analysis (before the camera hits): "
         "Measured 2026-11-25 (Python bindings, 128², 16 spp, 8 seeds, per-pixel variance across seeds over the mean "
         "image's mean square; `--boundary none` for the interior term alone): the boundary term holds 69 % of the "
         "variance and 79 % of the time (0.39 of 0.50 s), and the first parameter (the vertical translation toward "
