@@ -7,6 +7,7 @@
 ///   shares no code with the dual arithmetic);
 /// - the adaptive strength attaches the thin glossy ring and not a smooth sphere at 32 x 32, and a
 ///   diffuse teapot's smoothed creases (not the whole teapot) with a ramp no steeper than its bound;
+///   it leaves the ordinary turns of a coarse bunny's normals (edges about a pixel long) detached;
 /// - with every hit on a moving shape attached (CameraHits::Attached), `qsil grad` agrees with
 ///   central finite differences where the attached form's flux crosses a silhouette and an
 ///   intersection curve (a sphere sunk into a floor, rising) and a static post's outline (an edge
@@ -198,6 +199,27 @@ TEST(AttachedCamera, AdaptiveStrengthAttachesADiffuseMeshsSmoothedCreasesWithABo
   const Scene sphere = load_scene(test::data_file("tests/data/gradient/sunk-sphere.xml"), {{"res", "48"}});
   const SceneVelocities vs = compute_velocities(sphere, {parse_parameter("sphere:translate:0,1,0", sphere)});
   EXPECT_FALSE(camera_attachment(sphere, vs.moving, CameraHits::Adaptive).any());
+}
+
+TEST(AttachedCamera, AdaptiveStrengthLeavesACoarseMeshsOrdinaryTurnsDetached) {
+  // The bunny of shadow-quad (1839 vertices) has no crease, but its averaged normals turn by 45-90
+  // degrees over edges about a pixel long at 128²: there the warp's Jacobian costs more than the
+  // turn's tail (twice the variance when 9 % of its vertices were attached,
+  // docs/experiments/2026-11-28-diffuse-crease-rule.md). At most a few of them are attached, and
+  // none once a pixel is smaller than its edges.
+  for (const auto& [res, most] : {std::pair<const char*, double>{"128", 0.03}, {"256", 0.0}}) {
+    const Scene bunny = load_scene(test::data_file("scenes/shadow-quad.xml"), {{"res", res}});
+    const SceneVelocities vb = compute_velocities(bunny, {parse_parameter("object:translate:0,1,0", bunny)});
+    const CameraAttachment ab = camera_attachment(bunny, vb.moving, CameraHits::Adaptive);
+    int shape = -1;
+    for (size_t s = 0; s < bunny.shapes.size(); ++s)
+      if (bunny.shapes[s].id == "object") shape = int(s);
+    ASSERT_GE(shape, 0);
+    const size_t n = bunny.shapes[size_t(shape)].mesh.positions.size();
+    int some = 0;
+    for (double v : ab.strength[size_t(shape)]) some += v > 0;
+    EXPECT_LE(some, most * double(n)) << res << "²: " << some << " of " << n << " vertices attached";
+  }
 }
 
 /// grad with every camera hit on a moving shape attached against central finite differences.

@@ -93,10 +93,11 @@ inline CameraHits camera_hits_named(const std::string& name) {
 inline constexpr double kAttachedTurnStart = 1.5;
 inline constexpr double kAttachedTurnFull = 3.0;
 /// The lobe width (radians of normal turn) of a diffuse BSDF in the adaptive rule: a diffuse shape
-/// is attached where its normal turns by at least 0.75 rad (43 degrees) within a pixel, fully from
-/// 1.5 rad (measured: 0.25 attached too much and lost on `sun`, 1.0 gained nothing on the creases;
-/// docs/experiments/2026-11-28-diffuse-creases.md).
-inline constexpr double kDiffuseLobeWidth = 0.5;
+/// is attached where its normal's root-mean-square turn within a pixel (below) is at least 1.5 rad,
+/// fully from 3 rad (measured on 15 scenes: 0.5 with the edge's whole angle as the turn lost 2x on
+/// `shadow-quad`'s coarse bunny at 128²; 1.25 gave back part of the crease scenes' gain;
+/// docs/experiments/2026-11-28-diffuse-crease-rule.md).
+inline constexpr double kDiffuseLobeWidth = 1.0;
 /// The strength falls by at most 1 per kAttachedRampPixels pixels of surface (the ramp, below).
 inline constexpr double kAttachedRampPixels = 1.0;
 
@@ -114,10 +115,16 @@ inline constexpr double kAttachedRampPixels = 1.0;
 ///   its vertex normals per unit length (len) times s, the width of a pixel at the vertex's depth
 ///   (scene units): a curvature sustained over the pixel; alpha the GGX alpha;
 /// - diffuse (a smoothed crease: a mesh without normals whose averaged vertex normals span a sharp
-///   edge, docs/experiments/2026-11-25-tail-decomposition.md): turn = angle min(1, s / len), the
-///   edge's angle when the edge fits in a pixel (an edge's normals cannot turn by more); alpha
-///   kDiffuseLobeWidth. kappa s would attach every small, curved detail of a diffuse shape, and
-///   under a sun that loses (docs/experiments/2026-11-28-diffuse-creases.md).
+///   edge, docs/experiments/2026-11-25-tail-decomposition.md): turn = angle min(sqrt(s / len),
+///   s / len); alpha kDiffuseLobeWidth. An edge longer than a pixel turns by angle s / len within
+///   one, as above. One that fits in a pixel turns by its whole angle across a band len / s of the
+///   pixel, where the detached derivative is about angle / len: the pixel's second moment grows as
+///   angle² s / len, so its root mean square, angle sqrt(s / len), is what compares with the
+///   Jacobian's noise (which does not grow as the crease narrows). The edge's angle alone (the rule
+///   before 2026-11-28, evening) attached the turns of a coarse mesh's edges a pixel long, where
+///   the Jacobian cost more than it removed (`shadow-quad`'s bunny at 128²: twice the variance);
+///   kappa s would attach every small, curved detail of a diffuse shape, and under a sun that loses
+///   (docs/experiments/2026-11-28-diffuse-creases.md, 2026-11-28-diffuse-crease-rule.md).
 /// Then the ramp: a vertex's strength is raised to at least a neighbour's minus len / (s
 /// kAttachedRampPixels) (a Lipschitz bound, taken by a best-first pass from the strongest
 /// vertices), so the strength never rises from 0 to 1 across a triangle much smaller than a
@@ -205,7 +212,7 @@ inline CameraAttachment camera_attachment(const Scene& scene, const std::vector<
         if (!(len > 0)) continue;
         for (const int v : {i, j}) {
           const double sv = pixel[size_t(v)];
-          turn[size_t(v)] = std::max(turn[size_t(v)], diffuse ? angle * std::min(1.0, sv / len) : angle * sv / len);
+          turn[size_t(v)] = std::max(turn[size_t(v)], diffuse ? angle * std::min(std::sqrt(sv / len), sv / len) : angle * sv / len);
         }
       }
     std::vector<double> a(m.positions.size(), 0.0);
