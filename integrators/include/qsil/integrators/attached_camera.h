@@ -94,7 +94,7 @@ inline constexpr double kAttachedTurnStart = 1.5;
 inline constexpr double kAttachedTurnFull = 3.0;
 /// The lobe width (radians of normal turn) of a diffuse BSDF in the adaptive rule: a diffuse shape
 /// is attached where its normal's root-mean-square turn within a pixel (below) is at least 1.5 rad,
-/// fully from 3 rad (measured on 15 scenes: 0.5 with the edge's whole angle as the turn lost 2x on
+/// fully from 3 rad (measured on 12 scenes: 0.5 with the edge's whole angle as the turn lost 2x on
 /// `shadow-quad`'s coarse bunny at 128²; 1.25 gave back part of the crease scenes' gain;
 /// docs/experiments/2026-11-28-diffuse-crease-rule.md).
 inline constexpr double kDiffuseLobeWidth = 1.0;
