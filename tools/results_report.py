@@ -342,7 +342,7 @@ WHY_MISSED = {
         "(`docs/experiments/2026-11-28-diffuse-crease-rule.md`). Quadric's relative MSE × spp is now what it was on "
         "a21f177 (0.0507 × 176 against 0.035 × 256); the rest of the gap to that run is its spp in 15 s (176 against "
         "256), within this shared machine's timing noise (grad with and without attached hits timed equal, "
-        "interleaved). "
+        "interleaved). Meeting the target now needs about 1.35× more efficiency. "
         "Earlier analysis (before the camera hits): "
         "Measured 2026-11-25 (Python bindings, 128², 16 spp, 8 seeds, per-pixel variance across seeds over the mean "
         "image's mean square; `--boundary none` for the interior term alone): the boundary term holds 69 % of the "
