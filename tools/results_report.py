@@ -349,9 +349,9 @@ WHY_MISSED = {
         "variance and 79 % of the time (0.39 of 0.50 s), and the first parameter (the vertical translation toward "
         "the light) 44 % of the variance for 23 % of the mean square. Its variance is the bunny's self-shadow "
         "penumbrae at points that slide fast (`docs/design-notes.md` \"Narrow self-shadow penumbrae\"); the light "
-        "contour sets and the splitting at fast shading points took the ratio from 3.1 to its value here, and the "
-        "rate 0.5 is near its optimum (about 0.4 by √(V_b c_i / (V_i c_b)) from those figures). Meeting it needs about "
-        "14 % more efficiency at k = 8: a cheaper traversal (above) or a lower variance of the penumbra samples."),
+        "contour sets and the splitting at fast shading points took the ratio from 3.1 to 4.39 (a21f177), and the "
+        "rate 0.5 is near its optimum (about 0.4 by √(V_b c_i / (V_i c_b)) from those figures). Meeting it then needed "
+        "about 14 % more efficiency at k = 8: a cheaper traversal (above) or a lower variance of the penumbra samples."),
     "direct, k = 8 vsphere": (
         "Its estimate is below the target too, and vsphere's single runs spread widely here: its own relative MSE "
         "(floor subtracted) was 0.147 at 130 spp in the regeneration before (reference of 3636 spp, AMD EPYC) and "
@@ -364,7 +364,7 @@ WHY_MISSED = {
         "87 % of the squares of the largest samples, 71 % of it at the camera hit, 53 % at |n_g·wo| < 0.1 (the hit "
         "sliding along its ray at 1/cos); the boundary term 13 %, mostly well chosen (pdf ≥ 0.01 for 81 % of it). "
         "The adaptive camera hits attach 260 of Spot's 2930 vertices here (204 before the rms-turn rule of 8fbbdd0, "
-        "whose summed per-pixel variance at 48², 64 spp, 16 seeds was 379 against 474 and 484 detached, "
+        "whose summed per-pixel variance at 48², 64 spp, 16 seeds was 379 against 474 (the rule before) and 484 (detached), "
         "`docs/experiments/2026-11-28-diffuse-crease-rule.md`; the row is of the study before 8fbbdd0); attached "
         "everywhere lost 4.5× in s.e. "
         "(`docs/experiments/2026-11-28-diffuse-creases.md`). Single-run studies gave 0.32-0.62; this is the mean of "
@@ -402,9 +402,11 @@ WHY_MISSED = {
     "wingnut FD": (
         "The interior term's tail on the wing nut's smoothed sharp creases. Decomposed 2026-11-28 "
         "(`tools/tail_report.py`, 8 seeds): the interior term holds all of the largest samples' squares, 98 % at "
-        "the camera hit, 80 % where the shading normal turns at ≥ 100 rad per unit. The adaptive rule attaches 767 "
-        "of 3047 vertices at 48²; the diffuse-crease change gained 1.8× in summed variance at equal spp "
-        "(`docs/experiments/2026-11-28-diffuse-creases.md`). The reference's noise floor is above 1/10 of the "
+        "the camera hit, 80 % where the shading normal turns at ≥ 100 rad per unit. The adaptive rule attached 767 "
+        "of 3047 vertices at 48² when the study ran, a rule that gained 1.8× in summed variance at equal spp on its "
+        "tuning seeds (`docs/experiments/2026-11-28-diffuse-creases.md`) but tied detached on new ones (3037 against "
+        "3048, 48², 64 spp, seeds 4000–4015); the rms-turn rule of 8fbbdd0 attaches 488 and gives 2724 there "
+        "(`docs/experiments/2026-11-28-diffuse-crease-rule.md`; the row is of the study before 8fbbdd0). The reference's noise floor is above 1/10 of the "
         "errors compared here, so the ratio is partly the floor's."),
     "partial-view FD": (
         "One run of three (seed 1; 0.81 in a first three-run study of the same code that day) draws a tail: 0.834 against 0.054 and "
