@@ -365,7 +365,7 @@ WHY_MISSED = {
         "sliding along its ray at 1/cos); the boundary term 13 %, mostly well chosen (pdf ≥ 0.01 for 81 % of it). "
         "The adaptive camera hits attach 260 of Spot's 2930 vertices here (204 before the rms-turn rule of 8fbbdd0, "
         "whose summed per-pixel variance at 48², 64 spp, 16 seeds was 379 against 474 (the rule before) and 484 (detached), "
-        "`docs/experiments/2026-11-28-diffuse-crease-rule.md`; the row is of the study before 8fbbdd0); attached "
+        "`docs/experiments/2026-11-28-diffuse-crease-rule.md`). The row is of the study re-run on d8ca3bd, after that rule; it moved within run-to-run noise (0.382 → 0.365), so three 2-s runs do not show that gain. Attached "
         "everywhere lost 4.5× in s.e. "
         "(`docs/experiments/2026-11-28-diffuse-creases.md`). Single-run studies gave 0.32-0.62; this is the mean of "
         "three runs."),
@@ -390,7 +390,7 @@ WHY_MISSED = {
         "variance went 7393 → 5519, 5339, 9090 at up to 2.1× the time. The interior term holds the other 44 %, "
         "40 % of it at normal turns ≥ 100 rad per unit."),
     "glossy-sphere-light FD": (
-        "Heavy tails at the second vertex. The three runs give 22.3, 1.39 and 0.95 (seed 0 gave 30 in a first three-run "
+        "Heavy tails at the second vertex. The three runs give 17.1, 2.95 and 0.84 (22.3, 1.39 and 0.95 in the study on dc2a424; seed 0 gave 30 in a first three-run "
         "study of the same code that day, not committed: the tail sample recurs in a time-budgeted run whose spp "
         "varies). "
         "Decomposed 2026-11-28 (`tools/tail_report.py`, 8 seeds, `docs/experiments/2026-11-28-boundary-tails.md`): "
@@ -406,11 +406,11 @@ WHY_MISSED = {
         "of 3047 vertices at 48² when the study ran, a rule that gained 1.8× in summed variance at equal spp on its "
         "tuning seeds (`docs/experiments/2026-11-28-diffuse-creases.md`) but tied detached on new ones (3037 against "
         "3048, 48², 64 spp, seeds 4000–4015); the rms-turn rule of 8fbbdd0 attaches 488 and gives 2724 there "
-        "(`docs/experiments/2026-11-28-diffuse-crease-rule.md`; the row is of the study before 8fbbdd0). The reference's noise floor is above 1/10 of the "
+        "(`docs/experiments/2026-11-28-diffuse-crease-rule.md`). The row is of the study re-run on d8ca3bd, after that rule; it moved within run-to-run noise (≤ 0.894 → ≤ 0.856). The reference's noise floor is above 1/10 of the "
         "errors compared here, so the ratio is partly the floor's."),
     "partial-view FD": (
-        "One run of three (seed 1; 0.81 in a first three-run study of the same code that day) draws a tail: 0.834 against 0.054 and "
-        "0.063; FD's runs are 0.076-0.084. The single-run studies before ran seed 0 only (0.050). The tail is one "
+        "One run of three (seed 1) draws a tail: 0.604 against 0.041 and 0.056, FD's runs 0.072-0.085 (in the study "
+        "before, on dc2a424: 0.834 against 0.054 and 0.063; 0.81 in a first three-run study that day). The single-run studies before ran seed 0 only (0.050). The tail is one "
         "interior sample: `qsil grad` with that run's seed (compare's derive_seed(1, 0)) at 150 spp puts 93 % of the "
         "image sum's variance in pixel (34, 8), whose sample 45 is 8468. It is a camera hit on Spot at |n_g·wo| "
         "0.0023, sliding 411 units per unit θ along its ray (`docs/design-notes.md` \"Interior-term tails at grazing "
