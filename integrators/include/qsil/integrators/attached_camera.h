@@ -93,7 +93,7 @@ inline CameraHits camera_hits_named(const std::string& name) {
 inline constexpr double kAttachedTurnStart = 1.5;
 inline constexpr double kAttachedTurnFull = 3.0;
 /// The lobe width (radians of normal turn) of a diffuse BSDF in the adaptive rule: a diffuse shape
-/// is attached where its normal's root-mean-square turn within a pixel (below) is at least 1.5 rad,
+/// is attached where its normal's rms turn within a pixel (CameraAttachment) is at least 1.5 rad,
 /// fully from 3 rad (measured on 12 scenes: 0.5 with the edge's whole angle as the turn lost 2x on
 /// `shadow-quad`'s coarse bunny at 128²; 1.25 gave back part of the crease scenes' gain;
 /// docs/experiments/2026-11-28-diffuse-crease-rule.md).
@@ -109,14 +109,16 @@ inline constexpr double kAttachedRampPixels = 1.0;
 /// attached form only adds the noise of the warp's Jacobian (about L |V| / kAttachedBorder per
 /// sample, on every attached pixel). So a vertex's strength is
 /// smoothstep((m - kAttachedTurnStart) / (kAttachedTurnFull - kAttachedTurnStart)) with m = turn /
-/// alpha, turn the largest, over the vertex's edges, of how far the normal turns within a pixel
-/// along the edge, and alpha the lobe width:
+/// alpha, turn the largest over the vertex's edges of the turn of the normal along the edge within a
+/// pixel (below), and alpha the lobe width:
 /// - rough conductor (a thin, curved, glossy object): turn = angle s / len, the edge's angle between
 ///   its vertex normals per unit length (len) times s, the width of a pixel at the vertex's depth
 ///   (scene units): a curvature sustained over the pixel; alpha the GGX alpha;
 /// - diffuse (a smoothed crease: a mesh without normals whose averaged vertex normals span a sharp
 ///   edge, docs/experiments/2026-11-25-tail-decomposition.md): turn = angle min(sqrt(s / len),
-///   s / len), the root-mean-square turn within the pixel; alpha kDiffuseLobeWidth. An edge longer
+///   s / len): s times the root mean square over the pixel of the rate at which the normal turns
+///   along the edge (for an edge shorter than a pixel, more than the edge's own angle); alpha
+///   kDiffuseLobeWidth. An edge longer
 ///   than a pixel turns by angle s / len within one, as above. One that fits in a pixel turns by its
 ///   whole angle across a band len / s of the pixel, where the detached derivative is about
 ///   angle / len: the pixel's second moment grows as angle² s / len, and its root mean square,
