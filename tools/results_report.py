@@ -342,16 +342,15 @@ WHY_MISSED = {
         "(`docs/experiments/2026-11-28-diffuse-crease-rule.md`). Quadric's relative MSE × spp is now what it was on "
         "a21f177 (0.0507 × 176 against 0.035 × 256); the rest of the gap to that run is its spp in 15 s (176 against "
         "256), within this shared machine's timing noise (grad with and without attached hits timed equal, "
-        "interleaved). Meeting the target now needs about 1.35× more efficiency. "
-        "Earlier analysis (before the camera hits): "
-        "Measured 2026-11-25 (Python bindings, 128², 16 spp, 8 seeds, per-pixel variance across seeds over the mean "
-        "image's mean square; `--boundary none` for the interior term alone): the boundary term holds 69 % of the "
-        "variance and 79 % of the time (0.39 of 0.50 s), and the first parameter (the vertical translation toward "
-        "the light) 44 % of the variance for 23 % of the mean square. Its variance is the bunny's self-shadow "
-        "penumbrae at points that slide fast (`docs/design-notes.md` \"Narrow self-shadow penumbrae\"); the light "
-        "contour sets and the splitting at fast shading points took the ratio from 3.1 to 4.39 (a21f177), and the "
-        "rate 0.5 is near its optimum (about 0.4 by √(V_b c_i / (V_i c_b)) from those figures). Meeting it then needed "
-        "about 14 % more efficiency at k = 8: a cheaper traversal (above) or a lower variance of the penumbra samples."),
+        "interleaved). Meeting the target now needs about 1.35× more efficiency. Earlier analysis (before the camera "
+        "hits): Measured 2026-11-25 (Python bindings, 128², 16 spp, 8 seeds, per-pixel variance across seeds over the "
+        "mean image's mean square; `--boundary none` for the interior term alone): the boundary term holds 69 % of the "
+        "variance and 79 % of the time (0.39 of 0.50 s), and the first parameter (the vertical translation toward the "
+        "light) 44 % of the variance for 23 % of the mean square. Its variance is the bunny's self-shadow penumbrae at "
+        "points that slide fast (`docs/design-notes.md` \"Narrow self-shadow penumbrae\"); the light contour sets and "
+        "the splitting at fast shading points took the ratio from 3.1 to 4.39 (a21f177), and the rate 0.5 is near its "
+        "optimum (about 0.4 by √(V_b c_i / (V_i c_b)) from those figures). Meeting it then needed about 14 % more "
+        "efficiency at k = 8: a cheaper traversal (above) or a lower variance of the penumbra samples."),
     "direct, k = 8 vsphere": (
         "Its estimate is below the target too, and vsphere's single runs spread widely here: its own relative MSE "
         "(floor subtracted) was 0.147 at 130 spp in the regeneration before (reference of 3636 spp, AMD EPYC) and "
@@ -393,32 +392,33 @@ WHY_MISSED = {
         "variance went 7393 → 5519, 5339, 9090 at up to 2.1× the time. The interior term holds the other 44 %, "
         "40 % of it at normal turns ≥ 100 rad per unit."),
     "glossy-sphere-light FD": (
-        "Heavy tails at the second vertex. The three runs give 17.1, 2.95 and 0.84 (22.3, 1.39 and 0.95 in the study on dc2a424; seed 0 gave 30 in a first three-run "
-        "study of dc2a424's code that day, not committed: the tail sample recurs in a time-budgeted run whose spp "
-        "varies). "
-        "Decomposed 2026-11-28 (`tools/tail_report.py`, 8 seeds, `docs/experiments/2026-11-28-boundary-tails.md`): "
-        "the interior term holds 70 % of the largest samples' squares, 83 % of it at depth 2 on the GGX α 0.05 "
-        "floor, where the shading normal turns slowly (< 1 rad per unit: 74 %): the floor's narrow lobe seen along "
-        "a direction that moves with the wing nut's hit, which attached camera hits do not reach (attached deeper "
-        "vertices, `docs/design-notes.md`). The boundary term holds 30 %, 93 % of it at depth 2 on the sphere "
-        "light's (58 %) and the wing nut's (42 %) outlines, 43 % of it chosen with pdf < 0.01."),
+        "Heavy tails at the second vertex. The three runs give 17.1, 2.95 and 0.84 (22.3, 1.39 and 0.95 in the study "
+        "on dc2a424; seed 0 gave 30 in a first three-run study of dc2a424's code that day, not committed: the tail "
+        "sample recurs in a time-budgeted run whose spp varies). Decomposed 2026-11-28 (`tools/tail_report.py`, 8 "
+        "seeds, `docs/experiments/2026-11-28-boundary-tails.md`): the interior term holds 70 % of the largest samples' "
+        "squares, 83 % of it at depth 2 on the GGX α 0.05 floor, where the shading normal turns slowly (< 1 rad per "
+        "unit: 74 %): the floor's narrow lobe seen along a direction that moves with the wing nut's hit, which "
+        "attached camera hits do not reach (attached deeper vertices, `docs/design-notes.md`). The boundary term holds "
+        "30 %, 93 % of it at depth 2 on the sphere light's (58 %) and the wing nut's (42 %) outlines, 43 % of it "
+        "chosen with pdf < 0.01."),
     "wingnut FD": (
         "The interior term's tail on the wing nut's smoothed sharp creases. Decomposed 2026-11-28 "
-        "(`tools/tail_report.py`, 8 seeds): the interior term holds all of the largest samples' squares, 98 % at "
-        "the camera hit, 80 % where the shading normal turns at ≥ 100 rad per unit. The adaptive rule of "
-        "dc2a424's study attached 767 of 3047 vertices at 48² (the decomposition above is of that rule), a rule that gained 1.8× in summed variance at equal spp on its "
-        "tuning seeds (`docs/experiments/2026-11-28-diffuse-creases.md`) but tied detached on new ones (3037 against "
-        "3048, 48², 64 spp, seeds 4000–4015); the rms-turn rule of 8fbbdd0 attaches 488 and gives 2724 there "
-        "(`docs/experiments/2026-11-28-diffuse-crease-rule.md`, its counts section). The row is of the study re-run on d8ca3bd, after that rule; it moved within run-to-run noise (≤ 0.894 → ≤ 0.856). The reference's noise floor is above 1/10 of the "
-        "errors compared here, so the ratio is partly the floor's."),
+        "(`tools/tail_report.py`, 8 seeds): the interior term holds all of the largest samples' squares, 98 % at the "
+        "camera hit, 80 % where the shading normal turns at ≥ 100 rad per unit. The adaptive rule of dc2a424's study "
+        "attached 767 of 3047 vertices at 48² (the decomposition above is of that rule), a rule that gained 1.8× in "
+        "summed variance at equal spp on its tuning seeds (`docs/experiments/2026-11-28-diffuse-creases.md`) but tied "
+        "detached on new ones (3037 against 3048, 48², 64 spp, seeds 4000–4015); the rms-turn rule of 8fbbdd0 attaches "
+        "488 and gives 2724 there (`docs/experiments/2026-11-28-diffuse-crease-rule.md`, its counts section). The row "
+        "is of the study re-run on d8ca3bd, after that rule; it moved within run-to-run noise (≤ 0.894 → ≤ 0.856). The "
+        "reference's noise floor is above 1/10 of the errors compared here, so the ratio is partly the floor's."),
     "partial-view FD": (
         "One run of three (seed 1) draws a tail: 0.604 against 0.041 and 0.056, FD's runs 0.072-0.085 (in the study "
-        "before, on dc2a424: 0.834 against 0.054 and 0.063; 0.81 in a first three-run study that day). The single-run studies before ran seed 0 only (0.050). On dc2a424's code the tail was "
-        "one interior sample: `qsil grad` with that run's seed (compare's derive_seed(1, 0)) at 150 spp puts 93 % of the "
-        "image sum's variance in pixel (34, 8), whose sample 45 is 8468. It is a camera hit on Spot at |n_g·wo| "
-        "0.0023, sliding 411 units per unit θ along its ray (`docs/design-notes.md` \"Interior-term tails at grazing "
-        "hits\"); the adaptive camera hits attach creases and rough metal, not grazing hits "
-        "(`docs/experiments/2026-11-28-boundary-tails.md`)."),
+        "before, on dc2a424: 0.834 against 0.054 and 0.063; 0.81 in a first three-run study that day). The single-run "
+        "studies before ran seed 0 only (0.050). On dc2a424's code the tail was one interior sample: `qsil grad` with "
+        "that run's seed (compare's derive_seed(1, 0)) at 150 spp puts 93 % of the image sum's variance in pixel (34, "
+        "8), whose sample 45 is 8468. It is a camera hit on Spot at |n_g·wo| 0.0023, sliding 411 units per unit θ "
+        "along its ray (`docs/design-notes.md` \"Interior-term tails at grazing hits\"); the adaptive camera hits attach "
+        "creases and rough metal, not grazing hits (`docs/experiments/2026-11-28-boundary-tails.md`)."),
 }
 
 

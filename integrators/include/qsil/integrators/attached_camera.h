@@ -118,18 +118,17 @@ inline constexpr double kAttachedRampPixels = 1.0;
 ///   edge, docs/experiments/2026-11-25-tail-decomposition.md): turn = angle min(sqrt(s / len),
 ///   s / len): s times the root mean square over the pixel of the rate at which the normal turns
 ///   along the edge (for an edge shorter than a pixel, more than the edge's own angle); alpha
-///   kDiffuseLobeWidth. An edge longer
-///   than a pixel turns by angle s / len within one, as above. One that fits in a pixel turns by its
-///   whole angle across a band len / s of the pixel, where the detached derivative is about
-///   angle / len: the pixel's second moment grows as angle² s / len, and its root mean square,
-///   angle sqrt(s / len), is what compares with the Jacobian's noise (which does not grow as the
-///   crease narrows). The rule before 2026-11-28, evening, took the edge's whole angle with a lobe
-///   of 0.5 rad and attached the 45-90 degree turns of a coarse mesh's edges a pixel long, where the
-///   Jacobian cost more than it removed (`shadow-quad`'s bunny at 128²: twice the variance). The
-///   wider lobe is what leaves those edges detached; the square root keeps the creases much
-///   narrower than a pixel above the threshold. kappa s would attach every small, curved detail of
-///   a diffuse shape, and under a sun that loses (docs/experiments/2026-11-28-diffuse-creases.md,
-///   2026-11-28-diffuse-crease-rule.md).
+///   kDiffuseLobeWidth. An edge longer than a pixel turns by angle s / len within one, as above.
+///   One that fits in a pixel turns by its whole angle across a band len / s of the pixel, where the
+///   detached derivative is about angle / len: the pixel's second moment grows as angle² s / len,
+///   and its root mean square, angle sqrt(s / len), is what compares with the Jacobian's noise
+///   (which does not grow as the crease narrows). The rule before 2026-11-28, evening, took the
+///   edge's whole angle with a lobe of 0.5 rad and attached the 45-90 degree turns of a coarse
+///   mesh's edges a pixel long, where the Jacobian cost more than it removed (`shadow-quad`'s bunny
+///   at 128²: twice the variance). The wider lobe is what leaves those edges detached; the square
+///   root keeps the creases much narrower than a pixel above the threshold. kappa s would attach
+///   every small, curved detail of a diffuse shape, and under a sun that loses
+///   (docs/experiments/2026-11-28-diffuse-creases.md, 2026-11-28-diffuse-crease-rule.md).
 /// Then the ramp: a vertex's strength is raised to at least a neighbour's minus len / (s
 /// kAttachedRampPixels) (a Lipschitz bound, taken by a best-first pass from the strongest
 /// vertices), so the strength never rises from 0 to 1 across a triangle much smaller than a
