@@ -4,6 +4,7 @@
 
 #include "qsil/integrators/estimator.h"
 
+#include "attached_control.h"
 #include "forest_guide_training.h"
 #include "pixel_loop.h"
 #include "projective_boundary.h"
@@ -25,6 +26,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <optional>
 
 namespace qsil {
@@ -144,6 +146,12 @@ class GradientEstimator final : public Estimator::Impl, private RenderSetup {
       boundary_ctx.camera_hits = config.camera_hits;
       set_up_boundary_term(s, tracer, config.method, &vel, vel.moving, config.sppi, lights.environment,
                            boundary, boundary_ctx, primary, setup, config.intersection_curves);
+      if (primary.attached && config.camera_control_spp > 0) {
+        const auto t0 = Clock::now();
+        setup.control_pixels = set_attached_control(ctx, primary.attachment, config.camera_control_spp);
+        setup.control_seconds = seconds_since(t0);
+        setup.seconds += setup.control_seconds;
+      }
       // Projective sampling: no secondary edge sampler, its boundary sample space instead.
       if (config.method == Method::Projective) {
         projective = make_projective_edges(*boundary.edges, boundary_ctx.moving);
@@ -480,7 +488,7 @@ void RenderResult::merge(const RenderResult& other) {
 }
 
 std::string SetupReport::describe() const {
-  char buf[576], crossings[96] = "", sun[112] = "", attached[112] = "";
+  char buf[640], crossings[96] = "", sun[112] = "", attached[176] = "";
   if (crossing_segments > 0)
     std::snprintf(crossings, sizeof crossings, ", %d intersection-curve segments (%.3f s)", crossing_segments,
                   crossing_seconds);
@@ -492,6 +500,11 @@ std::string SetupReport::describe() const {
     std::snprintf(attached, sizeof attached,
                   ", camera hits attached at %d of %d moving vertices (%d static primary edges)", attached_vertices,
                   moving_vertices, static_primary_edges);
+  if (attached_vertices > 0 && control_pixels > 0) {
+    const size_t used = std::strlen(attached);
+    std::snprintf(attached + used, sizeof attached - used, ", a control variate at %d pixels (%.3f s)", control_pixels,
+                  control_seconds);
+  }
   std::snprintf(buf, sizeof buf, "%s: %d edges, %d fitted nodes (%d with quadrics), %d primary edges%s%s%s, %.3f s",
                 structure.c_str(), edges, fitted_nodes, quadric_nodes, primary_edges, crossings, sun, attached,
                 seconds);
@@ -507,6 +520,9 @@ Estimator::Estimator(const Scene& scene, EstimatorConfig config) {
   if (config.method == Method::WarpedArea) check_warped_area_sampling(config.warped_area);
   if (config.method == Method::Projective) check_projective_guiding(config.projective_guiding);
   check_forest_guiding(config.forest_guiding);
+  if (config.camera_control_spp != 0 && config.camera_control_spp < 2)
+    throw Error("the camera hits' control variate needs 0 (none) or at least 2 pre-pass spp (got " +
+                std::to_string(config.camera_control_spp) + ")");
   if (config.forest_guiding.training > 0 && !config.params.empty() && config.method != Method::Quadric &&
       config.method != Method::QuadricBox)
     throw Error("forest guide: method " + std::string(method_name(config.method)) +

@@ -112,7 +112,9 @@ void sample_chunk(const PathContext& ctx, const PrimaryEdges& primary, long long
 /// and colour: - sum over the sides of sign L w (g . v_side), v_side the velocity of the side's
 /// hit point carried to the edge point's depth along the same ray (a point at distance r from
 /// the camera that moves at v turns its ray as a point at distance r' moving at v r' / r), w the
-/// attachment weight of the side's sample position. `xe`: the edge point (world).
+/// attachment weight of the side's sample position, and L less the pixel's control variate c
+/// (CameraAttachment::control: the same c as the pixel's Jacobian term). `xe`: the edge point
+/// (world).
 template <int N>
 Eigen::Matrix<double, 3, N> attached_flux(const Scene& scene, const SceneVelocities& vel,
                                           const CameraAttachment& attachment, const EdgeSides& sides, const Vec3& g,
@@ -121,6 +123,7 @@ Eigen::Matrix<double, 3, N> attached_flux(const Scene& scene, const SceneVelocit
   const double b = attached_bump_1d(film.x() - px) * attached_bump_1d(film.y() - py);
   if (!(b > 0)) return flux;
   const Vec3 o = scene.camera.origin();
+  const Color c = attachment.control_at(px, py);
   for (int i = 0; i < sides.count; ++i) {
     const EdgeSides::Side& side = sides.side[i];
     if (!side.hit.valid() || !vel.moving[size_t(side.hit.shape)]) continue;
@@ -132,7 +135,7 @@ Eigen::Matrix<double, 3, N> attached_flux(const Scene& scene, const SceneVelocit
     const Eigen::Matrix<double, 1, N> gv =
         g.transpose() * material_velocity<N>(vel, scene, side.hit.shape, side.hit.triangle, side.hit.u, side.hit.v) *
         ((xe - o).norm() / r);
-    flux -= (side.sign * a * b) * side.L.matrix() * gv;
+    flux -= (side.sign * a * b) * Color(side.L - c).matrix() * gv;
   }
   return flux;
 }

@@ -230,7 +230,7 @@ void bind_forward(py::module_& m) {
          int guiding_resolution, double guiding_share, double guiding_training, bool guiding_octree,
          double guiding_seeds, int was_rays, double was_kappa, double was_exponent, bool was_unbiased,
          int forest_guide_training, int forest_guide_rounds, int forest_guide_resolution, int forest_guide_depth,
-         double forest_guide_share, const std::string& camera_hits) {
+         double forest_guide_share, const std::string& camera_hits, int camera_control_spp) {
         const Method method = parse_method(boundary, "boundary", kBoundaryMethods);
         const CameraHits hits = camera_hits_named(camera_hits);
         const std::vector<ParameterSpec> specs = parse_parameters(params, scene);
@@ -241,6 +241,7 @@ void bind_forward(py::module_& m) {
           EstimatorConfig config = EstimatorConfig::gradient(specs, method, sppi, sppp);
           config.intersection_curves = intersection_curves;
           config.camera_hits = hits;
+          config.camera_control_spp = camera_control_spp;
           if (method == Method::Regularized)
             config.regularization = Regularization::for_scene(scene, reg_width);
           config.projective_guiding = {guiding_resolution, guiding_training, guiding_share, guiding_octree,
@@ -275,7 +276,7 @@ void bind_forward(py::module_& m) {
         py::arg("guiding_seeds") = 64.0, py::arg("was_rays") = 8, py::arg("was_kappa") = 1e5,
         py::arg("was_exponent") = 3.0, py::arg("was_unbiased") = false, py::arg("forest_guide_training") = 0,
         py::arg("forest_guide_rounds") = 2, py::arg("forest_guide_resolution") = 8, py::arg("forest_guide_depth") = 3,
-        py::arg("forest_guide_share") = 0.5, py::arg("camera_hits") = "adaptive",
+        py::arg("forest_guide_share") = 0.5, py::arg("camera_hits") = "adaptive", py::arg("camera_control_spp") = 4,
         "Forward mode: (image (H, W, 3), derivatives (K, H, W, 3)) for 1-8 parameter specs "
         "('ID:translate:X,Y,Z', 'ID:rotate:X,Y,Z', 'ID:scale', 'ID:vertex:I:X,Y,Z'); a RuntimeWarning where one "
         "pixel holds half or more of a parameter's image-sum variance (a heavy tail's single sample, as `qsil grad` "
@@ -289,9 +290,8 @@ void bind_forward(py::module_& m) {
         "guiding_octree, guiding_seeds: its octree guide from projected seeds (excludes a grid); was_rays, "
         "was_kappa, was_exponent, was_unbiased: boundary='was''s auxiliary rays; forest_guide_training (0: none), "
         "forest_guide_rounds, forest_guide_resolution, forest_guide_depth, forest_guide_share: the quadric methods' "
-        "guided edge choice; camera_hits: 'adaptive', 'attached' or 'detached' camera samples on moving shapes (`qsil "
-        "grad "
-        "--help`)");
+        "guided edge choice; camera_hits: 'adaptive', 'attached' or 'detached' camera samples on moving shapes; "
+        "camera_control_spp: the pre-pass spp of their control variate (0: none; `qsil grad --help`)");
   // The keyword names before 2026-11-25 (boundary_spp, primary_samples): the same function.
   m.def("grad", grad, py::arg("scene"), py::arg("params"), py::arg("spp") = 0, py::arg("seed") = 0,
         py::arg("threads") = 0, py::arg("boundary") = "quadric", py::arg("boundary_spp") = 0,
@@ -301,7 +301,7 @@ void bind_forward(py::module_& m) {
         py::arg("was_kappa") = 1e5, py::arg("was_exponent") = 3.0, py::arg("was_unbiased") = false,
         py::arg("forest_guide_training") = 0, py::arg("forest_guide_rounds") = 2,
         py::arg("forest_guide_resolution") = 8, py::arg("forest_guide_depth") = 3, py::arg("forest_guide_share") = 0.5,
-        py::arg("camera_hits") = "adaptive",
+        py::arg("camera_hits") = "adaptive", py::arg("camera_control_spp") = 4,
         "The same, with the old keyword names boundary_spp (= sppi) and primary_samples (= sppp)");
 }
 

@@ -104,6 +104,12 @@ void add_boundary_flags(CLI::App& app, BoundaryFlags& flags, const std::string& 
                  "primary boundary term only")
       ->check(CLI::IsMember({"adaptive", "attached", "detached"}))
       ->capture_default_str();
+  app.add_option("--camera-control-spp", flags.camera_control_spp,
+                 "Samples per pixel of the primal pre-pass that sets the attached camera hits' control variate (a "
+                 "per-pixel constant taken from L in the warp's Jacobian term and flux; unbiased); 0: none, else "
+                 "at least 2")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   if (!curves_flag) return;
   bool& intersection_curves = flags.intersection_curves;
   app.add_flag_callback(
@@ -203,6 +209,7 @@ EstimatorConfig gradient_config(const Scene& scene, std::vector<ParameterSpec> p
   EstimatorConfig config = EstimatorConfig::gradient(std::move(params), method, flags.sppi, flags.sppp);
   config.intersection_curves = flags.intersection_curves;
   config.camera_hits = camera_hits_named(flags.camera_hits);
+  config.camera_control_spp = flags.camera_control_spp;
   if (method == Method::Regularized)
     config.regularization = Regularization::for_scene(scene, flags.reg_width);
   config.warped_area = flags.warped_area;

@@ -35,6 +35,8 @@ inline constexpr uint64_t kProjectiveSegments = 5;
 inline constexpr uint64_t kProjectiveTraining = 6;
 /// Projective sampling's octree guide: its camera-path seeds, per chunk.
 inline constexpr uint64_t kProjectiveSeeds = 7;
+/// The attached camera hits' control-variate pre-pass, per pixel sample (attached_control.h).
+inline constexpr uint64_t kAttachedControl = 8;
 }  // namespace stream
 
 /// Uniform sampler over one PCG32 stream.

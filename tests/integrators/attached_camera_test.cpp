@@ -8,6 +8,11 @@
 /// - the adaptive strength attaches the thin glossy ring and not a smooth sphere at 32 x 32, and a
 ///   diffuse teapot's smoothed creases (not the whole teapot) with a ramp no steeper than its bound;
 ///   it leaves the ordinary turns of a coarse bunny's normals (edges about a pixel long) detached;
+/// - the control variate's parts cancel: grad with c less grad without it (same seeds, same
+///   samples) has mean zero at a silhouette with an intersection curve and behind a static post,
+///   with the power to see a flux that leaves c out (the Jacobian's part, integrated on a grid
+///   outside the estimator, must be 6 and 8 standard errors from 0); with c left out of the flux
+///   both fail (docs/experiments/2026-11-29-attached-control.md);
 /// - with every hit on a moving shape attached (CameraHits::Attached), `qsil grad` agrees with
 ///   central finite differences where the attached form's flux crosses a silhouette and an
 ///   intersection curve (a sphere sunk into a floor, rising) and a static post's outline (an edge
@@ -28,6 +33,8 @@
 #include "qsil/scene.h"
 
 #include "estimator_runs.h"
+#include "integrators/attached_control.h"
+#include "integrators/light_setup.h"
 #include "test_data.h"
 
 #include <gtest/gtest.h>
@@ -219,7 +226,7 @@ TEST(AttachedCamera, AdaptiveStrengthLeavesACoarseMeshsOrdinaryTurnsDetached) {
     int some = 0;
     for (double v : ab.strength[size_t(shape)]) some += v > 0;
     EXPECT_LE(some, most * double(n)) << res << "²: " << some << " of " << n << " vertices attached";
-    if (most > 0) EXPECT_GT(some, 0) << res << "²: the rule attaches nothing on this mesh";
+    if (most > 0) { EXPECT_GT(some, 0) << res << "²: the rule attaches nothing on this mesh"; }
   }
 }
 
@@ -243,6 +250,96 @@ void expect_attached_agrees(const std::string& file, const std::map<std::string,
               f.value, f.se);
   EXPECT_NEAR(g.value, f.value, 3 * se) << file;
   EXPECT_LT(se, power * std::abs(f.value)) << file << ": not the power the test claims";
+}
+
+/// The image sum of the Jacobian term's control part, sum over pixels of c ∫_pixel div(w V) du
+/// (channel mean), by a 16 x 16 grid of film positions per pixel (midpoint rule): what a flux that
+/// left c out would leave uncancelled. An oracle built from attached_camera_ray and
+/// set_attached_control directly, outside the estimator.
+double jacobian_control_part(const Scene& scene, const std::vector<ParameterSpec>& params) {
+  const SceneVelocities vel = compute_velocities(scene, params);
+  const RayTracer tracer(scene);
+  const LightSetup lights(scene);
+  const PathContext ctx = lights.context(scene, tracer);
+  CameraAttachment attachment = camera_attachment(scene, vel.moving, CameraHits::Attached);
+  set_attached_control(ctx, attachment, kAttachedControlSpp);
+  const Camera& cam = scene.camera;
+  constexpr int g = 16;
+  double total = 0;
+  for (int py = 0; py < cam.height; ++py)
+    for (int px = 0; px < cam.width; ++px) {
+      const double c = attachment.control_at(px, py).mean();
+      if (c == 0) continue;
+      for (int i = 0; i < g; ++i)
+        for (int j = 0; j < g; ++j) {
+          const Vec2 film(px + (i + 0.5) / g, py + (j + 0.5) / g);
+          const Vec3 d = cam.direction(film.x(), film.y());
+          const CameraRay ray{d, tracer.intersect(cam.origin(), d)};
+          total +=
+              c * attached_camera_ray<1>(scene, vel, attachment, ray, film, px, py).jacobian.derivatives()[0] / (g * g);
+        }
+    }
+  return total;
+}
+
+/// The control variate's part of the estimate: grad with the control (camera_control_spp 4) less
+/// grad without it (0) at the same seed, whose samples are the same (the pre-pass draws from a
+/// stream of its own), is - c div(w V) summed over the camera samples plus c's part of the
+/// attached flux; it must have mean zero (CameraAttachment::control). Over `seeds` seeds of `spp`,
+/// the mean of the image sums' differences is within 3 standard errors of 0 (t with seeds - 1
+/// degrees of freedom: 99 % for 16 seeds), and the Jacobian's part alone
+/// (jacobian_control_part), which a flux without c would leave, is at least `power` of those
+/// standard errors from 0.
+void expect_control_part_vanishes(const std::string& file, const std::map<std::string, std::string>& defaults,
+                                  const std::string& param, int spp, int seeds, double power) {
+  const Scene scene = load_scene(test::data_file(file), defaults);
+  const std::vector<ParameterSpec> params = {parse_parameter(param, scene)};
+  EstimatorConfig with = EstimatorConfig::gradient(params, Method::Quadric);
+  with.camera_hits = CameraHits::Attached;
+  EstimatorConfig without = with;
+  without.camera_control_spp = 0;
+  const Estimator a(scene, with), b(scene, without);
+  ASSERT_GT(a.setup().control_pixels, 0) << file << ": no pixel has a control";
+  double sum = 0, sum2 = 0;
+  for (int i = 0; i < seeds; ++i) {
+    const double d = test::derivative_sum(a.run(test::quiet(spp, uint64_t(100 + i)))).value -
+                     test::derivative_sum(b.run(test::quiet(spp, uint64_t(100 + i)))).value;
+    sum += d;
+    sum2 += d * d;
+  }
+  const double mean = sum / seeds;
+  const double se = std::sqrt(std::max(0.0, sum2 - seeds * mean * mean) / (seeds - 1) / seeds);
+  const double jacobian = jacobian_control_part(scene, params);
+  std::printf("%s %s: control's part %.4g +- %.3g; the Jacobian's alone %.4g\n", file.c_str(), param.c_str(), mean, se,
+              jacobian);
+  EXPECT_LE(std::abs(mean), 3 * se) << file << ": the control's part does not cancel";
+  EXPECT_GE(std::abs(jacobian), power * se) << file << ": not the power the test claims";
+}
+
+TEST(SlowAttachedCameraControl, PartCancelsAtASilhouetteAndACrossing) {
+  expect_control_part_vanishes("tests/data/gradient/sunk-sphere.xml", {{"res", "8"}}, "sphere:translate:0,1,0", 1024,
+                               16, 6);
+}
+
+TEST(AttachedCamera, ControlVariatesPartCancelsBehindAStaticPost) {
+  expect_control_part_vanishes("tests/data/gradient/metal-sunk-post.xml", {{"res", "8"}, {"alpha", "1"}},
+                               "sphere:translate:0,1,0", 256, 16, 8);
+}
+
+TEST(AttachedCamera, ControlPrePassOfFewerThanTwoSamplesIsRefused) {
+  // Its shrinkage needs the samples' variance: 1 (or a negative count) is an error, 0 is no control.
+  const Scene scene = load_scene(test::data_file("tests/data/gradient/sunk-sphere.xml"), {{"res", "8"}});
+  EstimatorConfig config = EstimatorConfig::gradient({parse_parameter("sphere:translate:0,1,0", scene)});
+  config.camera_hits = CameraHits::Attached;
+  for (const int spp : {1, -3}) {
+    config.camera_control_spp = spp;
+    EXPECT_NE(test::message_of([&] {
+                Estimator(scene, config);
+              }).find("at least 2 pre-pass spp (got " + std::to_string(spp) + ")"),
+              std::string::npos);
+  }
+  config.camera_control_spp = 0;
+  EXPECT_EQ(Estimator(scene, config).setup().control_pixels, 0);
 }
 
 TEST(SlowAttachedCameraVsFD, SphereSunkIntoAFloorRising) {

@@ -127,6 +127,21 @@ def test_intersection_curves_switch_reaches_both_modes():
     assert np.array_equal(a, qsil.grad(s, ["spot:translate:1,0,0"], spp=2, seed=3, intersection_curves=False)[1])
 
 
+def test_camera_control_switch_reaches_the_estimator():
+    # Attached camera hits on the sunk sphere: the control variate (camera_control_spp, default 4)
+    # changes the derivative, not the image (the same paths); 0 turns it off; 1 is refused.
+    sunk = qsil.Scene(os.path.join(ROOT, "tests", "data", "gradient", "sunk-sphere.xml"), {"res": "16", "spp": "4"})
+    run = lambda **k: qsil.grad(sunk, ["sphere:translate:0,1,0"], spp=4, seed=3, camera_hits="attached", **k)
+    image, on = run()
+    image_off, off = run(camera_control_spp=0)
+    assert np.array_equal(image, image_off)
+    assert not np.array_equal(on, off)
+    assert np.array_equal(on, run(camera_control_spp=4)[1])
+    with pytest.raises(qsil.Error) as e:
+        run(camera_control_spp=1)
+    assert "at least 2 pre-pass spp (got 1)" in str(e.value)
+
+
 def mesh_edges(F):
     """Directed edges (T*3, 2) of triangles F."""
     return np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])

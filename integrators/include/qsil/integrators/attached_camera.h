@@ -33,6 +33,8 @@
 /// exists.
 /// Pdfs carry no derivative: the sample is placed at u by the detached pixel sampler, as every
 /// sample is; only the integrand is transformed.
+/// A control variate (CameraAttachment::control): the Jacobian term and the flux take L - c, c a
+/// per-pixel constant fixed at set-up; c's parts of the two cancel, so any such c is unbiased.
 
 #include "qsil/dual.h"
 #include "qsil/error.h"
@@ -136,6 +138,29 @@ inline constexpr double kAttachedRampPixels = 1.0;
 /// 0 on static shapes and on flat-shaded ones (their normal does not turn within a face).
 struct CameraAttachment {
   std::vector<std::vector<double>> strength;  ///< [shape][vertex]; empty for a shape never attached
+  /// The control variate c of the attached form, per pixel (row-major, `control_width` pixels a
+  /// row; empty: c = 0 everywhere): the warp's Jacobian term L div(w V) and the attached flux take
+  /// L - c instead of L (AttachedCameraRay::apply_jacobian, the primary term's attached flux).
+  /// Unbiased for any c fixed before the run: over a pixel, c's part of the Jacobian term integrates
+  /// to c times the sum of w V's jumps across the pixel's discontinuities (divergence theorem, w V = 0
+  /// on the pixel's border), which is exactly c's part of the flux, with the opposite sign. Set by
+  /// set_attached_control (attached_control.h); docs/experiments/2026-11-29-attached-control.md.
+  std::vector<Color> control;
+  int control_width = 0;
+  /// c at pixel (px, py) (zero where none was set).
+  Color control_at(int px, int py) const {
+    if (control.empty()) return Color::Zero();
+    return control[size_t(py) * size_t(control_width) + size_t(px)];
+  }
+  /// Whether triangle `triangle` of shape `shape` has a vertex of non-zero strength: whether a
+  /// camera ray that hits it is attached (attached_camera_ray).
+  bool touches(const Scene& scene, int shape, int triangle) const {
+    if (shape < 0 || size_t(shape) >= strength.size()) return false;
+    const auto& st = strength[size_t(shape)];
+    if (st.empty()) return false;
+    const Eigen::Vector3i& t = scene.shapes[size_t(shape)].mesh.triangles[size_t(triangle)];
+    return st[size_t(t[0])] > 0 || st[size_t(t[1])] > 0 || st[size_t(t[2])] > 0;
+  }
   /// Whether any vertex has a non-zero strength.
   bool any() const {
     for (const auto& s : strength)
@@ -246,12 +271,14 @@ Eigen::Matrix<double, 3, N> material_velocity(const SceneVelocities& vel, const 
 }
 
 /// A camera sample's warped direction: unit in value (the camera ray's own), its derivatives
-/// d(direction)/du · w V per parameter; and the warp's Jacobian, value 1, derivatives div(w V).
+/// d(direction)/du · w V per parameter; the warp's Jacobian, value 1, derivatives div(w V); and the
+/// control variate c of its pixel (CameraAttachment::control).
 template <int N>
 struct AttachedCameraRay {
   Vec3T<Dual<N>> dir;
   Dual<N> jacobian;
   bool moves = false;  ///< false: the detached sample (zero derivatives, Jacobian 1)
+  Color control = Color::Zero();
   /// The direction for PathRay::moving_dir: &dir, or null for the detached sample.
   const Vec3T<Dual<N>>* moving_dir() const { return moves ? &dir : nullptr; }
   /// The detached sample along unit direction `d`: fixed direction, Jacobian 1.
@@ -260,10 +287,14 @@ struct AttachedCameraRay {
     r.jacobian.derivatives().setZero();
     return r;
   }
-  /// L times the Jacobian (L unchanged for the detached sample).
+  /// L's derivatives plus (L - c) div(w V): L times the Jacobian, less the control's part (L
+  /// unchanged for the detached sample).
   void apply_jacobian(ColorT<Dual<N>>& L) const {
     if (moves)
-      for (int c = 0; c < 3; ++c) L[c] = L[c] * jacobian;
+      for (int c = 0; c < 3; ++c) {
+        L[c] = L[c] * jacobian;
+        L[c].derivatives() -= control[c] * jacobian.derivatives();
+      }
   }
 };
 
@@ -278,12 +309,7 @@ AttachedCameraRay<N> attached_camera_ray(const Scene& scene, const SceneVelociti
                                          int px, int py) {
   AttachedCameraRay<N> r = AttachedCameraRay<N>::detached(ray.dir);
   if (!ray.hit.valid() || !vel.moving[size_t(ray.hit.shape)]) return r;
-  {
-    const auto& st = attachment.strength[size_t(ray.hit.shape)];
-    if (st.empty()) return r;
-    const Eigen::Vector3i& t = scene.shapes[size_t(ray.hit.shape)].mesh.triangles[size_t(ray.hit.triangle)];
-    if (!(st[size_t(t[0])] > 0 || st[size_t(t[1])] > 0 || st[size_t(t[2])] > 0)) return r;
-  }
+  if (!attachment.touches(scene, ray.hit.shape, ray.hit.triangle)) return r;
   // Over film position u = (u_x, u_y): A is a dual in the two film coordinates.
   using A = Eigen::AutoDiffScalar<Eigen::Vector2d>;
   using V3 = Eigen::Matrix<A, 3, 1>;
@@ -345,6 +371,7 @@ AttachedCameraRay<N> attached_camera_ray(const Scene& scene, const SceneVelociti
   for (int i = 0; i < 3; ++i) r.dir[i].derivatives() = dd.row(i).transpose();
   r.jacobian.derivatives() = div;
   r.moves = true;
+  r.control = attachment.control_at(px, py);
   return r;
 }
 

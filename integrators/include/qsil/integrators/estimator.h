@@ -73,6 +73,10 @@ struct EstimatorConfig {
   /// normal turns by more than a lobe width across a pixel; Attached: everywhere; Detached: the
   /// camera ray fixed.
   CameraHits camera_hits = CameraHits::Adaptive;
+  /// Samples per pixel of the primal pre-pass that sets the attached camera hits' control variate
+  /// (CameraAttachment::control, `--camera-control-spp`), at the pixels with attached hits; 0: no
+  /// control (c = 0). 0 or at least 2; unused when no camera hit is attached.
+  int camera_control_spp = 4;
   /// Regularised visibility (qsil/integrators/regularized_visibility.h; absolute, from
   /// Regularization::for_scene of the scene as loaded). Method::Regularized requires it enabled;
   /// enabled with Method::FiniteDifferences or without parameters, the differences and the image
@@ -164,10 +168,15 @@ struct SetupReport {
   /// attachment strength, of all moving vertices, and the static shapes' primary edges sampled
   /// for the attached form's flux (0 when nothing is attached).
   int attached_vertices = 0, moving_vertices = 0, static_primary_edges = 0;
+  /// Their control variate (EstimatorConfig::camera_control_spp): the pixels given one, and the
+  /// pre-pass's wall time (part of `seconds`).
+  int control_pixels = 0;
+  double control_seconds = 0;
   /// One line: "STRUCTURE: E edges, F fitted nodes (Q with quadrics), P primary edges, T s", with
   /// ", C intersection-curve segments (T s)" before the time when there are any, and
   /// ", the environment's sun (A deg, S % of its power) a light of the edge choice" when one is,
-  /// and ", camera hits attached at A of V moving vertices (S static primary edges)" when some are.
+  /// and ", camera hits attached at A of V moving vertices (S static primary edges)" when some are,
+  /// followed by ", a control variate at P pixels (T s)" when it has one.
   std::string describe() const;
 };
 
