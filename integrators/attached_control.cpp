@@ -39,9 +39,8 @@ int set_attached_control(const PathContext& ctx, CameraAttachment& attachment, i
       touched = touched || (h.valid() && attachment.touches(scene, h.shape, h.triangle));
     }
     if (!touched) return;
-    // The mean over all of the pixel's samples, attached or not: c from the attached ones only,
-    // or c only where every pre-pass ray is attached, gained less
-    // (docs/experiments/2026-11-29-attached-control.md).
+    // The mean over all of the pixel's samples, attached or not (the variants compared:
+    // docs/experiments/2026-11-29-attached-control.md).
     Color sum = Color::Zero(), sum2 = Color::Zero();
     for (int s = 0; s < spp; ++s) {
       const Color L =

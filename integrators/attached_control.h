@@ -10,20 +10,15 @@
 
 namespace qsil {
 
-/// Samples per pixel of the pre-pass by default (EstimatorConfig::camera_control_spp): at 4 the
-/// pre-pass costs about 1 % of a 64-spp `grad` run, and c's own noise, which the shrinkage below
-/// weighs, no longer costs variance on the scenes measured.
-inline constexpr int kAttachedControlSpp = 4;
-
 /// Fills `attachment.control` (CameraAttachment) for `ctx.scene`'s camera: at every pixel where one
 /// of `spp` (>= 2) pre-pass camera rays hits a triangle the attachment touches, c is the pre-pass
 /// mean of the primal radiance shrunk towards 0 by its own noise, per channel:
 /// c = mean mean² / (mean² + s² / spp), s² the samples' unbiased variance (James-Stein-like: a c
-/// as noisy as the pixel's spread adds more variance than it removes); elsewhere, and where a sample
-/// is not finite, c = 0. The pre-pass is a fixed function of the scene (seed 0, a stream of its own,
-/// stream::kAttachedControl), so c is fixed before any run, as unbiasedness requires. Runs on every
-/// core of the current arena. Returns the number of pixels with a control. Throws qsil::Error when
-/// spp < 2.
+/// as noisy as the pixel's spread adds more variance than it removes); elsewhere, and where a
+/// sample is not finite, c = 0. The pre-pass is a fixed function of the scene (seed 0, a stream of
+/// its own, stream::kAttachedControl), so c is fixed before any run, as unbiasedness requires. Runs
+/// on every core of the current arena. Returns the number of pixels given a control (whose c may
+/// still be 0 in a channel). Throws qsil::Error when spp < 2.
 int set_attached_control(const PathContext& ctx, CameraAttachment& attachment, int spp);
 
 }  // namespace qsil

@@ -276,7 +276,8 @@ void bind_forward(py::module_& m) {
         py::arg("guiding_seeds") = 64.0, py::arg("was_rays") = 8, py::arg("was_kappa") = 1e5,
         py::arg("was_exponent") = 3.0, py::arg("was_unbiased") = false, py::arg("forest_guide_training") = 0,
         py::arg("forest_guide_rounds") = 2, py::arg("forest_guide_resolution") = 8, py::arg("forest_guide_depth") = 3,
-        py::arg("forest_guide_share") = 0.5, py::arg("camera_hits") = "adaptive", py::arg("camera_control_spp") = 4,
+        py::arg("forest_guide_share") = 0.5, py::arg("camera_hits") = "adaptive",
+        py::arg("camera_control_spp") = kAttachedControlSpp,
         "Forward mode: (image (H, W, 3), derivatives (K, H, W, 3)) for 1-8 parameter specs "
         "('ID:translate:X,Y,Z', 'ID:rotate:X,Y,Z', 'ID:scale', 'ID:vertex:I:X,Y,Z'); a RuntimeWarning where one "
         "pixel holds half or more of a parameter's image-sum variance (a heavy tail's single sample, as `qsil grad` "
@@ -301,7 +302,7 @@ void bind_forward(py::module_& m) {
         py::arg("was_kappa") = 1e5, py::arg("was_exponent") = 3.0, py::arg("was_unbiased") = false,
         py::arg("forest_guide_training") = 0, py::arg("forest_guide_rounds") = 2,
         py::arg("forest_guide_resolution") = 8, py::arg("forest_guide_depth") = 3, py::arg("forest_guide_share") = 0.5,
-        py::arg("camera_hits") = "adaptive", py::arg("camera_control_spp") = 4,
+        py::arg("camera_hits") = "adaptive", py::arg("camera_control_spp") = kAttachedControlSpp,
         "The same, with the old keyword names boundary_spp (= sppi) and primary_samples (= sppp)");
 }
 

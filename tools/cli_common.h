@@ -70,7 +70,7 @@ struct BoundaryFlags {
   double sppp = kDefaultSppp;
   bool intersection_curves = true;  ///< false: --no-intersection-curves
   std::string camera_hits = "adaptive";  ///< --camera-hits (EstimatorConfig::camera_hits, camera_hits_named)
-  int camera_control_spp = 4;            ///< --camera-control-spp (EstimatorConfig::camera_control_spp)
+  int camera_control_spp = kAttachedControlSpp;  ///< --camera-control-spp (EstimatorConfig::camera_control_spp)
   /// --reg-width: regularized's blur width, as a fraction of the scene's bounding-box diagonal
   /// (Regularization::for_scene).
   double reg_width = 1e-3;

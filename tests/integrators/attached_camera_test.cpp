@@ -282,7 +282,7 @@ double jacobian_control_part(const Scene& scene, const std::vector<ParameterSpec
   return total;
 }
 
-/// The control variate's part of the estimate: grad with the control (camera_control_spp 4) less
+/// The control variate's part of the estimate: grad with the control (kAttachedControlSpp) less
 /// grad without it (0) at the same seed, whose samples are the same (the pre-pass draws from a
 /// stream of its own), is - c div(w V) summed over the camera samples plus c's part of the
 /// attached flux; it must have mean zero (CameraAttachment::control). Over `seeds` seeds of `spp`,
@@ -296,6 +296,7 @@ void expect_control_part_vanishes(const std::string& file, const std::map<std::s
   const std::vector<ParameterSpec> params = {parse_parameter(param, scene)};
   EstimatorConfig with = EstimatorConfig::gradient(params, Method::Quadric);
   with.camera_hits = CameraHits::Attached;
+  with.camera_control_spp = kAttachedControlSpp;  // the oracle's c (jacobian_control_part)
   EstimatorConfig without = with;
   without.camera_control_spp = 0;
   const Estimator a(scene, with), b(scene, without);
@@ -312,6 +313,7 @@ void expect_control_part_vanishes(const std::string& file, const std::map<std::s
   const double jacobian = jacobian_control_part(scene, params);
   std::printf("%s %s: control's part %.4g +- %.3g; the Jacobian's alone %.4g\n", file.c_str(), param.c_str(), mean, se,
               jacobian);
+  ASSERT_GT(se, 0) << file << ": c changed no sample";
   EXPECT_LE(std::abs(mean), 3 * se) << file << ": the control's part does not cancel";
   EXPECT_GE(std::abs(jacobian), power * se) << file << ": not the power the test claims";
 }
@@ -327,7 +329,8 @@ TEST(AttachedCamera, ControlVariatesPartCancelsBehindAStaticPost) {
 }
 
 TEST(AttachedCamera, ControlPrePassOfFewerThanTwoSamplesIsRefused) {
-  // Its shrinkage needs the samples' variance: 1 (or a negative count) is an error, 0 is no control.
+  // Its shrinkage needs the samples' variance: 1 (or a negative count) is an error, 2 the least
+  // accepted, 0 no control.
   const Scene scene = load_scene(test::data_file("tests/data/gradient/sunk-sphere.xml"), {{"res", "8"}});
   EstimatorConfig config = EstimatorConfig::gradient({parse_parameter("sphere:translate:0,1,0", scene)});
   config.camera_hits = CameraHits::Attached;
@@ -338,6 +341,8 @@ TEST(AttachedCamera, ControlPrePassOfFewerThanTwoSamplesIsRefused) {
               }).find("at least 2 pre-pass spp (got " + std::to_string(spp) + ")"),
               std::string::npos);
   }
+  config.camera_control_spp = 2;
+  EXPECT_GT(Estimator(scene, config).setup().control_pixels, 0);
   config.camera_control_spp = 0;
   EXPECT_EQ(Estimator(scene, config).setup().control_pixels, 0);
 }

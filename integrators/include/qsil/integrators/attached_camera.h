@@ -36,6 +36,7 @@
 /// A control variate (CameraAttachment::control): the Jacobian term and the flux take L - c, c a
 /// per-pixel constant fixed at set-up; c's parts of the two cancel, so any such c is unbiased.
 
+#include "qsil/check.h"
 #include "qsil/dual.h"
 #include "qsil/error.h"
 #include "qsil/integrators/geometry_view.h"
@@ -72,6 +73,12 @@ T attached_bump_1d(const T& s) {
   if (sv > 1.0 - k) return step((T(1.0) - s) / k);
   return T(1.0);
 }
+
+/// Samples per pixel of the primal pre-pass that sets the attached form's control variate
+/// (CameraAttachment::control, set_attached_control), by default (EstimatorConfig::
+/// camera_control_spp, `--camera-control-spp`, qsil.grad's camera_control_spp); chosen in
+/// docs/experiments/2026-11-28-jacobian-control-variate.md.
+inline constexpr int kAttachedControlSpp = 4;
 
 /// Which camera samples are attached (EstimatorConfig::camera_hits, `--camera-hits`).
 enum class CameraHits {
@@ -146,10 +153,12 @@ struct CameraAttachment {
   /// on the pixel's border), which is exactly c's part of the flux, with the opposite sign. Set by
   /// set_attached_control (attached_control.h); docs/experiments/2026-11-29-attached-control.md.
   std::vector<Color> control;
-  int control_width = 0;
-  /// c at pixel (px, py) (zero where none was set).
+  int control_width = 0;  ///< pixels per row of `control` (the camera's width), 0 while it is empty
+  /// c at pixel (px, py), both within the camera's film (zero where none was set).
   Color control_at(int px, int py) const {
     if (control.empty()) return Color::Zero();
+    QSIL_DCHECK(px >= 0 && px < control_width && py >= 0 &&
+                size_t(py) * size_t(control_width) + size_t(px) < control.size());
     return control[size_t(py) * size_t(control_width) + size_t(px)];
   }
   /// Whether triangle `triangle` of shape `shape` has a vertex of non-zero strength: whether a
@@ -277,8 +286,8 @@ template <int N>
 struct AttachedCameraRay {
   Vec3T<Dual<N>> dir;
   Dual<N> jacobian;
-  bool moves = false;  ///< false: the detached sample (zero derivatives, Jacobian 1)
-  Color control = Color::Zero();
+  bool moves = false;             ///< false: the detached sample (zero derivatives, Jacobian 1)
+  Color control = Color::Zero();  ///< the pixel's c, taken from L in the Jacobian term (apply_jacobian)
   /// The direction for PathRay::moving_dir: &dir, or null for the detached sample.
   const Vec3T<Dual<N>>* moving_dir() const { return moves ? &dir : nullptr; }
   /// The detached sample along unit direction `d`: fixed direction, Jacobian 1.
@@ -291,9 +300,9 @@ struct AttachedCameraRay {
   /// unchanged for the detached sample).
   void apply_jacobian(ColorT<Dual<N>>& L) const {
     if (moves)
-      for (int c = 0; c < 3; ++c) {
-        L[c] = L[c] * jacobian;
-        L[c].derivatives() -= control[c] * jacobian.derivatives();
+      for (int k = 0; k < 3; ++k) {
+        L[k] = L[k] * jacobian;
+        L[k].derivatives() -= control[k] * jacobian.derivatives();
       }
   }
 };

@@ -75,8 +75,9 @@ struct EstimatorConfig {
   CameraHits camera_hits = CameraHits::Adaptive;
   /// Samples per pixel of the primal pre-pass that sets the attached camera hits' control variate
   /// (CameraAttachment::control, `--camera-control-spp`), at the pixels with attached hits; 0: no
-  /// control (c = 0). 0 or at least 2; unused when no camera hit is attached.
-  int camera_control_spp = 4;
+  /// control (c = 0). 0 or at least 2: Estimator throws qsil::Error for any other value, whether or
+  /// not a camera hit is attached (unused when none is).
+  int camera_control_spp = kAttachedControlSpp;
   /// Regularised visibility (qsil/integrators/regularized_visibility.h; absolute, from
   /// Regularization::for_scene of the scene as loaded). Method::Regularized requires it enabled;
   /// enabled with Method::FiniteDifferences or without parameters, the differences and the image
