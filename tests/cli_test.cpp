@@ -230,6 +230,9 @@ TEST(CLI, ReverseErrorsExitWithCode2) {
   expect_error("reverse scenes/shadow-quad.xml --spp 1 -D res=16 --shape object", "give --adjoint or --target");
   expect_error("reverse scenes/shadow-quad.xml --spp 1 -D res=16 --shape object --boundary fd --target " + target,
                "--boundary");
+  for (const std::string flag : {"--camera-hits attached", "--camera-hits adaptive", "--camera-control-spp 4"})
+    expect_error("reverse scenes/shadow-quad.xml --spp 1 -D res=16 --shape object " + flag + " --target " + target,
+                 "camera hits are detached in reverse mode");
 }
 
 TEST(CLI, ReverseWritesOneGradientRowPerVertex) {

@@ -103,11 +103,20 @@ const CommandRegistrar registrar{
                           "(interior term only)",
                           true);
        app.add_option("--image", flags->image, "Also write the primal image of the same paths (EXR)");
-       return [flags]() {
+       // Reverse mode's camera hits are detached: asking for attached ones (or their control
+       // variate) is an error, not a silently different estimator.
+       const CLI::Option* hits = app.get_option("--camera-hits");
+       const CLI::Option* control = app.get_option("--camera-control-spp");
+       return [flags, hits, control]() {
          if (process_group().size() > 1) throw Error("reverse: runs in one process (no MPI launcher)");
          if (flags->adjoint.empty() && flags->target.empty()) throw Error("reverse: give --adjoint or --target");
          if (flags->boundary.forest_guiding.training > 0)
            throw Error("reverse: --forest-guide-training is forward mode's only (qsil grad)");
+         if ((hits->count() > 0 && flags->boundary.camera_hits != "detached") ||
+             (control->count() > 0 && flags->boundary.camera_control_spp != 0))
+           throw Error(
+               "reverse: camera hits are detached in reverse mode (--camera-hits and --camera-control-spp are "
+               "forward mode's only, qsil grad)");
          const Method method = parse_method(flags->boundary.method, "--boundary", kBoundaryMethods);
          const Scene scene = load_scene_with_flags(flags->scene, flags->defines);
          const Camera& cam = scene.camera;
