@@ -34,7 +34,7 @@
 
 #include "estimator_runs.h"
 #include "integrators/attached_control.h"
-#include "integrators/light_setup.h"
+#include "integrators/render_setup.h"
 #include "test_data.h"
 
 #include <gtest/gtest.h>
@@ -258,11 +258,9 @@ void expect_attached_agrees(const std::string& file, const std::map<std::string,
 /// set_attached_control directly, outside the estimator.
 double jacobian_control_part(const Scene& scene, const std::vector<ParameterSpec>& params) {
   const SceneVelocities vel = compute_velocities(scene, params);
-  const RayTracer tracer(scene);
-  const LightSetup lights(scene);
-  const PathContext ctx = lights.context(scene, tracer);
+  const RenderSetup setup(scene);  // the estimators' tracer and lights
   CameraAttachment attachment = camera_attachment(scene, vel.moving, CameraHits::Attached);
-  set_attached_control(ctx, attachment, kAttachedControlSpp);
+  set_attached_control(setup.ctx, attachment, kAttachedControlSpp);
   const Camera& cam = scene.camera;
   constexpr int g = 16;
   double total = 0;
@@ -274,7 +272,7 @@ double jacobian_control_part(const Scene& scene, const std::vector<ParameterSpec
         for (int j = 0; j < g; ++j) {
           const Vec2 film(px + (i + 0.5) / g, py + (j + 0.5) / g);
           const Vec3 d = cam.direction(film.x(), film.y());
-          const CameraRay ray{d, tracer.intersect(cam.origin(), d)};
+          const CameraRay ray{d, setup.tracer.intersect(cam.origin(), d)};
           total +=
               c * attached_camera_ray<1>(scene, vel, attachment, ray, film, px, py).jacobian.derivatives()[0] / (g * g);
         }
