@@ -520,9 +520,7 @@ Estimator::Estimator(const Scene& scene, EstimatorConfig config) {
   if (config.method == Method::WarpedArea) check_warped_area_sampling(config.warped_area);
   if (config.method == Method::Projective) check_projective_guiding(config.projective_guiding);
   check_forest_guiding(config.forest_guiding);
-  if (config.camera_control_spp != 0 && config.camera_control_spp < 2)
-    throw Error("the camera hits' control variate needs 0 (none) or at least 2 pre-pass spp (got " +
-                std::to_string(config.camera_control_spp) + ")");
+  check_camera_control_spp(config.camera_control_spp);
   if (config.forest_guiding.training > 0 && !config.params.empty() && config.method != Method::Quadric &&
       config.method != Method::QuadricBox)
     throw Error("forest guide: method " + std::string(method_name(config.method)) +

@@ -109,34 +109,19 @@ void sample_chunk(const PathContext& ctx, const PrimaryEdges& primary, long long
 }
 
 /// The attached form's flux through a primary discontinuity (attached_camera.h), per parameter
-/// and colour: - sum over the sides of sign L w (g . v_side), v_side the velocity of the side's
-/// hit point carried to the edge point's depth along the same ray (a point at distance r from
-/// the camera that moves at v turns its ray as a point at distance r' moving at v r' / r), w the
-/// attachment weight of the side's sample position, and L less the pixel's control variate c
-/// (CameraAttachment::control: the same c as the pixel's Jacobian term). `xe`: the edge point
-/// (world).
+/// and colour (for_each_attached_side with the velocities of `vel`).
 template <int N>
 Eigen::Matrix<double, 3, N> attached_flux(const Scene& scene, const SceneVelocities& vel,
                                           const CameraAttachment& attachment, const EdgeSides& sides, const Vec3& g,
                                           const Vec3& xe, const Vec2& film, int px, int py) {
   Eigen::Matrix<double, 3, N> flux = Eigen::Matrix<double, 3, N>::Zero();
-  const double b = attached_bump_1d(film.x() - px) * attached_bump_1d(film.y() - py);
-  if (!(b > 0)) return flux;
-  const Vec3 o = scene.camera.origin();
-  const Color c = attachment.control_at(px, py);
-  for (int i = 0; i < sides.count; ++i) {
-    const EdgeSides::Side& side = sides.side[i];
-    if (!side.hit.valid() || !vel.moving[size_t(side.hit.shape)]) continue;
-    const double a = attachment.at(scene, side.hit.shape, side.hit.triangle, side.hit.u, side.hit.v);
-    if (!(a > 0)) continue;
-    const Vec3 y = scene.shapes[size_t(side.hit.shape)].mesh.point(side.hit.triangle, side.hit.u, side.hit.v);
-    const double r = (y - o).norm();
-    if (!(r > 0)) continue;
-    const Eigen::Matrix<double, 1, N> gv =
-        g.transpose() * material_velocity<N>(vel, scene, side.hit.shape, side.hit.triangle, side.hit.u, side.hit.v) *
-        ((xe - o).norm() / r);
-    flux -= (side.sign * a * b) * Color(side.L - c).matrix() * gv;
-  }
+  for_each_attached_side(
+      scene, attachment, sides, xe, film, px, py, [&](const EdgeSides::Side& side, double k, const Color& L) {
+        if (!vel.moving[size_t(side.hit.shape)]) return;
+        const Eigen::Matrix<double, 1, N> gv =
+            g.transpose() * material_velocity<N>(vel, scene, side.hit.shape, side.hit.triangle, side.hit.u, side.hit.v);
+        flux -= k * L.matrix() * gv;
+      });
   return flux;
 }
 
@@ -323,8 +308,21 @@ void for_each_primary_sample(const PathContext& ctx, const PrimaryEdges& edges, 
               ctx, edges, count, plan.per_sample, seed, c, chunk_stats[size_t(j - j0)],
               [](const edgetree::Edge&, double, const Vec3&) { return true; },
               [&](int px, int py, const edgetree::Edge& e, double t, const Color& weight, const Vec3& g,
-                  const PrimaryPoint&) {
-                out.push_back({px, py, &e, t, weight, g});
+                  const PrimaryPoint& point) {
+                PrimarySample sample;
+                sample.px = px;
+                sample.py = py;
+                sample.edge = &e;
+                sample.t = t;
+                sample.weight = weight;
+                sample.g = g;
+                if (point.sides) {
+                  sample.attached = true;
+                  sample.sides = *point.sides;
+                  sample.film = point.film;
+                  sample.scale = point.scale;
+                }
+                out.push_back(sample);
               });
         },
         j0, j1);

@@ -17,6 +17,7 @@
 #include "qsil/edgetree/edge_set.h"
 #include "qsil/film.h"
 #include "qsil/integrators/attached_camera.h"
+#include "qsil/integrators/edge_point.h"
 #include "qsil/integrators/estimator.h"
 #include "qsil/integrators/path_tracer.h"
 #include "qsil/parameters.h"
@@ -130,14 +131,51 @@ void add_primary_boundary(Film& film, const PathContext& ctx, const SceneVelocit
 
 /// One contributing primary edge sample (reverse mode): the pixel it lands in, the edge point
 /// (edge, t), its weight s (L_bg - L_fg) W / pdf per sample index, and g = (w0 x w1) / |w_t|^3:
-/// the pixel's derivative gains weight (g . v) for an edge-point velocity v.
+/// the pixel's derivative gains weight (g . v) for an edge-point velocity v. With attached camera
+/// hits (PrimaryEdges::attached), also what the attached form's flux needs
+/// (for_each_attached_side): the jump's two sides, the film position (pixels) and W per_sample /
+/// pdf (`scale`, which multiplies the flux as it does the jump).
 struct PrimarySample {
   int px = 0, py = 0;
   const edgetree::Edge* edge = nullptr;
   double t = 0;
   Color weight = Color::Zero();
   Vec3 g = Vec3::Zero();
+  bool attached = false;  ///< sides, film and scale are set
+  EdgeSides sides;
+  Vec2 film = Vec2::Zero();
+  double scale = 0;
+  /// The edge point (world).
+  Vec3 point() const { return edge->p0 + t * (edge->p1 - edge->p0); }
 };
+
+/// The sides of a primary sample's jump that carry the attached form's flux (attached_camera.h):
+/// the flux at an edge point `xe` (world) at film position `film` (pixels) in pixel (px, py) is,
+/// per parameter and colour, - sum over the sides of k (L_side - c) (g . v_side), where v_side is the
+/// velocity of the material point the side's ray hits (side.hit: shape, triangle, barycentrics u,
+/// v) and c the pixel's control variate (CameraAttachment::control).
+/// `fn(side, k, L_side - c)` is called for each side whose hit has a non-zero attachment, with
+/// k = sign w r_e / r_side: w = b(film) a(hit), the attachment weight of the side's sample
+/// position; r_e / r_side, as a point at distance r_side from the camera that moves at v turns its
+/// ray as a point at distance r_e (the edge point's) moving at v r_e / r_side.
+template <class Fn>
+void for_each_attached_side(const Scene& scene, const CameraAttachment& attachment, const EdgeSides& sides,
+                            const Vec3& xe, const Vec2& film, int px, int py, Fn&& fn) {
+  const double b = attached_bump_1d(film.x() - px) * attached_bump_1d(film.y() - py);
+  if (!(b > 0)) return;
+  const Vec3 o = scene.camera.origin();
+  const Color c = attachment.control_at(px, py);
+  for (int i = 0; i < sides.count; ++i) {
+    const EdgeSides::Side& side = sides.side[i];
+    if (!side.hit.valid()) continue;
+    const double a = attachment.at(scene, side.hit.shape, side.hit.triangle, side.hit.u, side.hit.v);
+    if (!(a > 0)) continue;
+    const Vec3 y = scene.shapes[size_t(side.hit.shape)].mesh.point(side.hit.triangle, side.hit.u, side.hit.v);
+    const double r = (y - o).norm();
+    if (!(r > 0)) continue;
+    fn(side, side.sign * a * b * (xe - o).norm() / r, Color(side.L - c));
+  }
+}
 using PrimarySampleFn = std::function<void(const PrimarySample&)>;
 
 /// The primary boundary term's samples of the range [first_sample, first_sample + spp), drawn

@@ -3,18 +3,22 @@
 
 #include "qsil/integrators/reverse.h"
 
+#include "attached_control.h"
 #include "pixel_loop.h"
-#include "render_setup.h"
 #include "qsil/error.h"
 #include "qsil/fnv1a.h"
+#include "qsil/integrators/attached_camera.h"
 #include "qsil/integrators/boundary_term.h"
 #include "qsil/integrators/path_tracer.h"
 #include "qsil/vertex_normals.h"
+#include "render_setup.h"
 
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <optional>
 #include <set>
+#include <type_traits>
 #include <unordered_map>
 
 namespace qsil {
@@ -31,6 +35,13 @@ using RDual = Dual<kSlots>;
 /// The local Jacobian of a hit: its triangle's three vertex positions (9) and normals (9).
 constexpr int kLocal = 18;
 using LDual = Dual<kLocal>;
+/// Where the first pass of a path whose camera hit is attached (attached_camera.h) puts the
+/// camera direction's three slots: the second hit's, so that pass holds one hit (Tape::capacity).
+constexpr int kDirectionSlot = kSlotsPerHit;
+/// The attached camera ray over its local parameters: the hit triangle's three vertex positions
+/// (column 3 i + j: vertex i along axis j).
+constexpr int kWarpLocal = 9;
+using CameraWarp = AttachedCameraRay<kWarpLocal>;
 
 /// One chosen-shape hit of a path that scatters (seg < max depth), as traced.
 struct TapeHit {
@@ -39,14 +50,18 @@ struct TapeHit {
   Vec3 direction;  ///< the ray's fixed direction
 };
 
-/// The hits of the current pass of a path. Hits window .. window + kHitsPerPass - 1 hold slots.
+/// The hits of the current pass of a path. Hits window .. window + capacity - 1 hold slots.
 struct Tape {
   std::vector<TapeHit> hits;
   int window = 0;
+  /// Hits with slots in this pass: kHitsPerPass, or 1 in a first pass whose camera direction
+  /// holds the second hit's slots (kDirectionSlot).
+  int capacity = kHitsPerPass;
   bool moving = false;  ///< a chosen-shape hit at or before the current vertex: p moves
   void reset(int first) {
     hits.clear();
     window = first;
+    capacity = kHitsPerPass;
     moving = false;
   }
 };
@@ -68,7 +83,7 @@ struct ReverseView {
     tape->moving = true;
     const int slot = (int(tape->hits.size()) - tape->window) * kSlotsPerHit;
     tape->hits.push_back({hit, o, d});
-    if (slot < 0 || slot >= kSlots) return true;
+    if (slot < 0 || slot >= tape->capacity * kSlotsPerHit) return true;
     for (int i = 0; i < 3; ++i) {
       si.p[i].derivatives()[slot + i] += 1.0;
       si.ns[i].derivatives()[slot + 3 + i] += 1.0;
@@ -237,6 +252,9 @@ struct TileScratch {
   /// that scatters): the dual passes of the sample continue it from there. Set whenever the probe
   /// stopped; unused by a sample without traversals (its passes build no boundary hook).
   std::optional<Sampler> resume;
+  /// The attached camera ray of the sample's first pass (moves false: detached) and its hit.
+  CameraWarp warp = CameraWarp::detached(Vec3::UnitZ());
+  Hit warp_hit;
 };
 
 /// One sample of one pixel: sample index s of pixel (x, y), and the run's seed.
@@ -294,9 +312,16 @@ class ReverseEstimator::Impl : public RenderSetup {
                   " is not supported (forward mode only: qsil grad)");
     if (config.method != Method::None && !samples_edges(config.method))
       throw Error("method " + std::string(method_name(config.method)) + " cannot estimate derivatives");
+    check_camera_control_spp(config.camera_control_spp);
     if (samples_edges(config.method)) {
+      boundary_ctx.camera_hits = config.camera_hits;
       set_up_boundary_term(s, tracer, config.method, nullptr, chosen, config.sppi, lights.environment, boundary,
                            boundary_ctx, primary, setup, config.intersection_curves);
+      if (primary.attached && config.camera_control_spp > 0) {
+        const auto t0 = std::chrono::steady_clock::now();
+        setup.control_pixels = set_attached_control(ctx, primary.attachment, config.camera_control_spp);
+        setup.control_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      }
     }
   }
 
@@ -304,7 +329,7 @@ class ReverseEstimator::Impl : public RenderSetup {
   /// each hit's local Jacobian.
   void backpropagate_hits(const Tape& tape, const ColorT<RDual>& L, const Color& a,
                           std::vector<Contribution>& out) const {
-    const int last = std::min(int(tape.hits.size()), tape.window + kHitsPerPass);
+    const int last = std::min(int(tape.hits.size()), tape.window + tape.capacity);
     for (int h = tape.window; h < last; ++h) {
       const int slot = (h - tape.window) * kSlotsPerHit;
       Eigen::Matrix<double, kSlotsPerHit, 1> adj = Eigen::Matrix<double, kSlotsPerHit, 1>::Zero();
@@ -325,6 +350,43 @@ class ReverseEstimator::Impl : public RenderSetup {
         out.push_back({ci, tri[k], true, Vec3(local.segment<3>(9 + 3 * k))});
       }
     }
+  }
+
+  /// Whether the camera ray `ray` is attached (attached_camera.h): it hits a triangle of a chosen
+  /// shape that the attachment touches.
+  bool attached_hit(const CameraRay& ray) const {
+    return primary.attached && ray.hit.valid() && chosen[size_t(ray.hit.shape)] &&
+           primary.attachment.touches(scene, ray.hit.shape, ray.hit.triangle);
+  }
+
+  /// The attached camera ray of `ray` (attached_hit) at film position `film` in pixel (px, py),
+  /// over the hit triangle's vertex positions (kWarpLocal): a unit velocity per coordinate.
+  CameraWarp camera_warp(const CameraRay& ray, const Vec2& film, int px, int py) const {
+    std::array<Eigen::Matrix<double, 3, kWarpLocal>, 3> unit;
+    for (int i = 0; i < 3; ++i) {
+      unit[size_t(i)].setZero();
+      unit[size_t(i)].middleCols<3>(3 * i) = Mat3::Identity();
+    }
+    return attached_camera_warp<kWarpLocal>(scene, primary.attachment, ray, film, px, py, unit, kWarpLocal);
+  }
+
+  /// Adds the adjoints of an attached camera ray (`warp`, of hit `hit`) to `out`: the camera
+  /// direction's slots (kDirectionSlot) of the first pass's L through the warp's d(direction)/dX,
+  /// and sum_c a_c (L_c - c_c) times the Jacobian's d div(w V)/dX (AttachedCameraRay::apply_jacobian
+  /// read backwards), X the hit triangle's vertex positions.
+  void backpropagate_warp(const CameraWarp& warp, const Hit& hit, const ColorT<RDual>& L, const Color& a,
+                          std::vector<Contribution>& out) const {
+    Vec3 adj_dir = Vec3::Zero();
+    double adj_jacobian = 0;
+    for (int c = 0; c < 3; ++c) {
+      adj_dir += a[c] * L[c].derivatives().segment<3>(kDirectionSlot);
+      adj_jacobian += a[c] * (L[c].value() - warp.control[c]);
+    }
+    Eigen::Matrix<double, kWarpLocal, 1> local = adj_jacobian * warp.jacobian.derivatives();
+    for (int i = 0; i < 3; ++i) local += adj_dir[i] * warp.dir[i].derivatives();
+    const Eigen::Vector3i& tri = scene.shapes[size_t(hit.shape)].mesh.triangles[size_t(hit.triangle)];
+    const int ci = chosen_index[size_t(hit.shape)];
+    for (int k = 0; k < 3; ++k) out.push_back({ci, tri[k], false, Vec3(local.segment<3>(3 * k))});
   }
 
   /// The index of pixel (x, y) in the film (row-major): its adjoint's place, and the seed of its
@@ -348,7 +410,10 @@ class ReverseEstimator::Impl : public RenderSetup {
   /// same numbers: the same path; its camera ray and path counted in `st`), with the secondary
   /// boundary term (ReverseBoundaryHook<Real>: adjoint `a`, edges' shares to
   /// `scratch.contributions`, its stream `bsampler`, left where the path ends; run as `pass` says)
-  /// when the sample has traversals. The part trace_probe and trace_pass share.
+  /// when the sample has traversals. The part trace_probe and trace_pass share. An attached camera
+  /// ray (attached_hit) stops the probe (ProbeView: radiance 0, `stopped` set) and, in the first
+  /// pass with duals (tape window 0), sets scratch.warp and starts the path along the warped
+  /// direction, whose slots are kDirectionSlot's (tape capacity 1).
   template <class View>
   ColorT<typename View::Real> trace_sample(const PixelSample& ps, const View& view, const Color& a, Sampler& bsampler,
                                            const BoundaryPass& pass, TileScratch& scratch, PathStats& st) const {
@@ -356,8 +421,26 @@ class ReverseEstimator::Impl : public RenderSetup {
     const Camera& cam = scene.camera;
     const uint64_t pixel = pixel_index(ps);
     Sampler sampler(ps.seed, pixel, uint64_t(ps.s));
-    const CameraRay ray = trace_camera_ray(ctx, ps.x, ps.y, sampler.next2(), st);
-    const PathRay<Real> start{lift<Real>(cam.origin()), ray.dir, ray.hit};
+    const Vec2 u = sampler.next2();
+    const CameraRay ray = trace_camera_ray(ctx, ps.x, ps.y, u, st);
+    PathRay<Real> start{lift<Real>(cam.origin()), ray.dir, ray.hit};
+    Vec3T<Real> warped;  // the attached camera direction, its value ray.dir
+    if (attached_hit(ray)) {
+      if constexpr (std::is_same_v<View, ProbeView>) {
+        *view.stopped = true;
+        return lift<Real>(Color::Zero().eval());
+      } else if (scratch.tape.window == 0) {
+        scratch.warp = camera_warp(ray, Vec2(ps.x + u.x(), ps.y + u.y()), ps.x, ps.y);
+        scratch.warp_hit = ray.hit;
+        if (scratch.warp.moves) {
+          Eigen::Matrix<double, 3, kSlots> slots = Eigen::Matrix<double, 3, kSlots>::Zero();
+          slots.middleCols<3>(kDirectionSlot) = Mat3::Identity();
+          warped = lift<kSlots>(ray.dir, slots);
+          start.moving_dir = &warped;
+          scratch.tape.capacity = 1;
+        }
+      }
+    }
     const int traversals =
         boundary.sampler ? boundary_traversals(boundary_ctx.sppi, ps.seed, pixel, uint64_t(ps.s)) : 0;
     if (traversals <= 0) return trace_path(ctx, view, start, sampler, st);
@@ -405,11 +488,13 @@ class ReverseEstimator::Impl : public RenderSetup {
   ColorT<RDual> trace_pass(const PixelSample& ps, int window, const Color& a, TileScratch& scratch,
                            PathStats& st) const {
     scratch.tape.reset(window);
+    scratch.warp.moves = false;
     const ReverseView view{&scene, &chosen, &scratch.tape};
     Sampler bsampler = scratch.resume ? *scratch.resume : boundary_stream(ps);
     const BoundaryPass pass{.edges = window == 0, .after_probe = scratch.resume.has_value(), .stats_out = nullptr};
     const ColorT<RDual> L = trace_sample(ps, view, a, bsampler, pass, scratch, st);
     backpropagate_hits(scratch.tape, L, a, scratch.contributions);
+    if (scratch.warp.moves) backpropagate_warp(scratch.warp, scratch.warp_hit, L, a, scratch.contributions);
     return L;
   }
 
@@ -437,7 +522,9 @@ class ReverseEstimator::Impl : public RenderSetup {
             ++sums.probed;
           } else {
             value_L = value(trace_pass(ps, 0, a, scratch, sums.stats));
-            for (int w = kHitsPerPass; w < int(scratch.tape.hits.size()); w += kHitsPerPass) {
+            // The next window starts after the first pass's hits with slots (one when the camera
+            // direction held the second's).
+            for (int w = scratch.tape.capacity; w < int(scratch.tape.hits.size()); w += kHitsPerPass) {
               trace_pass(ps, w, a, scratch, sums.stats);
               ++sums.replays;
             }
@@ -460,6 +547,7 @@ class ReverseEstimator::Impl : public RenderSetup {
                         std::vector<std::vector<Vec3>>& d_position, ReverseResult& r) const {
     const size_t W = size_t(scene.camera.width);
     PathStats st;
+    std::vector<Contribution> flux;  // a sample's attached flux, added when all of it is finite
     for_each_primary_sample(ctx, primary, config.sppp, first, count, options.seed, options.threads, st,
                             [&](const PrimarySample& ps) {
                               const size_t pixel = size_t(ps.py) * W + size_t(ps.px);
@@ -469,9 +557,31 @@ class ReverseEstimator::Impl : public RenderSetup {
                                 ++r.nonfinite;
                                 return;
                               }
+                              flux.clear();
+                              if (ps.attached) {
+                                const Color adj = Eigen::Map<const Color>(&adjoint[3 * pixel]) / double(count);
+                                for_each_attached_side(
+                                    scene, primary.attachment, ps.sides, ps.point(), ps.film, ps.px, ps.py,
+                                    [&](const EdgeSides::Side& side, double k, const Color& L) {
+                                      const int ci = chosen_index[size_t(side.hit.shape)];
+                                      if (ci < 0) return;
+                                      // The flux - k (L - c) (g . v_side), v_side = sum_i b_i v_i.
+                                      const Vec3 gs = -ps.scale * k * (adj * L).sum() * ps.g;
+                                      const Eigen::Vector3i& tri = scene.shapes[size_t(side.hit.shape)]
+                                                                       .mesh.triangles[size_t(side.hit.triangle)];
+                                      const double b[3] = {1 - side.hit.u - side.hit.v, side.hit.u, side.hit.v};
+                                      for (int i = 0; i < 3; ++i) flux.push_back({ci, tri[i], false, Vec3(b[i] * gs)});
+                                    });
+                                if (!finite(flux)) {
+                                  ++r.nonfinite;
+                                  return;
+                                }
+                              }
                               add_edge_adjoint(*ps.edge, g0, g1, chosen_index, [&](int ci, int vertex, const Vec3& value) {
                                 d_position[size_t(ci)][size_t(vertex)] += value;
                               });
+                              for (const Contribution& c : flux)
+                                d_position[size_t(c.chosen)][size_t(c.vertex)] += c.value;
                             });
     r.rays += st.rays;
     r.traversals += st.boundary_traversals;
@@ -530,9 +640,18 @@ ReverseUpdate ReverseEstimator::update() {
   m.ctx = m.lights.context(m.scene, m.tracer);
   if (samples_edges(m.config.method)) {
     const auto te = std::chrono::steady_clock::now();
+    // The control variate's c: kept (ReverseConfig::camera_control_spp), the primary edges and
+    // their attachment being found anew.
+    std::vector<Color> control = std::move(m.primary.attachment.control);
+    const int control_width = m.primary.attachment.control_width;
     const edgetree::RefitReport r =
         update_boundary_term(m.scene, m.tracer, m.config.method, m.chosen, m.lights.environment, m.boundary,
                              m.boundary_ctx, m.primary, m.setup, m.config.intersection_curves);
+    const size_t pixels = size_t(m.scene.camera.width) * size_t(m.scene.camera.height);
+    if (m.primary.attached && control_width == m.scene.camera.width && control.size() == pixels) {
+      m.primary.attachment.control = std::move(control);
+      m.primary.attachment.control_width = control_width;
+    }
     out.edge_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - te).count();
     out.refitted = !r.rebuild_advised();
     if (out.refitted) {

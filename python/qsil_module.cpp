@@ -349,42 +349,50 @@ struct PyReverseEstimator {
 
 /// Binds qsil.reverse (reverse mode) and qsil.ReverseEstimator.
 void bind_reverse(py::module_& m) {
-  const auto reverse =
-      [](const Scene& scene, const std::vector<std::string>& shapes, const Array& adjoint, int spp, uint64_t seed,
-         int threads, const std::string& boundary, double sppi, double sppp, bool intersection_curves) {
-        const Method method = parse_method(boundary, "boundary", kBoundaryMethods);
-        const std::vector<double> w = adjoint_weights(scene, adjoint);
-        const std::vector<int> indices = resolve_shapes(scene, shapes);
-        std::optional<ReverseResult> r;
-        {
-          py::gil_scoped_release release;
-          const ReverseEstimator e(scene, ReverseConfig{indices, method, sppi, sppp, intersection_curves});
-          r = e.run(w, options(spp, seed, threads));
-        }
-        return reverse_dict(*r, shapes);
-      };
+  const auto reverse = [](const Scene& scene, const std::vector<std::string>& shapes, const Array& adjoint, int spp,
+                          uint64_t seed, int threads, const std::string& boundary, double sppi, double sppp,
+                          bool intersection_curves, const std::string& camera_hits, int camera_control_spp) {
+    const Method method = parse_method(boundary, "boundary", kBoundaryMethods);
+    const std::vector<double> w = adjoint_weights(scene, adjoint);
+    const std::vector<int> indices = resolve_shapes(scene, shapes);
+    ReverseConfig config{indices, method, sppi, sppp, intersection_curves};
+    config.camera_hits = camera_hits_named(camera_hits);
+    config.camera_control_spp = camera_control_spp;
+    std::optional<ReverseResult> r;
+    {
+      py::gil_scoped_release release;
+      const ReverseEstimator e(scene, config);
+      r = e.run(w, options(spp, seed, threads));
+    }
+    return reverse_dict(*r, shapes);
+  };
   py::class_<PyReverseEstimator>(
       m, "ReverseEstimator",
       "Reverse mode set up once for an optimisation: run() as qsil.reverse, update() after the scene's meshes "
       "changed (set_vertices: the edge forest is refitted, the ray tracer's vertices moved; set_mesh: set up anew)")
       .def(py::init([](const Scene& scene, const std::vector<std::string>& shapes, const std::string& boundary,
-                       double sppi, double sppp, bool intersection_curves, bool probe_paths) {
+                       double sppi, double sppp, bool intersection_curves, bool probe_paths,
+                       const std::string& camera_hits, int camera_control_spp) {
              const Method method = parse_method(boundary, "boundary", kBoundaryMethods);
              const std::vector<int> indices = resolve_shapes(scene, shapes);
              auto p = std::make_unique<PyReverseEstimator>();
              p->scene = &scene;
              p->shapes = shapes;
-             py::gil_scoped_release release;
              ReverseConfig config{indices, method, sppi, sppp, intersection_curves};
              config.probe_paths = probe_paths;
+             config.camera_hits = camera_hits_named(camera_hits);
+             config.camera_control_spp = camera_control_spp;
+             py::gil_scoped_release release;
              p->estimator = std::make_unique<ReverseEstimator>(scene, config);
              return p;
            }),
            py::arg("scene"), py::arg("shapes"), py::arg("boundary") = "quadric", py::arg("sppi") = 0,
            py::arg("sppp") = kDefaultSppp, py::arg("intersection_curves") = true, py::arg("probe_paths") = true,
+           py::arg("camera_hits") = "adaptive", py::arg("camera_control_spp") = kAttachedControlSpp,
            py::keep_alive<1, 2>(),
            "Sets up reverse mode for `shapes` of `scene` (kept alive by the estimator); arguments as for "
-           "qsil.reverse; probe_paths=False traces every path with dual numbers (the same estimates, slower: "
+           "qsil.reverse (update() keeps the control variate's per-pixel c of the set-up: unbiased for any c); "
+           "probe_paths=False traces every path with dual numbers (the same estimates, slower: "
            "for timing, ReverseConfig::probe_paths)")
       .def(
           "run",
@@ -438,14 +446,16 @@ void bind_reverse(py::module_& m) {
           "structure's part)");
   m.def("reverse", reverse, py::arg("scene"), py::arg("shapes"), py::arg("adjoint"), py::arg("spp") = 0,
         py::arg("seed") = 0, py::arg("threads") = 0, py::arg("boundary") = "quadric", py::arg("sppi") = 0,
-        py::arg("sppp") = kDefaultSppp, py::arg("intersection_curves") = true,
+        py::arg("sppp") = kDefaultSppp, py::arg("intersection_curves") = true, py::arg("camera_hits") = "adaptive",
+        py::arg("camera_control_spp") = kAttachedControlSpp,
         "Reverse mode: for the loss L = sum(adjoint * I), a dict with 'image' (H, W, 3), 'loss' (of that image), "
-        "'gradient' {shape id: dL/dx (V, 3)}, 'seconds', 'nonfinite', 'probed'; sppi, sppp and intersection_curves as "
-        "for grad");
+        "'gradient' {shape id: dL/dx (V, 3)}, 'seconds', 'nonfinite', 'probed'; sppi, sppp, intersection_curves, "
+        "camera_hits and camera_control_spp as for grad (the chosen shapes are the moving ones)");
   // The keyword names before 2026-11-25 (boundary_spp, primary_samples): the same function.
   m.def("reverse", reverse, py::arg("scene"), py::arg("shapes"), py::arg("adjoint"), py::arg("spp") = 0,
         py::arg("seed") = 0, py::arg("threads") = 0, py::arg("boundary") = "quadric", py::arg("boundary_spp") = 0,
         py::arg("primary_samples") = kDefaultSppp, py::arg("intersection_curves") = true,
+        py::arg("camera_hits") = "adaptive", py::arg("camera_control_spp") = kAttachedControlSpp,
         "The same, with the old keyword names boundary_spp (= sppi) and primary_samples (= sppp)");
 }
 

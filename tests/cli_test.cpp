@@ -230,9 +230,29 @@ TEST(CLI, ReverseErrorsExitWithCode2) {
   expect_error("reverse scenes/shadow-quad.xml --spp 1 -D res=16 --shape object", "give --adjoint or --target");
   expect_error("reverse scenes/shadow-quad.xml --spp 1 -D res=16 --shape object --boundary fd --target " + target,
                "--boundary");
-  for (const std::string flag : {"--camera-hits attached", "--camera-hits adaptive", "--camera-control-spp 4"})
-    expect_error("reverse scenes/shadow-quad.xml --spp 1 -D res=16 --shape object " + flag + " --target " + target,
-                 "camera hits are detached in reverse mode");
+  expect_error(
+      "reverse scenes/shadow-quad.xml --spp 1 -D res=16 --shape object --camera-control-spp 1 --target " + target,
+      "at least 2 pre-pass spp (got 1)");
+}
+
+TEST(CLI, ReverseTakesGradsCameraHitsAndControlVariate) {
+  // The set-up line says what was built: attached camera hits and their control variate, as
+  // `qsil grad` builds them; without the pre-pass no control; detached, neither.
+  const std::string target = tmp("qsil_reverse_target3.exr"), out = tmp("qsil_reverse3.npy");
+  ASSERT_EQ(run_qsil("render scenes/shadow-quad.xml -q -D res=16 --spp 1 -o " + target).code, 0);
+  const std::string run = "reverse scenes/shadow-quad.xml -q -D res=16 --spp 1 --shape object --target " + target +
+                          " -o " + out + " --camera-hits ";
+  const CliRun attached = run_qsil(run + "attached");
+  ASSERT_EQ(attached.code, 0) << attached.err;
+  EXPECT_NE(attached.out.find("camera hits attached at"), std::string::npos) << attached.out;
+  EXPECT_NE(attached.out.find("a control variate at"), std::string::npos) << attached.out;
+  const CliRun uncontrolled = run_qsil(run + "attached --camera-control-spp 0");
+  ASSERT_EQ(uncontrolled.code, 0) << uncontrolled.err;
+  EXPECT_NE(uncontrolled.out.find("camera hits attached at"), std::string::npos) << uncontrolled.out;
+  EXPECT_EQ(uncontrolled.out.find("a control variate"), std::string::npos) << uncontrolled.out;
+  const CliRun detached = run_qsil(run + "detached");
+  ASSERT_EQ(detached.code, 0) << detached.err;
+  EXPECT_EQ(detached.out.find("camera hits attached"), std::string::npos) << detached.out;
 }
 
 TEST(CLI, ReverseWritesOneGradientRowPerVertex) {

@@ -103,26 +103,19 @@ const CommandRegistrar registrar{
                           "(interior term only)",
                           true);
        app.add_option("--image", flags->image, "Also write the primal image of the same paths (EXR)");
-       // Reverse mode's camera hits are detached: asking for attached ones (or their control
-       // variate) is an error, not a silently different estimator.
-       const CLI::Option* hits = app.get_option("--camera-hits");
-       const CLI::Option* control = app.get_option("--camera-control-spp");
-       return [flags, hits, control]() {
+       return [flags]() {
          if (process_group().size() > 1) throw Error("reverse: runs in one process (no MPI launcher)");
          if (flags->adjoint.empty() && flags->target.empty()) throw Error("reverse: give --adjoint or --target");
          if (flags->boundary.forest_guiding.training > 0)
            throw Error("reverse: --forest-guide-training is forward mode's only (qsil grad)");
-         if ((hits->count() > 0 && flags->boundary.camera_hits != "detached") ||
-             (control->count() > 0 && flags->boundary.camera_control_spp != 0))
-           throw Error(
-               "reverse: camera hits are detached in reverse mode (--camera-hits and --camera-control-spp are "
-               "forward mode's only, qsil grad)");
          const Method method = parse_method(flags->boundary.method, "--boundary", kBoundaryMethods);
          const Scene scene = load_scene_with_flags(flags->scene, flags->defines);
          const Camera& cam = scene.camera;
-         const ReverseEstimator reverse(scene,
-                                        ReverseConfig{resolve_shapes(scene, flags->shapes), method, flags->boundary.sppi,
-                                                      flags->boundary.sppp, flags->boundary.intersection_curves});
+         ReverseConfig config{resolve_shapes(scene, flags->shapes), method, flags->boundary.sppi, flags->boundary.sppp,
+                              flags->boundary.intersection_curves};
+         config.camera_hits = camera_hits_named(flags->boundary.camera_hits);
+         config.camera_control_spp = flags->boundary.camera_control_spp;
+         const ReverseEstimator reverse(scene, config);
          double l2 = NAN;
          const std::vector<double> w =
              flags->adjoint.empty() ? l2_adjoint(scene, flags->target, flags->render, l2)
@@ -144,6 +137,7 @@ const CommandRegistrar registrar{
              flags->scene.c_str(), cam.width, cam.height, r.spp, flags->boundary.method.c_str(),
              reverse.setup().seconds + r.seconds, reverse.setup().seconds, (unsigned long long)r.traversals,
              (unsigned long long)r.replays, (unsigned long long)r.probed);
+         std::printf("  set-up: %s\n", reverse.setup().describe().c_str());
          if (std::isnan(l2))
            std::printf("  loss sum W.I = %.9g\n", r.loss);
          else

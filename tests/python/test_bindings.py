@@ -142,6 +142,25 @@ def test_camera_control_switch_reaches_the_estimator():
     assert "at least 2 pre-pass spp (got 1)" in str(e.value)
 
 
+def test_reverse_takes_the_camera_hits_and_keeps_the_control_across_an_update():
+    # Reverse mode's camera_hits and camera_control_spp reach the estimator (each changes the
+    # gradient of the same paths; 1 is refused), and an update() keeps the set-up's control
+    # variate: after an update of unmoved vertices the gradient is the set-up's, bit for bit.
+    sunk = qsil.Scene(os.path.join(ROOT, "tests", "data", "gradient", "sunk-sphere.xml"), {"res": "16", "spp": "4"})
+    adjoint = np.where(np.random.default_rng(5).random((16, 16, 3)) < 0.5, -1.0, 1.0)
+    run = lambda **k: qsil.reverse(sunk, ["sphere"], adjoint, spp=4, seed=3, threads=2, **k)["gradient"]["sphere"]
+    on = run(camera_hits="attached")
+    assert not np.array_equal(on, run(camera_hits="attached", camera_control_spp=0))
+    assert not np.array_equal(on, run(camera_hits="detached"))
+    with pytest.raises(qsil.Error) as e:
+        run(camera_hits="attached", camera_control_spp=1)
+    assert "at least 2 pre-pass spp (got 1)" in str(e.value)
+    estimator = qsil.ReverseEstimator(sunk, ["sphere"], camera_hits="attached")
+    assert np.array_equal(estimator.run(adjoint, spp=4, seed=3, threads=2)["gradient"]["sphere"], on)
+    assert estimator.update()["refitted"]
+    assert np.array_equal(estimator.run(adjoint, spp=4, seed=3, threads=2)["gradient"]["sphere"], on)
+
+
 def mesh_edges(F):
     """Directed edges (T*3, 2) of triangles F."""
     return np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])

@@ -44,6 +44,7 @@
 #include "qsil/scene.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <queue>
 #include <string>
@@ -79,6 +80,15 @@ T attached_bump_1d(const T& s) {
 /// camera_control_spp, `--camera-control-spp`, qsil.grad's camera_control_spp); chosen in
 /// docs/experiments/2026-11-28-jacobian-control-variate.md.
 inline constexpr int kAttachedControlSpp = 4;
+
+/// Throws qsil::Error unless `spp` is a valid pre-pass size of the control variate
+/// (EstimatorConfig::camera_control_spp, ReverseConfig::camera_control_spp): 0 (none) or at least 2
+/// (its shrinkage needs the samples' variance).
+inline void check_camera_control_spp(int spp) {
+  if (spp != 0 && spp < 2)
+    throw Error("the camera hits' control variate needs 0 (none) or at least 2 pre-pass spp (got " +
+                std::to_string(spp) + ")");
+}
 
 /// Which camera samples are attached (EstimatorConfig::camera_hits, `--camera-hits`).
 enum class CameraHits {
@@ -308,17 +318,21 @@ struct AttachedCameraRay {
 };
 
 /// The attached camera ray of the sample at film position `film` (pixels) in pixel (px, py), whose
-/// camera ray `ray` (trace_camera_ray) was traced, w = b(u) a(x) (`attachment`). Where the ray
-/// escapes, hits a static shape or a triangle whose three vertices have strength 0, or meets its triangle's plane at a
-/// grazing angle where the arithmetic overflows (a set of measure zero), the direction is fixed and the Jacobian 1: the
-/// detached sample. `vel`: the velocities the view's duals carry.
+/// camera ray `ray` (trace_camera_ray) was traced and hit a triangle that the attachment touches,
+/// w = b(u) a(x) (`attachment`), for `num_params` (<= N) parameters whose velocities of the hit
+/// triangle's three vertices are `vertex_velocity` (3 x N each, world units per unit parameter, in
+/// the triangle's vertex order; columns from num_params on are ignored). The material point at
+/// barycentrics (b0, b1, b2) moves at b0 v0 + b1 v1 + b2 v2. Forward mode gives the scene's
+/// velocities (attached_camera_ray); reverse mode a unit velocity per vertex coordinate (N = 9:
+/// column 3 i + j moves vertex i along axis j), whose results are the local Jacobians of the
+/// warped direction and of div(w V). Where the ray meets its triangle's plane at a grazing angle
+/// where the arithmetic overflows (a set of measure zero), the detached sample.
 template <int N>
-AttachedCameraRay<N> attached_camera_ray(const Scene& scene, const SceneVelocities& vel,
-                                         const CameraAttachment& attachment, const CameraRay& ray, const Vec2& film,
-                                         int px, int py) {
+AttachedCameraRay<N> attached_camera_warp(const Scene& scene, const CameraAttachment& attachment, const CameraRay& ray,
+                                          const Vec2& film, int px, int py,
+                                          const std::array<Eigen::Matrix<double, 3, N>, 3>& vertex_velocity,
+                                          int num_params) {
   AttachedCameraRay<N> r = AttachedCameraRay<N>::detached(ray.dir);
-  if (!ray.hit.valid() || !vel.moving[size_t(ray.hit.shape)]) return r;
-  if (!attachment.touches(scene, ray.hit.shape, ray.hit.triangle)) return r;
   // Over film position u = (u_x, u_y): A is a dual in the two film coordinates.
   using A = Eigen::AutoDiffScalar<Eigen::Vector2d>;
   using V3 = Eigen::Matrix<A, 3, 1>;
@@ -351,19 +365,18 @@ AttachedCameraRay<N> attached_camera_ray(const Scene& scene, const SceneVelociti
   const Vec3 o = cam.origin();
   for (int i = 0; i < 3; ++i)
     c[i] = A(Rt(i, 0)) * (y[0] - A(o.x())) + A(Rt(i, 1)) * (y[1] - A(o.y())) + A(Rt(i, 2)) * (y[2] - A(o.z()));
-  const auto& P = vel.position[size_t(ray.hit.shape)];
   // d(unit direction)/du (3 x 2) at u: from q, whose norm does not change what it points at.
   const Vec3 qv0(q[0].value(), q[1].value(), q[2].value());
   const double qn = qv0.norm();
   Eigen::Matrix<double, 3, 2> dq;
   for (int i = 0; i < 3; ++i) dq.row(i) = q[i].derivatives().transpose();
   const Eigen::Matrix<double, 3, 2> ddir = (Eigen::Matrix3d::Identity() - qv0 * qv0.transpose() / (qn * qn)) * dq / qn;
-  Eigen::Matrix<double, N, 1> div;
-  Eigen::Matrix<double, 3, N> dd;
-  for (int k = 0; k < vel.num_params; ++k) {
+  Eigen::Matrix<double, N, 1> div = Eigen::Matrix<double, N, 1>::Zero();
+  Eigen::Matrix<double, 3, N> dd = Eigen::Matrix<double, 3, N>::Zero();
+  for (int k = 0; k < num_params; ++k) {
     V3 dy;
     for (int i = 0; i < 3; ++i)
-      dy[i] = b0 * A(P[size_t(tri[0])](i, k)) + b1 * A(P[size_t(tri[1])](i, k)) + b2 * A(P[size_t(tri[2])](i, k));
+      dy[i] = b0 * A(vertex_velocity[0](i, k)) + b1 * A(vertex_velocity[1](i, k)) + b2 * A(vertex_velocity[2](i, k));
     V3 dc;
     for (int i = 0; i < 3; ++i) dc[i] = A(Rt(i, 0)) * dy[0] + A(Rt(i, 1)) * dy[1] + A(Rt(i, 2)) * dy[2];
     const A vx = A(-0.5 * cam.width / tf.x()) * (dc[0] * c[2] - c[0] * dc[2]) / (c[2] * c[2]);
@@ -372,16 +385,35 @@ AttachedCameraRay<N> attached_camera_ray(const Scene& scene, const SceneVelociti
     div[k] = fx.derivatives()[0] + fy.derivatives()[1];
     dd.col(k) = ddir * Vec2(fx.value(), fy.value());
   }
-  for (int k = vel.num_params; k < N; ++k) {
-    div[k] = 0;
-    dd.col(k).setZero();
-  }
   if (!div.allFinite() || !dd.allFinite()) return r;
   for (int i = 0; i < 3; ++i) r.dir[i].derivatives() = dd.row(i).transpose();
   r.jacobian.derivatives() = div;
   r.moves = true;
   r.control = attachment.control_at(px, py);
   return r;
+}
+
+/// The attached camera ray of the sample at film position `film` (pixels) in pixel (px, py), whose
+/// camera ray `ray` (trace_camera_ray) was traced, w = b(u) a(x) (`attachment`): attached_camera_warp
+/// with the velocities the view's duals carry (`vel`). Where the ray escapes, hits a static shape
+/// or a triangle whose three vertices have strength 0, or meets its triangle's plane at a grazing
+/// angle where the arithmetic overflows (a set of measure zero), the direction is fixed and the
+/// Jacobian 1: the detached sample.
+template <int N>
+AttachedCameraRay<N> attached_camera_ray(const Scene& scene, const SceneVelocities& vel,
+                                         const CameraAttachment& attachment, const CameraRay& ray, const Vec2& film,
+                                         int px, int py) {
+  if (!ray.hit.valid() || !vel.moving[size_t(ray.hit.shape)] ||
+      !attachment.touches(scene, ray.hit.shape, ray.hit.triangle))
+    return AttachedCameraRay<N>::detached(ray.dir);
+  const Eigen::Vector3i& tri = scene.shapes[size_t(ray.hit.shape)].mesh.triangles[size_t(ray.hit.triangle)];
+  const auto& P = vel.position[size_t(ray.hit.shape)];
+  std::array<Eigen::Matrix<double, 3, N>, 3> v;
+  for (int i = 0; i < 3; ++i) {
+    v[size_t(i)].setZero();
+    v[size_t(i)].leftCols(vel.num_params) = P[size_t(tri[i])].leftCols(vel.num_params);
+  }
+  return attached_camera_warp<N>(scene, attachment, ray, film, px, py, v, vel.num_params);
 }
 
 }  // namespace qsil

@@ -17,7 +17,14 @@
 ///   jump / pdf) adds W g (1 - t) to v0 and W g t to v1 (g = (w0 x w1)/|w_t|^3,
 ///   boundary_term.h), and -W g . dp/dslot to the slots of the moving shading point p;
 /// - primary boundary term: the same for the camera's edge samples, weighted by the adjoint of
-///   the pixel each lands in (for_each_primary_sample).
+///   the pixel each lands in (for_each_primary_sample);
+/// - attached camera hits (ReverseConfig::camera_hits, attached_camera.h): the first pass of a
+///   path whose camera hit is attached gives the camera direction derivative slots of its own (the
+///   second hit's; that pass then holds one hit), and the warp's local Jacobian over the hit
+///   triangle's vertex positions (attached_camera_warp with a unit velocity per coordinate)
+///   carries their adjoint, and (L - c) times the Jacobian's, to them; the primary term adds the
+///   attached flux's adjoint to the vertices of the triangles its sides hit
+///   (for_each_attached_side).
 /// The edge sampler's importance has no velocities (velocity_factor 1): the per-vertex gradient
 /// has a parameter per vertex. Eligible edges: those of chosen shapes at a static p, every
 /// shape's at a p that moves (a chosen-shape hit at or before it).
@@ -50,6 +57,20 @@ struct ReverseConfig {
   /// interior derivative. false: every path with dual numbers, which costs more where the chosen
   /// shapes fill little of what the paths see (for tests and timing).
   bool probe_paths = true;
+  /// Camera hits attached to the surface (EstimatorConfig::camera_hits, attached_camera.h), with
+  /// the chosen shapes as the moving ones: the warp's local Jacobian (the hit triangle's three
+  /// vertices) carries the warped direction's and the Jacobian's adjoints to them, and the primary
+  /// term adds the attached flux's. Edge-sampling methods only (Method::None: detached, as in
+  /// forward mode). The warp's Jacobian for one vertex holds the gradient of its barycentric, so
+  /// the raw per-vertex gradient is noisier attached (up to 2.7x on the teapot) while its smoothed
+  /// (Large Steps) and whole-shape parts are less noisy
+  /// (docs/experiments/2026-11-29-reverse-attached.md): Detached suits plain descent on x.
+  CameraHits camera_hits = CameraHits::Adaptive;
+  /// EstimatorConfig::camera_control_spp: the control variate's pre-pass, run by the constructor
+  /// (and by an update() that sets up anew). An update() that refits keeps the pixels' c: any c
+  /// fixed before a run is unbiased (CameraAttachment::control), and one from the last set-up's
+  /// shapes saves an optimiser a pre-pass per step. 0 or at least 2 (check_camera_control_spp).
+  int camera_control_spp = kAttachedControlSpp;
 };
 
 /// One reverse-mode run.
@@ -89,10 +110,11 @@ struct ReverseUpdate {
 class ReverseEstimator {
  public:
   /// Builds the ray tracer, lights, and for an edge-sampling method the boundary method's
-  /// structures over every shape and the primary edges of the chosen shapes. Throws qsil::Error
+  /// structures over every shape, the primary edges of the chosen shapes, their camera hits'
+  /// attachment and its control variate (ReverseConfig::camera_control_spp). Throws qsil::Error
   /// for an empty or repeated shape list, a shape index out of range, a method that is neither
-  /// an edge-sampling method nor none, or a sppi or sppp out of range
-  /// (check_sample_rates).
+  /// an edge-sampling method nor none, a sppi or sppp out of range (check_sample_rates), or a
+  /// control pre-pass neither 0 nor at least 2 spp (check_camera_control_spp).
   ReverseEstimator(const Scene& scene, ReverseConfig config);
   ~ReverseEstimator();
   ReverseEstimator(ReverseEstimator&&) noexcept;
