@@ -325,7 +325,7 @@ class ReverseEstimator::Impl : public RenderSetup {
     }
   }
 
-  /// Adds the adjoints of the slots of tape hits [first, first + kHitsPerPass) to `out` through
+  /// Adds the adjoints of the slots of tape hits [window, window + capacity) to `out` through
   /// each hit's local Jacobian.
   void backpropagate_hits(const Tape& tape, const ColorT<RDual>& L, const Color& a,
                           std::vector<Contribution>& out) const {
@@ -481,7 +481,8 @@ class ReverseEstimator::Impl : public RenderSetup {
   }
 
   /// One pass of sample `ps`'s path (trace_sample) with duals: slots for tape hits [window,
-  /// window + kHitsPerPass), its secondary boundary term adding to `scratch.contributions` (adjoint
+  /// window + capacity) (and, in the first pass of an attached camera hit, for the camera
+  /// direction: backpropagate_warp), its secondary boundary term adding to `scratch.contributions` (adjoint
   /// `a` of the pixel, per sample; the edges' share on the first pass; after a probe pass stopped,
   /// only from the first chosen-shape hit on, drawing from a copy of `scratch.resume`) and its
   /// hits' adjoints added by backpropagate_hits.
@@ -499,7 +500,8 @@ class ReverseEstimator::Impl : public RenderSetup {
   }
 
   /// The interior and secondary boundary terms of samples [first, first + count) of the pixels of
-  /// `tile`: each sample's path is traced once per window of kHitsPerPass tape hits; a sample
+  /// `tile`: each sample's path is traced once per window of kHitsPerPass tape hits (the first
+  /// window one hit when the camera direction holds the second's slots); a sample
   /// with a non-finite radiance or adjoint is dropped and counted. Writes the pixels' primal
   /// values into `image` (W x H x 3).
   void reverse_tile(const Tile& tile, const std::vector<double>& adjoint, int first, int count, uint64_t seed,
@@ -647,10 +649,20 @@ ReverseUpdate ReverseEstimator::update() {
     const edgetree::RefitReport r =
         update_boundary_term(m.scene, m.tracer, m.config.method, m.chosen, m.lights.environment, m.boundary,
                              m.boundary_ctx, m.primary, m.setup, m.config.intersection_curves);
+    // Without a c to keep (nothing was attached at the set-up, or the film's size changed), the
+    // first update that attaches something runs the pre-pass.
     const size_t pixels = size_t(m.scene.camera.width) * size_t(m.scene.camera.height);
-    if (m.primary.attached && control_width == m.scene.camera.width && control.size() == pixels) {
+    if (!m.primary.attached) {
+      m.setup.control_pixels = 0;
+    } else if (control_width == m.scene.camera.width && control.size() == pixels) {
       m.primary.attachment.control = std::move(control);
       m.primary.attachment.control_width = control_width;
+    } else if (m.config.camera_control_spp > 0) {
+      const auto tc = std::chrono::steady_clock::now();
+      m.setup.control_pixels = set_attached_control(m.ctx, m.primary.attachment, m.config.camera_control_spp);
+      m.setup.control_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - tc).count();
+    } else {
+      m.setup.control_pixels = 0;
     }
     out.edge_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - te).count();
     out.refitted = !r.rebuild_advised();

@@ -22,6 +22,7 @@
 //   static post on a floor, reverse mode agrees with FD as above.
 #include "qsil/integrators/reverse.h"
 #include "qsil/error.h"
+#include "qsil/integrators/boundary_schedule.h"
 #include "qsil/integrators/estimator.h"
 #include "qsil/ray_tracer.h"
 #include "qsil/rng.h"
@@ -166,39 +167,54 @@ TEST(ReverseMode, InteriorTermEqualsForwardModeOnTheOtherBundledScenes) {
   }
 }
 
-/// Forward and reverse mode with every camera hit on shape "sphere" attached (CameraHits::Attached)
-/// and the control variate, on `file` at 16 x 16 and 4 spp: with the same seed both modes trace the
-/// same paths and draw the same primary edge samples, so where the secondary boundary term is zero
-/// (the scenes' comments) the two sums agree to rounding for a translation, a rotation and one
-/// vertex (the one nearest the image centre that the camera sees). Detached, the sums differ (the
-/// attached form's parts are not vacuous).
-void expect_attached_reverse_equals_forward(const std::string& file, const std::string& max_depth) {
-  const Scene scene = load_scene(test::data_file(file), {{"res", "16"}, {"spp", "4"}, {"max_depth", max_depth}});
-  const TriangleMesh& mesh = scene.shapes[size_t(scene.find_shape("sphere"))].mesh;
-  int vertex = 0;
-  double best = kInf;
+/// "ID:vertex:V:1,0.5,0" for the vertex V of shape `id` nearest the image centre that the camera
+/// sees (faces it, nothing in front of it).
+std::string visible_vertex_param(const Scene& scene, const std::string& id) {
+  const TriangleMesh& mesh = scene.shapes[size_t(scene.find_shape(id))].mesh;
+  const Vec2 centre(0.5 * scene.camera.width, 0.5 * scene.camera.height);
   const RayTracer tracer(scene);
   const Vec3 o = scene.camera.origin();
+  int vertex = 0;
+  double best = kInf;
   for (size_t v = 0; v < mesh.positions.size(); ++v) {
     if (!(mesh.normals[v].dot(o - mesh.positions[v]) > 0)) continue;
     const double to_vertex = (mesh.positions[v] - o).norm();
     if (tracer.intersect(o, (mesh.positions[v] - o) / to_vertex).t < to_vertex * (1 - 1e-6)) continue;  // hidden
-    const double d = (scene.camera.project(mesh.positions[v]) - Vec2(8, 8)).norm();
+    const double d = (scene.camera.project(mesh.positions[v]) - centre).norm();
     if (d < best) best = d, vertex = int(v);
   }
-  const std::vector<ParameterSpec> params = parse_parameters(
-      {"sphere:translate:0.3,1,-0.2", "sphere:rotate:1,0,0", "sphere:vertex:" + std::to_string(vertex) + ":1,0.5,0"},
-      scene);
-  const std::vector<int> shapes = resolve_shapes(scene, {"sphere"});
+  return id + ":vertex:" + std::to_string(vertex) + ":1,0.5,0";
+}
+
+/// Forward and reverse mode with every camera hit on the chosen shapes `ids` attached
+/// (CameraHits::Attached) and the control variate, at `sppi` secondary traversals per vertex and
+/// seed `seed`: both modes trace the same paths and draw the same primary edge samples, so where
+/// the secondary boundary term is zero (the scene's comment, or no traversal scheduled: sppi
+/// 1/1024 and a seed that schedules none, which the function checks) the two sums agree to
+/// rounding for each parameter. Detached, the sum of some parameter differs (the attached form's
+/// parts are not vacuous); `replays`: paths meet the chosen shapes more than twice (replayed passes after an
+/// attached first pass of one hit).
+void expect_attached_reverse_equals_forward(const Scene& scene, const std::vector<std::string>& ids,
+                                            const std::vector<std::string>& param_texts, double sppi, uint64_t seed,
+                                            bool replays) {
+  const std::string& file = scene.file.string();
+  const std::vector<ParameterSpec> params = parse_parameters(param_texts, scene);
+  const std::vector<int> shapes = resolve_shapes(scene, ids);
+  if (sppi < 1) {
+    for (uint64_t pixel = 0; pixel < uint64_t(scene.camera.width) * scene.camera.height; ++pixel)
+      for (int s = 0; s < scene.camera.spp; ++s)
+        ASSERT_EQ(boundary_traversals(sppi, seed, pixel, uint64_t(s)), 0)
+            << "seed " << seed << " schedules a traversal";
+  }
   const std::vector<double> w = random_adjoint(scene, 5);
   RenderOptions opt;
-  opt.seed = 13;
+  opt.seed = seed;
   opt.progress = false;
-  EstimatorConfig fc = EstimatorConfig::gradient(params, Method::Quadric);
+  EstimatorConfig fc = EstimatorConfig::gradient(params, Method::Quadric, sppi);
   fc.camera_hits = CameraHits::Attached;
   const Estimator forward(scene, fc);
   const Film film = forward.run(opt).film;
-  ReverseConfig rc{shapes, Method::Quadric};
+  ReverseConfig rc{shapes, Method::Quadric, sppi};
   rc.camera_hits = CameraHits::Attached;
   const ReverseEstimator reverse(scene, rc);
   ASSERT_GT(reverse.setup().attached_vertices, 0) << file;
@@ -207,28 +223,51 @@ void expect_attached_reverse_equals_forward(const std::string& file, const std::
   EXPECT_EQ(reverse.setup().static_primary_edges, forward.setup().static_primary_edges) << file;
   const ReverseResult r = reverse.run(w, opt);
   EXPECT_EQ(r.nonfinite, 0u) << file;
+  if (replays) {
+    EXPECT_GT(r.replays, 0u) << file << ": no path met the chosen shapes more than once after its camera hit";
+  }
   rc.camera_hits = CameraHits::Detached;
   const ReverseResult d = ReverseEstimator(scene, rc).run(w, opt);
   const SceneVelocities vel = compute_velocities(scene, params);
+  int attached_differs = 0;
   for (int k = 0; k < int(params.size()); ++k) {
     const double a = forward_dot(film, forward.layout(), k, w), b = reverse_dot(r, shapes, vel, k),
                  c = reverse_dot(d, shapes, vel, k);
     std::printf("%s %-30s forward %.12g reverse %.12g (detached %.6g)\n", file.c_str(), params[size_t(k)].text.c_str(),
                 a, b, c);
     EXPECT_GT(std::abs(a), 1e-3) << "vacuous";
-    EXPECT_GT(std::abs(c - a), 1e-3 * std::abs(a)) << "attached and detached agree: the test tests nothing";
+    attached_differs += std::abs(c - a) > 1e-3 * std::abs(a);
     EXPECT_NEAR(b, a, 1e-9 * std::abs(a)) << file << " " << params[size_t(k)].text;
   }
+  EXPECT_GT(attached_differs, 0) << file << ": attached and detached agree: the test tests nothing";
 }
 
 TEST(ReverseMode, AttachedCameraHitsEqualForwardModeOnTheSamePaths) {
   // A rough-metal sphere alone under an environment map, three segments: the path's derivative
   // along the warped direction, the warp's Jacobian less c, the flux at the sphere's silhouette.
-  expect_attached_reverse_equals_forward("tests/data/gradient/metal-sphere.xml", "3");
+  const Scene sphere = load_scene(test::data_file("tests/data/gradient/metal-sphere.xml"),
+                                  {{"res", "16"}, {"spp", "4"}, {"max_depth", "3"}});
+  expect_attached_reverse_equals_forward(
+      sphere, {"sphere"},
+      {"sphere:translate:0.3,1,-0.2", "sphere:rotate:1,0,0", visible_vertex_param(sphere, "sphere")}, 0, 13, false);
   // An emissive sphere sunk into a floor behind a static post, one segment: the Jacobian term and
   // the flux at the silhouette, at the intersection curve and at the post's outline, an edge of a
   // shape that is not chosen.
-  expect_attached_reverse_equals_forward("tests/data/gradient/glowing-sunk-post.xml", "1");
+  const Scene post = load_scene(test::data_file("tests/data/gradient/glowing-sunk-post.xml"),
+                                {{"res", "16"}, {"spp", "4"}, {"max_depth", "1"}});
+  expect_attached_reverse_equals_forward(
+      post, {"sphere"}, {"sphere:translate:0.3,1,-0.2", "sphere:rotate:1,0,0", visible_vertex_param(post, "sphere")}, 0,
+      13, false);
+  // Spot and the glossy mirror both chosen and attached, 6 segments, and no secondary traversal
+  // scheduled (seed 14): the camera sees Spot only in the mirror, so its hits come after an
+  // attached camera hit on the mirror whose first pass holds one hit, and later windows start at
+  // hit 1 (replays); Spot's parameters do not move the mirror's warp, the mirror's do.
+  const Scene mirror =
+      load_scene(test::data_file("scenes/spot-mirror.xml"), {{"res", "16"}, {"spp", "4"}, {"max_depth", "6"}});
+  expect_attached_reverse_equals_forward(
+      mirror, {"spot", "mirror"},
+      {"spot:translate:0.3,1,-0.2", "spot:rotate:0,1,0", visible_vertex_param(mirror, "spot"), "mirror:rotate:1,0,0"},
+      1.0 / 1024, 14, true);
 }
 
 /// Mean and standard error of `runs` independent estimates.
@@ -397,9 +436,14 @@ TEST(ReverseMode, SameGradientForAnyThreadCount) {
 /// that meets a chosen shape (its interior term lost), or if a dual pass after a probe redid the
 /// boundary term of the vertices before the first chosen-shape hit (counted twice) or did not
 /// continue the probe's boundary stream (other boundary samples).
-void expect_probe_changes_nothing(const Scene& scene, const std::vector<std::string>& ids, bool replays) {
+void expect_probe_changes_nothing(const Scene& scene, const std::vector<std::string>& ids, bool replays,
+                                  CameraHits hits = CameraHits::Adaptive) {
   ReverseConfig config{resolve_shapes(scene, ids), Method::Quadric, 1};
+  config.camera_hits = hits;
   const ReverseEstimator probing(scene, config);
+  if (hits == CameraHits::Attached) {
+    ASSERT_GT(probing.setup().attached_vertices, 0) << "nothing attached: the probe's stop at the camera is untested";
+  }
   config.probe_paths = false;
   const ReverseEstimator duals(scene, config);
   const std::vector<double> w = random_adjoint(scene, 7);
@@ -461,6 +505,12 @@ TEST(ReverseMode, ProbePassChangesNothingButTheCost) {
   expect_probe_changes_nothing(
       load_scene(test::data_file("scenes/spot-mirror.xml"), {{"res", "32"}, {"spp", "8"}, {"max_depth", "8"}}),
       {"spot"}, true);
+  // An emissive sphere with every camera hit on it attached, one segment: no path scatters, so a
+  // probe that did not stop at an attached camera hit would complete the sample without the
+  // warp's Jacobian term.
+  expect_probe_changes_nothing(
+      load_scene(test::data_file("tests/data/gradient/glowing-sunk-post.xml"), {{"res", "16"}, {"spp", "4"}}),
+      {"sphere"}, false, CameraHits::Attached);
 }
 
 /// Moves shape `id`'s vertices by a smooth field of amplitude amp times its bounding-box diagonal

@@ -145,7 +145,8 @@ def test_camera_control_switch_reaches_the_estimator():
 def test_reverse_takes_the_camera_hits_and_keeps_the_control_across_an_update():
     # Reverse mode's camera_hits and camera_control_spp reach the estimator (each changes the
     # gradient of the same paths; 1 is refused), and an update() keeps the set-up's control
-    # variate: after an update of unmoved vertices the gradient is the set-up's, bit for bit.
+    # variate: after an update of unmoved vertices the gradient is the set-up's, bit for bit; after
+    # a change of film size, a new estimator's.
     sunk = qsil.Scene(os.path.join(ROOT, "tests", "data", "gradient", "sunk-sphere.xml"), {"res": "16", "spp": "4"})
     adjoint = np.where(np.random.default_rng(5).random((16, 16, 3)) < 0.5, -1.0, 1.0)
     run = lambda **k: qsil.reverse(sunk, ["sphere"], adjoint, spp=4, seed=3, threads=2, **k)["gradient"]["sphere"]
@@ -159,6 +160,14 @@ def test_reverse_takes_the_camera_hits_and_keeps_the_control_across_an_update():
     assert np.array_equal(estimator.run(adjoint, spp=4, seed=3, threads=2)["gradient"]["sphere"], on)
     assert estimator.update()["refitted"]
     assert np.array_equal(estimator.run(adjoint, spp=4, seed=3, threads=2)["gradient"]["sphere"], on)
+    # Another film size: the old c does not fit, so the update runs the pre-pass anew, as a new
+    # estimator's set-up does (without it: c = 0, another gradient).
+    sunk.set_resolution(24, 24)
+    adjoint24 = np.where(np.random.default_rng(6).random((24, 24, 3)) < 0.5, -1.0, 1.0)
+    estimator.update()
+    assert np.array_equal(estimator.run(adjoint24, spp=4, seed=3, threads=2)["gradient"]["sphere"],
+                          qsil.reverse(sunk, ["sphere"], adjoint24, spp=4, seed=3, threads=2,
+                                       camera_hits="attached")["gradient"]["sphere"])
 
 
 def mesh_edges(F):

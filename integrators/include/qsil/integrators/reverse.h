@@ -62,14 +62,16 @@ struct ReverseConfig {
   /// vertices) carries the warped direction's and the Jacobian's adjoints to them, and the primary
   /// term adds the attached flux's. Edge-sampling methods only (Method::None: detached, as in
   /// forward mode). The warp's Jacobian for one vertex holds the gradient of its barycentric, so
-  /// the raw per-vertex gradient is noisier attached (up to 2.7x on the teapot) while its smoothed
+  /// the raw per-vertex gradient is noisier attached (2.75x on the teapot) while its smoothed
   /// (Large Steps) and whole-shape parts are less noisy
   /// (docs/experiments/2026-11-29-reverse-attached.md): Detached suits plain descent on x.
   CameraHits camera_hits = CameraHits::Adaptive;
   /// EstimatorConfig::camera_control_spp: the control variate's pre-pass, run by the constructor
-  /// (and by an update() that sets up anew). An update() that refits keeps the pixels' c: any c
-  /// fixed before a run is unbiased (CameraAttachment::control), and one from the last set-up's
-  /// shapes saves an optimiser a pre-pass per step. 0 or at least 2 (check_camera_control_spp).
+  /// (and by an update() that sets up anew). Any other update() keeps the pixels' c: any c fixed
+  /// before a run is unbiased (CameraAttachment::control), and one from earlier shapes saves an
+  /// optimiser a pre-pass per step; only when there is none to keep (nothing was attached before,
+  /// or the film's size changed) does the first update that attaches something run the pre-pass.
+  /// 0 or at least 2 (check_camera_control_spp).
   int camera_control_spp = kAttachedControlSpp;
 };
 
