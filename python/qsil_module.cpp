@@ -316,6 +316,18 @@ std::vector<double> adjoint_weights(const Scene& scene, const Array& adjoint) {
   return std::vector<double>(adjoint.data(), adjoint.data() + adjoint.size());
 }
 
+/// The ReverseConfig of qsil.reverse's and qsil.ReverseEstimator's keywords (the shapes by id).
+/// Throws qsil::Error for an unknown method, shape or camera-hits rule.
+ReverseConfig reverse_config(const Scene& scene, const std::vector<std::string>& shapes, const std::string& boundary,
+                             double sppi, double sppp, bool intersection_curves, const std::string& camera_hits,
+                             int camera_control_spp) {
+  ReverseConfig config{resolve_shapes(scene, shapes), parse_method(boundary, "boundary", kBoundaryMethods), sppi, sppp,
+                       intersection_curves};
+  config.camera_hits = camera_hits_named(camera_hits);
+  config.camera_control_spp = camera_control_spp;
+  return config;
+}
+
 /// A reverse-mode result as qsil.reverse returns it: 'image' (H, W, 3), 'loss', 'gradient'
 /// {shape id: (V, 3)}, 'seconds', 'nonfinite', 'probed'.
 py::dict reverse_dict(const ReverseResult& r, const std::vector<std::string>& shapes) {
@@ -352,12 +364,9 @@ void bind_reverse(py::module_& m) {
   const auto reverse = [](const Scene& scene, const std::vector<std::string>& shapes, const Array& adjoint, int spp,
                           uint64_t seed, int threads, const std::string& boundary, double sppi, double sppp,
                           bool intersection_curves, const std::string& camera_hits, int camera_control_spp) {
-    const Method method = parse_method(boundary, "boundary", kBoundaryMethods);
+    const ReverseConfig config =
+        reverse_config(scene, shapes, boundary, sppi, sppp, intersection_curves, camera_hits, camera_control_spp);
     const std::vector<double> w = adjoint_weights(scene, adjoint);
-    const std::vector<int> indices = resolve_shapes(scene, shapes);
-    ReverseConfig config{indices, method, sppi, sppp, intersection_curves};
-    config.camera_hits = camera_hits_named(camera_hits);
-    config.camera_control_spp = camera_control_spp;
     std::optional<ReverseResult> r;
     {
       py::gil_scoped_release release;
@@ -373,15 +382,12 @@ void bind_reverse(py::module_& m) {
       .def(py::init([](const Scene& scene, const std::vector<std::string>& shapes, const std::string& boundary,
                        double sppi, double sppp, bool intersection_curves, bool probe_paths,
                        const std::string& camera_hits, int camera_control_spp) {
-             const Method method = parse_method(boundary, "boundary", kBoundaryMethods);
-             const std::vector<int> indices = resolve_shapes(scene, shapes);
+             ReverseConfig config = reverse_config(scene, shapes, boundary, sppi, sppp, intersection_curves,
+                                                   camera_hits, camera_control_spp);
+             config.probe_paths = probe_paths;
              auto p = std::make_unique<PyReverseEstimator>();
              p->scene = &scene;
              p->shapes = shapes;
-             ReverseConfig config{indices, method, sppi, sppp, intersection_curves};
-             config.probe_paths = probe_paths;
-             config.camera_hits = camera_hits_named(camera_hits);
-             config.camera_control_spp = camera_control_spp;
              py::gil_scoped_release release;
              p->estimator = std::make_unique<ReverseEstimator>(scene, config);
              return p;
