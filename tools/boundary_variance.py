@@ -7,6 +7,8 @@ The boundary term of seed s is grad(s) - grad(s, boundary="none"): the boundary 
 stream of its own, so both runs trace the same paths and their difference is the boundary term
 (primary and secondary) exactly. Per seed and in total it prints nothing but the summary:
   boundary  sum over pixels of the per-pixel variance across seeds (channel mean, derivative 0),
+            its range when one seed is left out (each in turn: a sum that one seed's rare sample
+            carries spans a factor of several, and then this many seeds cannot rank two builds),
             the share of that sum in the top 1 % of pixels, the image sum's mean +- its s.e.;
   interior  the same for grad(s, boundary="none");
   seconds   grad's mean wall time per run (the boundary method's; threads as given).
@@ -25,13 +27,37 @@ import numpy as np
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
+def leave_one_out_range(runs):
+    """(smallest, largest) summed per-pixel variance over the seeds with one seed left out, each seed
+    in turn (runs: seeds x H x W, at least 3 seeds). Where one seed's rare sample carries the sum, the
+    range spans a factor of several: two builds whose sums differ by less than their ranges are not
+    ranked by this many seeds."""
+    runs = np.asarray(runs, dtype=float)
+    n = runs.shape[0]
+    if n < 3:
+        raise ValueError(f"leave_one_out_range needs at least 3 seeds (got {n})")
+    total = runs.sum(axis=0)
+    total_sq = (runs * runs).sum(axis=0)
+    sums = []
+    for i in range(n):
+        s, q = total - runs[i], total_sq - runs[i] * runs[i]
+        # Variance of the other n - 1 seeds, per pixel (ddof 1), from their sums.
+        sums.append(float(np.maximum(q - s * s / (n - 1), 0.0).sum() / (n - 2)))
+    return min(sums), max(sums)
+
+
 def summary(name, runs):
-    """One line: per-pixel variance summed, its top-1 % share, image sum +- s.e. (runs: seeds x H x W)."""
+    """One line: per-pixel variance summed, its leave-one-seed-out range (leave_one_out_range; with
+    at least 3 seeds), its top-1 % share, image sum +- s.e. (runs: seeds x H x W)."""
     var = runs.var(axis=0, ddof=1)
     flat = np.sort(var.ravel())[::-1]
     top = flat[:max(1, flat.size // 100)].sum() / flat.sum() if flat.sum() > 0 else float("nan")
     sums = runs.sum(axis=(1, 2))
-    return (f"{name:9s} variance sum {var.sum():.4g}  top-1% share {top:.2f}  "
+    loo = ""
+    if runs.shape[0] >= 3:
+        lo, hi = leave_one_out_range(runs)
+        loo = f" (one seed left out: {lo:.4g}..{hi:.4g})"
+    return (f"{name:9s} variance sum {var.sum():.4g}{loo}  top-1% share {top:.2f}  "
             f"image sum {sums.mean():.4g} +- {sums.std(ddof=1) / np.sqrt(len(sums)):.3g}")
 
 
