@@ -325,7 +325,7 @@ WHY_MISSED = {
         "traversals\"), so that would trade cost for variance, not remove it, and is not done."),
     "spot-mirror Embree share": (
         "What is not the edge choice is mostly path shading, which spends in Embree about what the primal renderer "
-        "does (the share in parentheses: the environment map's sampling — 6–9 % of `grad` in "
+        "does (the share in parentheses: the environment map's sampling — 6–10 % of `grad` in "
         "`Distribution1D::find_bin`, cache misses on the 2-D table — BSDFs, duals and the film are the rest). With "
         "the edge choice free (43 % of `grad`'s samples, above), Embree's share of what remains would be about its "
         "share divided by 0.57, still near `render`'s own: the target needs the path shading of `render` and of the "
@@ -365,11 +365,11 @@ WHY_MISSED = {
         "The adaptive camera hits attach 260 of Spot's 2930 vertices here at 48² (204 with the rule before 8fbbdd0; "
         "counts from `qsil grad`'s set-up line). With the rms-turn rule of 8fbbdd0 the summed per-pixel variance at "
         "48², 64 spp, 16 seeds was 379, against 474 with the rule before and 484 detached "
-        "(`docs/experiments/2026-11-28-diffuse-crease-rule.md`). The row is of the study re-run on d8ca3bd, after "
-        "that rule. It moved within run-to-run noise (0.382 → 0.365): three 2-s runs do not show that gain. Attached "
-        "everywhere lost 4.5× in s.e. "
-        "(`docs/experiments/2026-11-28-diffuse-creases.md`). Single-run studies gave 0.32-0.62; this is the mean of "
-        "three runs."),
+        "(`docs/experiments/2026-11-28-diffuse-crease-rule.md`). The study of c3eb573 (2026-11-29, five runs) gives "
+        "0.552, against 0.365 on d8ca3bd (three runs) and 0.382 on dc2a424: quadric's runs 0.082–0.126, FD's "
+        "0.053–0.062. The camera hits' control variate, added between those studies, measured 0.934× the variance "
+        "here (`docs/experiments/2026-11-29-attached-control.md`), less than that move: most of it is the runs' "
+        "spread. Attached everywhere lost 4.5× in s.e. (`docs/experiments/2026-11-28-diffuse-creases.md`)."),
     "teapot FD": (
         "The interior term's tail on the teapot's smoothed creases, smaller than before. The adaptive rule attaches "
         "the camera hits near diffuse smoothed creases (2026-11-28, `docs/experiments/2026-11-28-diffuse-creases.md`): "
@@ -379,7 +379,7 @@ WHY_MISSED = {
         "is left (`tools/tail_report.py`, 8 seeds, `docs/experiments/2026-11-28-boundary-tails.md`): the interior "
         "term holds 73 % of the largest samples' squares, 39 % of it where the shading normal turns at ≥ 100 rad "
         "per unit and 41 % at depth 2 (hits seen on the floor, which camera hits do not reach); the boundary term "
-        "27 %, well chosen (pdf ≥ 0.1 for 99 % of it)."),
+        "27 %, well chosen (pdf ≥ 0.1 for 99 % of it). Five runs on c3eb573: quadric 0.080–0.262, FD 0.054–0.063."),
     "ring-light FD": (
         "Self-shadows seen from sliding hits. Decomposed 2026-11-28 (`tools/tail_report.py` with the boundary "
         "term's largest edge points, `docs/experiments/2026-11-28-boundary-tails.md`): the boundary term holds 56 % "
@@ -390,10 +390,10 @@ WHY_MISSED = {
         "creases, and attached everywhere costs the warp's noise on every pixel (6× on a diffuse Spot). The ring's "
         "loose light bounds are not the cause: split into 4, 8 or 16 emitters with tight bounds, the summed "
         "variance went 7393 → 5519, 5339, 9090 at up to 2.1× the time. The interior term holds the other 44 %, "
-        "40 % of it at normal turns ≥ 100 rad per unit."),
+        "40 % of it at normal turns ≥ 100 rad per unit. Five runs on c3eb573: quadric 0.34–1.03, FD 0.052–0.067."),
     "glossy-sphere-light FD": (
-        "Heavy tails at the second vertex. The three runs give 17.1, 2.95 and 0.84 (22.3, 1.39 and 0.95 in the study "
-        "on dc2a424; seed 0 gave 30 in a first three-run study of dc2a424's code that day, not committed: the tail "
+        "Heavy tails at the second vertex. The five runs of c3eb573 give 7.11, 1.54, 0.73, 0.98 and 1.83, FD's "
+        "0.135–0.193 (d8ca3bd's three: 17.1, 2.95 and 0.84; 22.3, 1.39 and 0.95 in the study on dc2a424; seed 0 gave 30 in a first three-run study of dc2a424's code that day, not committed: the tail "
         "sample recurs in a time-budgeted run whose spp varies). Decomposed 2026-11-28 (`tools/tail_report.py`, 8 "
         "seeds, `docs/experiments/2026-11-28-boundary-tails.md`): the interior term holds 70 % of the largest samples' "
         "squares, 83 % of it at depth 2 on the GGX α 0.05 floor, where the shading normal turns slowly (< 1 rad per "
@@ -409,16 +409,28 @@ WHY_MISSED = {
         "summed variance at equal spp on its tuning seeds (`docs/experiments/2026-11-28-diffuse-creases.md`) but tied "
         "detached on new ones (3037 against 3048, 48², 64 spp, seeds 4000–4015); the rms-turn rule of 8fbbdd0 attaches "
         "488 and gives 2724 there (`docs/experiments/2026-11-28-diffuse-crease-rule.md`, its counts section). The row "
-        "is of the study re-run on d8ca3bd, after that rule; it moved within run-to-run noise (≤ 0.894 → ≤ 0.856). The "
+        "is of the study re-run on d8ca3bd, after that rule; it moved within run-to-run noise (≤ 0.894 → ≤ 0.856), and "
+        "on c3eb573 (five runs) to ≤ 0.997, a tie: quadric's runs 0.052–0.068, FD's 0.055–0.061. The "
         "reference's noise floor is above 1/10 of the errors compared here, so the ratio is partly the floor's."),
     "partial-view FD": (
-        "One run of three (seed 1) draws a tail: 0.604 against 0.041 and 0.056, FD's runs 0.072-0.085 (in the study "
-        "before, on dc2a424: 0.834 against 0.054 and 0.063; 0.81 in a first three-run study that day). The single-run "
+        "One run of five (seed 1, as before) draws a tail on c3eb573: 0.394 against 0.035–0.068, FD's runs "
+        "0.062–0.064; without that run quadric's mean would be 0.049, below FD's. In d8ca3bd's study 0.604 against "
+        "0.041 and 0.056, FD's runs 0.072-0.085 (in the study before, on dc2a424: 0.834 against 0.054 and 0.063; 0.81 in a first three-run study that day). The single-run "
         "studies before ran seed 0 only (0.050). On dc2a424's code the tail was one interior sample: `qsil grad` with "
         "that run's seed (compare's derive_seed(1, 0)) at 150 spp puts 93 % of the image sum's variance in pixel (34, "
         "8), whose sample 45 is 8468. It is a camera hit on Spot at |n_g·wo| 0.0023, sliding 411 units per unit θ "
         "along its ray (`docs/design-notes.md` \"Interior-term tails at grazing hits\"); the adaptive camera hits attach "
         "creases and rough metal, not grazing hits (`docs/experiments/2026-11-28-boundary-tails.md`)."),
+    "thin-metal FD": (
+        "A tie within the runs' spread: on c3eb573 (2026-11-29, five runs) quadric 0.108–0.135 against FD "
+        "0.080–0.133; d8ca3bd's study (three runs) gave 1.16, met. The reference's floor is above 1/10 of the errors "
+        "compared, so the bound includes it. Every vertex of the ring is attached (the rough-conductor rule: 1536 of "
+        "1536 at 48²); detached, grad's standard error was 1.6–5.6× FD's at a quarter of its spp "
+        "(`docs/experiments/2026-11-27-thin-metal.md`), and the study now finds it level with FD. What is left "
+        "(`tools/tail_report.py`, 48², 64 spp, seeds 100–107, 2026-11-29): the interior term holds all of the largest "
+        "samples' squares, 99 % at the camera hit, 98 % at |n_g·wo| ≥ 0.1, 85 % where the normal turns at 10–100 rad "
+        "per unit of slide (the tube's curvature under the α 0.2 lobe). The largest (seed 100, 3561) still slides "
+        "3.6 per unit θ at |n_g·wo| 0.22, where the warp's weight w = b a is below 1 (why there was not looked into)."),
 }
 
 
