@@ -338,8 +338,9 @@ class GradientEstimator final : public Estimator::Impl, private RenderSetup {
       } else {
         L = trace_path(ctx, view, path_ray, sampler, st, recorder);
       }
-      attached.apply_jacobian(L);
       recorder.finish(L);
+      attached.apply_jacobian(L);
+      recorder.jacobian(L);
     }
   }
 

@@ -9,23 +9,31 @@
 #include "qsil/integrators/sample_trace.h"
 #include "qsil/integrators/surface_interaction.h"
 
+#include <array>
+#include <vector>
+
 namespace qsil {
 
 /// The vertex hook of trace_path that records each vertex into `trace` (forward mode, derivative
 /// `param` of duals of size N). Called at every vertex that may still scatter; the derivative L
-/// has gathered at each call closes the previous vertex's `added` (finish() closes the last).
+/// has gathered at each call closes the previous vertex's `added` (finish() closes the last and
+/// sets every vertex's `arises`; jacobian() adds an attached camera ray's Jacobian term).
+/// One recorder per traced sample.
 template <int N>
 struct VertexRecorder {
   SampleTrace* trace;
   int param;
   mutable double last = 0;  ///< channel-mean derivative of L at the previous call
+  /// Per recorded vertex, per channel: the throughput reaching it (value, derivative) and L when it
+  /// was reached (value, derivative), for `arises`.
+  mutable std::vector<std::array<double, 12>> at;
 
   static double mean_derivative(const ColorT<Dual<N>>& L, int k) {
     return (L[0].derivatives()[k] + L[1].derivatives()[k] + L[2].derivatives()[k]) / 3.0;
   }
 
   void operator()(const SurfaceInteraction<Dual<N>>& si, const ShadingPoint<Dual<N>>& sp, const Vec3& wo_local,
-                  const ColorT<Dual<N>>& /*beta*/, int seg, Sampler& /*sampler*/, PathStats& /*stats*/,
+                  const ColorT<Dual<N>>& beta, int seg, Sampler& /*sampler*/, PathStats& /*stats*/,
                   ColorT<Dual<N>>& L) const {
     const double now = mean_derivative(L, param);
     if (trace->vertices.empty())
@@ -33,6 +41,14 @@ struct VertexRecorder {
     else
       trace->vertices.back().added = now - last;
     last = now;
+    std::array<double, 12> a;
+    for (int c = 0; c < 3; ++c) {
+      a[size_t(c)] = beta[c].value();
+      a[size_t(3 + c)] = beta[c].derivatives()[param];
+      a[size_t(6 + c)] = L[c].value();
+      a[size_t(9 + c)] = L[c].derivatives()[param];
+    }
+    at.push_back(a);
     VertexTrace v;
     v.segments = seg;
     v.shape = si.shape;
@@ -51,13 +67,49 @@ struct VertexRecorder {
     trace->vertices.push_back(v);
   }
 
-  /// Closes the last vertex with the path's final derivative `L` (trace_path's result).
+  /// Closes the last vertex with the path's final derivative `L` (trace_path's result, before any
+  /// camera Jacobian) and splits the interior term by where it arises (VertexTrace::arises): vertex
+  /// k collects A_k (value a_k, derivative a'_k, per channel) with throughput b_k, so
+  /// a'_k = (b'_k / b_k) a_k + [the rest, k's own part], and b'_k / b_k = g_k is the sum of the
+  /// log-derivatives g_{i+1} - g_i that the earlier vertices' factors add (g_1 the first
+  /// throughput's); vertex i then takes its own part plus (g_{i+1} - g_i) times sum_{k > i} a_k.
+  /// The split telescopes to the sum of the a'_k for any g, so the parts add up to the interior
+  /// term exactly; a channel whose throughput is 0 gives g = 0 there (its part stays its own).
   void finish(const ColorT<Dual<N>>& L) const {
     const double now = mean_derivative(L, param);
     if (trace->vertices.empty())
       trace->camera_emission = now;
     else
       trace->vertices.back().added = now - last;
+    trace->interior = now;
+    const size_t n = at.size();
+    for (int c = 0; c < 3; ++c) {
+      std::vector<double> a(n), da(n), g(n);
+      for (size_t k = 0; k < n; ++k) {
+        const bool next = k + 1 < n;
+        a[k] = (next ? at[k + 1][size_t(6 + c)] : L[c].value()) - at[k][size_t(6 + c)];
+        da[k] = (next ? at[k + 1][size_t(9 + c)] : L[c].derivatives()[param]) - at[k][size_t(9 + c)];
+        const double b = at[k][size_t(c)];
+        g[k] = b != 0 ? at[k][size_t(3 + c)] / b : 0.0;
+      }
+      double later = 0;  // sum of a_j over j > k
+      for (size_t k = n; k-- > 0;) {
+        double part = da[k] - g[k] * a[k];
+        if (k + 1 < n) part += (g[k + 1] - g[k]) * later;
+        later += a[k];
+        if (k == 0) part += g[0] * later;
+        trace->vertices[k].arises += part / 3.0;
+      }
+    }
+  }
+
+  /// After finish(): the attached camera ray's Jacobian term, the difference between `L` (after
+  /// AttachedCameraRay::apply_jacobian) and the L finish() was given, into
+  /// SampleTrace::camera_jacobian, the first vertex's `arises` and the interior term.
+  void jacobian(const ColorT<Dual<N>>& L) const {
+    const double now = mean_derivative(L, param);
+    trace->camera_jacobian = now - trace->interior;
+    if (!trace->vertices.empty()) trace->vertices.front().arises += trace->camera_jacobian;
     trace->interior = now;
   }
 };

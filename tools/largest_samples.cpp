@@ -38,10 +38,13 @@ void print_largest_samples(const Scene& scene, const std::vector<ParameterSpec>&
                 s.y, s.sample, s.param, s.param < int(params.size()) ? params[size_t(s.param)].text.c_str() : "?",
                 s.value, s.interior, s.value - s.interior);
     if (s.camera_emission != 0) std::printf("      emission seen by the camera: %.6g\n", s.camera_emission);
+    if (s.camera_jacobian != 0) std::printf("      the attached camera ray's Jacobian term: %.6g\n", s.camera_jacobian);
     for (const VertexTrace& v : s.vertices)
-      std::printf("      vertex %d on %s tri %d: |ng.wo| %.3g, ns.wo %.3g, dt %.4g, |dp| %.4g, |dns| %.4g, adds %.6g\n",
-                  v.segments, shape_name(scene, v.shape).c_str(), v.triangle, v.cos_geometric, v.cos_shading, v.dt, v.dp,
-                  v.dns, v.added);
+      std::printf(
+          "      vertex %d on %s tri %d: |ng.wo| %.3g, ns.wo %.3g, dt %.4g, |dp| %.4g, |dns| %.4g, adds %.6g, arises "
+          "%.6g\n",
+          v.segments, shape_name(scene, v.shape).c_str(), v.triangle, v.cos_geometric, v.cos_shading, v.dt, v.dp, v.dns,
+          v.added, v.arises);
     const BoundaryPointTrace& b = s.boundary;
     if (b.points > 0)
       std::printf("      boundary: %d edge points, sum %.6g; the largest at vertex %d, on a %s of %s: pdf %.4g, rate %g, "
@@ -55,15 +58,15 @@ void print_largest_samples(const Scene& scene, const std::vector<ParameterSpec>&
 void write_largest_samples_csv(const std::string& path, const Scene& scene, const std::vector<SampleTrace>& largest) {
   std::ostringstream out;
   out.precision(9);
-  out << "rank,x,y,sample,param,value,interior,boundary,camera_emission,segments,shape,triangle,cos_geometric,"
-         "cos_shading,dt,dp,dns,added,b_points,b_total,b_segments,b_shape,b_kind,b_pdf,b_rate,b_jump,b_bsdf,"
-         "b_throughput,b_jacobian,b_distance,b_edge_length,b_sin_view,b_added\n";
+  out << "rank,x,y,sample,param,value,interior,boundary,camera_emission,camera_jacobian,segments,shape,triangle,"
+         "cos_geometric,cos_shading,dt,dp,dns,added,arises,b_points,b_total,b_segments,b_shape,b_kind,b_pdf,"
+         "b_rate,b_jump,b_bsdf,b_throughput,b_jacobian,b_distance,b_edge_length,b_sin_view,b_added\n";
   int rank = 0;
   for (const SampleTrace& s : largest) {
     ++rank;
     const auto head = [&] {
       out << rank << ',' << s.x << ',' << s.y << ',' << s.sample << ',' << s.param << ',' << s.value << ','
-          << s.interior << ',' << s.value - s.interior << ',' << s.camera_emission << ',';
+          << s.interior << ',' << s.value - s.interior << ',' << s.camera_emission << ',' << s.camera_jacobian << ',';
     };
     const BoundaryPointTrace& b = s.boundary;
     const auto tail = [&] {
@@ -78,13 +81,13 @@ void write_largest_samples_csv(const std::string& path, const Scene& scene, cons
     };
     if (s.vertices.empty()) {
       head();
-      out << ",,,,,,,,";
+      out << ",,,,,,,,,";
       tail();
     }
     for (const VertexTrace& v : s.vertices) {
       head();
       out << v.segments << ',' << shape_name(scene, v.shape) << ',' << v.triangle << ',' << v.cos_geometric << ','
-          << v.cos_shading << ',' << v.dt << ',' << v.dp << ',' << v.dns << ',' << v.added;
+          << v.cos_shading << ',' << v.dt << ',' << v.dp << ',' << v.dns << ',' << v.added << ',' << v.arises;
       tail();
     }
   }

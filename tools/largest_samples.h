@@ -15,7 +15,9 @@ namespace qsil::cli {
 /// Prints `largest` (largest first) to stdout: per sample its pixel, sample index, parameter,
 /// derivative (channel mean), interior and secondary boundary parts, then one line per path
 /// vertex (segments before it, shape id, triangle, |n_g . wo|, n_s . wo, dt/dtheta, |dp/dtheta|,
-/// |dn_s/dtheta|, the derivative added from that vertex on), and a line on its secondary boundary
+/// |dn_s/dtheta|, the derivative added from that vertex on, and the part of the interior term that
+/// arises there, VertexTrace::arises; with an attached camera ray, a line with its Jacobian term
+/// before them), and a line on its secondary boundary
 /// term's largest edge point (BoundaryPointTrace: vertex, edge kind and shape, pdf, jump, BSDF,
 /// throughput, g . v, distance, edge length, sin of the view angle, contribution).
 void print_largest_samples(const Scene& scene, const std::vector<ParameterSpec>& params,

@@ -5,8 +5,12 @@ splits the sum of squares of the kept samples by term, path depth, cosine at the
 The largest samples of a heavy-tailed estimator hold most of its variance. So the split of their
 sum of squares says which cause to attack first:
 - the interior term against the secondary boundary term;
-- for the interior part, the vertex that adds the most to each sample: its depth (segments before
-  it), its |n_g . wo| in decades (grazing hits slide fast along their rays), the rate at which its
+- for the interior part, the vertex where most of each sample's derivative arises (`arises` of
+  `qsil grad --largest-samples-csv`: what the vertex's own shading and hit add, and the derivative
+  of the throughput factor it passes on times all that later vertices collect; not `added`, which
+  files a derivative under the vertex that collects the light, e.g. a mirror that brings a bright
+  sky to a diffuse hit whose normal turns fast; the first vertex's includes an attached camera
+  ray's Jacobian term, whose share is reported too): its depth (segments before it), its |n_g . wo| in decades (grazing hits slide fast along their rays), the rate at which its
   shading normal turns along the slide, |dn_s/dtheta| / |dp/dtheta| in decades (per scene unit:
   large on small triangles whose vertex normals differ much, e.g. smoothed creases), and the
   surface it lies on;
@@ -99,6 +103,7 @@ def main():
     by_term = collections.Counter()
     by_depth, by_cos, by_surface = collections.Counter(), collections.Counter(), collections.Counter()
     by_turn = collections.Counter()
+    jacobian = 0.0  # the interior squares' part in attached camera rays' Jacobian terms
     b_depth, b_kind, b_shape = collections.Counter(), collections.Counter(), collections.Counter()
     b_pdf, b_distance, b_sin = collections.Counter(), collections.Counter(), collections.Counter()
     b_own = collections.Counter()
@@ -125,8 +130,11 @@ def main():
                 by_term["boundary"] += (value - interior) ** 2 * share
                 with_vertex = [v for v in vertices if v["segments"] != ""]
                 if with_vertex and interior != 0:
-                    top = max(with_vertex, key=lambda v: abs(float(v["added"])))
+                    top = max(with_vertex, key=lambda v: abs(float(v["arises"])))
                     w = interior ** 2 * share
+                    parts = sum(abs(float(v["arises"])) for v in with_vertex)
+                    if parts > 0:
+                        jacobian += w * min(1.0, abs(float(head.get("camera_jacobian") or 0.0)) / parts)
                     by_depth[int(top["segments"])] += w
                     by_cos[cosine_bucket(float(top["cos_geometric"]))] += w
                     by_surface[top["shape"]] += w
@@ -158,13 +166,14 @@ def main():
     print("share of their sum of squares:")
     print("  term:      " + ", ".join(f"{k} {v / total:.2f}" for k, v in by_term.most_common()))
     interior = by_term["interior"] or math.inf
-    print("  interior, by the vertex that adds the most:")
+    print("  interior, by the vertex where most of it arises:")
     print("    depth:   " + ", ".join(f"{k} {v / interior:.2f}" for k, v in sorted(by_depth.items())))
     order = ["< 0.0001", "< 0.001", "< 0.01", "< 0.1", ">= 0.1"]
     print("    |ng.wo|: " + ", ".join(f"{k} {by_cos[k] / interior:.2f}" for k in order if k in by_cos))
     print("    |dns|/|dp|: " + ", ".join(f"{k} {by_turn[k] / interior:.2f}" for k in ["< 1", "< 10", "< 100", ">= 100"]
                                        if k in by_turn))
     print("    surface: " + ", ".join(f"{k} {v / interior:.2f}" for k, v in by_surface.most_common()))
+    print(f"    of which the attached camera rays' Jacobian terms (at depth 1): {jacobian / interior:.2f}")
     boundary = by_term["boundary"] or math.inf
     print("  boundary, by the edge point that adds the most:")
     print("    depth:   " + ", ".join(f"{k} {v / boundary:.2f}" for k, v in sorted(b_depth.items())))

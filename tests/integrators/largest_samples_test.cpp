@@ -4,7 +4,11 @@
 //   from the sample's own stream must reproduce it exactly (a retrace from the wrong stream, or a
 //   path that differs, fails this); with the quadric boundary term the interior part is the same
 //   sample retraced, so it equals the None run's value of that sample.
-// - Bookkeeping: the camera's emission plus what each vertex adds is the interior term.
+// - Bookkeeping: the camera's emission plus what each vertex adds is the interior term, and so is
+//   the camera's emission plus what arises at each vertex (with an attached camera ray, whose
+//   Jacobian term the first vertex takes).
+// - Attribution: on `two-mirrors`, a static flat mirror lit by an environment map collects light
+//   but adds no derivative of its own, so nothing arises there, however much it adds.
 // - Order and coverage: largest first; the largest |sample| bounds every pixel's |mean| (a mean
 //   of samples), and the kept samples do not depend on the thread count.
 // Scene: `direct` (Spot in front of a backdrop under an environment map) at 16², 16 spp.
@@ -46,9 +50,15 @@ TEST(LargestSamples, RetraceReproducesTheInteriorTerm) {
   for (const SampleTrace& s : none.result.largest) {
     EXPECT_EQ(s.interior, s.value) << "pixel (" << s.x << ", " << s.y << ") sample " << s.sample;
     ASSERT_FALSE(s.vertices.empty());
-    double sum = s.camera_emission;
-    for (const VertexTrace& v : s.vertices) sum += v.added;
+    double sum = s.camera_emission, arises = s.camera_emission, scale = std::abs(s.interior);
+    for (const VertexTrace& v : s.vertices) {
+      sum += v.added;
+      arises += v.arises;
+      scale += std::abs(v.added) + std::abs(v.arises);
+    }
     EXPECT_NEAR(sum, s.interior, 1e-12 * std::abs(s.interior)) << "the vertices' parts sum to the interior term";
+    EXPECT_NEAR(arises, s.interior, 1e-12 * scale) << "so do the parts that arise at them";
+    EXPECT_EQ(s.camera_jacobian, 0.0);
   }
   // With the boundary term, the interior part of a sample is the same path's derivative. Camera
   // hits detached: at 16 x 16 the adaptive rule attaches Spot's sharpest smoothed creases, and an
@@ -65,6 +75,59 @@ TEST(LargestSamples, RetraceReproducesTheInteriorTerm) {
     ++compared;
   }
   EXPECT_EQ(compared, 64);
+}
+
+// With attached camera hits the retrace's interior term holds the warp's Jacobian term: outside
+// every vertex's `added`, inside the first vertex's `arises`.
+TEST(LargestSamples, AnAttachedRaysJacobianArisesAtTheFirstVertex) {
+  const DirectRun run = run_direct(Method::Quadric, 2, 32, CameraHits::Attached);
+  int with_jacobian = 0;
+  for (const SampleTrace& s : run.result.largest) {
+    double added = s.camera_emission + s.camera_jacobian, arises = s.camera_emission, scale = std::abs(s.interior);
+    for (const VertexTrace& v : s.vertices) {
+      added += v.added;
+      arises += v.arises;
+      scale += std::abs(v.added) + std::abs(v.arises);
+    }
+    EXPECT_NEAR(added, s.interior, 1e-12 * scale) << "pixel (" << s.x << ", " << s.y << ") sample " << s.sample;
+    EXPECT_NEAR(arises, s.interior, 1e-12 * scale) << "pixel (" << s.x << ", " << s.y << ") sample " << s.sample;
+    with_jacobian += s.camera_jacobian != 0;
+  }
+  EXPECT_GT(with_jacobian, 0) << "no attached sample among the largest: the test sees nothing";
+}
+
+// two-mirrors: the bunny seen directly and in two GGX alpha 0.01 mirrors under an environment map.
+// A path camera -> bunny -> mirror collects at the mirror the sky it reflects, and the sample's
+// derivative is the bunny hit's (its normal turns as it slides, detached): at the static, flat
+// mirror, the light sample's and the escape's directions are fixed, so what it collects has no
+// derivative of its own, and the factor it would pass on has none either. `arises` must be ~0 there
+// while `added` carries the sample.
+TEST(LargestSamples, NothingArisesAtAStaticMirrorThatCollectsTheLight) {
+  const Scene scene = load_scene(test::data_file("scenes/two-mirrors.xml"), {{"res", "24"}, {"spp", "32"}});
+  std::vector<bool> mirror(scene.shapes.size(), false);
+  for (size_t i = 0; i < scene.shapes.size(); ++i)
+    mirror[i] = scene.shapes[i].id == "mirror-left" || scene.shapes[i].id == "mirror-right";
+  const std::vector<ParameterSpec> params{parse_parameter("bunny:translate:1,0,0", scene)};
+  EstimatorConfig config = EstimatorConfig::gradient(params, Method::None);
+  config.camera_hits = CameraHits::Detached;
+  const Estimator e(scene, config);
+  RenderOptions o;
+  o.progress = false;
+  o.seed = 5;
+  o.threads = 2;
+  o.largest_samples = 64;
+  const RenderResult r = e.run(o);
+  int checked = 0, carried = 0;
+  for (const SampleTrace& s : r.largest) {
+    if (s.vertices.size() < 2 || mirror[size_t(s.vertices[0].shape)] || !mirror[size_t(s.vertices[1].shape)]) continue;
+    const VertexTrace& at_mirror = s.vertices[1];
+    EXPECT_LE(std::abs(at_mirror.arises), 1e-9 * std::abs(s.interior))
+        << "pixel (" << s.x << ", " << s.y << ") sample " << s.sample << ": adds " << at_mirror.added;
+    ++checked;
+    carried += std::abs(at_mirror.added) >= 0.5 * std::abs(s.interior);
+  }
+  EXPECT_GT(checked, 0) << "no kept path meets a mirror after the bunny";
+  EXPECT_GT(carried, 0) << "no kept sample is collected mostly at a mirror: the test cannot tell the two rules apart";
 }
 
 // The retrace evaluates the sample's secondary boundary term again, from its own stream, beside

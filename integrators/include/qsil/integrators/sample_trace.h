@@ -34,6 +34,17 @@ struct VertexTrace {
   /// it escapes to). Summed over the vertices, with the emission the camera ray finds first
   /// (SampleTrace::camera_emission), it is the sample's interior term.
   double added = 0;
+  /// The part of the sample's interior term that arises at this vertex, wherever the path collects
+  /// it: the derivative of what this vertex collects with its throughput held (its own shading,
+  /// hit and light samples), plus, for every later vertex, what that vertex collects (value) times
+  /// the log-derivative of the throughput factor this vertex adds toward the next (its BSDF weight
+  /// as its frame and hit move), per colour channel, then the channel mean; the first vertex also
+  /// takes the attached camera ray's Jacobian term (SampleTrace::camera_jacobian) and any
+  /// derivative of the throughput it starts with. A diffuse hit whose normal turns fast and whose
+  /// sampled direction finds a bright mirror shows its derivative here, not at the mirror that
+  /// collects the light (`added`). Summed over the vertices, with the camera's emission, it is the
+  /// interior term.
+  double arises = 0;
 };
 
 /// The edge point that adds the most to a sample's secondary boundary term (derivatives with
@@ -72,6 +83,9 @@ struct SampleTrace {
   double value = 0;   ///< the sample's derivative (channel mean) for `param`: interior + secondary boundary
   double interior = 0;  ///< of which the interior term (the retraced path's derivative)
   double camera_emission = 0;  ///< the derivative of emission seen directly by the camera ray
+  /// An attached camera ray's Jacobian term (AttachedCameraRay::apply_jacobian): part of the
+  /// interior term, in no vertex's `added` (in the first vertex's `arises`); 0 for a fixed ray.
+  double camera_jacobian = 0;
   std::vector<VertexTrace> vertices;  ///< in path order
   BoundaryPointTrace boundary;        ///< its secondary boundary term's largest edge point
 };
