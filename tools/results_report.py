@@ -377,8 +377,10 @@ WHY_MISSED = {
         "against 0.209 adaptive (0.16-0.28), 2.1×, with the rule before 8fbbdd0. A single-run study before the "
         "three-run ones gave 0.198 with a lucky detached run. What "
         "is left (`tools/tail_report.py`, 8 seeds, `docs/experiments/2026-11-28-boundary-tails.md`): the interior "
-        "term holds 73 % of the largest samples' squares, 39 % of it where the shading normal turns at ≥ 100 rad "
-        "per unit and 41 % at depth 2 (hits seen on the floor, which camera hits do not reach); the boundary term "
+        "term holds 73 % of the largest samples' squares, then filed 41 % at depth 2, on the floor that collects the "
+        "light; by where the derivative arises (`VertexTrace::arises`, 2026-11-29, c3eb573) 93 % of it is at the "
+        "camera hit on the teapot, 69 % where the shading normal turns at ≥ 100 rad per unit, and 18 % is the "
+        "attached camera rays' Jacobian term; the boundary term "
         "27 %, well chosen (pdf ≥ 0.1 for 99 % of it). Five runs on c3eb573: quadric 0.080–0.262, FD 0.054–0.063."),
     "ring-light FD": (
         "Self-shadows seen from sliding hits. Decomposed 2026-11-28 (`tools/tail_report.py` with the boundary "
@@ -390,15 +392,20 @@ WHY_MISSED = {
         "creases, and attached everywhere costs the warp's noise on every pixel (6× on a diffuse Spot). The ring's "
         "loose light bounds are not the cause: split into 4, 8 or 16 emitters with tight bounds, the summed "
         "variance went 7393 → 5519, 5339, 9090 at up to 2.1× the time. The interior term holds the other 44 %, "
-        "40 % of it at normal turns ≥ 100 rad per unit. Five runs on c3eb573: quadric 0.34–1.03, FD 0.052–0.067."),
+        "40 % of it at normal turns ≥ 100 rad per unit (by where it arises, 2026-11-29: 89 % at the camera hit, 34 % of "
+        "the interior part the attached camera rays' Jacobian term). Five runs on c3eb573: quadric 0.34–1.03, FD 0.052–0.067."),
     "glossy-sphere-light FD": (
-        "Heavy tails at the second vertex. The five runs of c3eb573 give 7.11, 1.54, 0.73, 0.98 and 1.83, FD's "
+        "Heavy tails at the camera hit. The five runs of c3eb573 give 7.11, 1.54, 0.73, 0.98 and 1.83, FD's "
         "0.135–0.193 (d8ca3bd's three: 17.1, 2.95 and 0.84; 22.3, 1.39 and 0.95 in the study on dc2a424; seed 0 gave 30 in a first three-run study of dc2a424's code that day, not committed: the tail "
         "sample recurs in a time-budgeted run whose spp varies). Decomposed 2026-11-28 (`tools/tail_report.py`, 8 "
         "seeds, `docs/experiments/2026-11-28-boundary-tails.md`): the interior term holds 70 % of the largest samples' "
-        "squares, 83 % of it at depth 2 on the GGX α 0.05 floor, where the shading normal turns slowly (< 1 rad per "
-        "unit: 74 %): the floor's narrow lobe seen along a direction that moves with the wing nut's hit, which "
-        "attached camera hits do not reach (attached deeper vertices, `docs/design-notes.md`). The boundary term holds "
+        "squares, filed then at depth 2 on the GGX α 0.05 floor (83 %) by the vertex that collects the light; by where "
+        "the derivative arises (`VertexTrace::arises`, 2026-11-29, same command, c3eb573) it is the camera hit on the "
+        "wing nut (89 % of the interior part), and 58 % of the interior part is the attached camera rays' Jacobian "
+        "term: L div(w V) with L the floor's bright highlight of the sphere light, rare in the pixel, so the "
+        "control variate's per-pixel c does not cancel it (the largest sample, seed 105, 4849, is 4854 of "
+        "Jacobian; `docs/experiments/2026-11-29-seed-counts.md`). Detached, the same samples slide (32 seeds: "
+        "adaptive 4058 against detached 4347 summed per-pixel variance, attached everywhere 26 620). The boundary term holds "
         "30 %, 93 % of it at depth 2 on the sphere light's (58 %) and the wing nut's (42 %) outlines, 43 % of it "
         "chosen with pdf < 0.01."),
     "wingnut FD": (
@@ -429,7 +436,8 @@ WHY_MISSED = {
         "(`docs/experiments/2026-11-27-thin-metal.md`), and the study now finds it level with FD. What is left "
         "(`tools/tail_report.py`, 48², 64 spp, seeds 100–107, 2026-11-29): the interior term holds all of the largest "
         "samples' squares, 99 % at the camera hit, 98 % at |n_g·wo| ≥ 0.1, 85 % where the normal turns at 10–100 rad "
-        "per unit of slide (the tube's curvature under the α 0.2 lobe). The largest (seed 100, 3561) still slides "
+        "per unit of slide (the tube's curvature under the α 0.2 lobe), and 43 % is the attached rays' Jacobian "
+        "term (by where it arises, `VertexTrace::arises`). The largest (seed 100, 3561) still slides "
         "3.6 per unit θ at |n_g·wo| 0.22, where the warp's weight w = b a is below 1 (why there was not looked into)."),
 }
 
