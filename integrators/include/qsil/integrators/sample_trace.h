@@ -43,7 +43,8 @@ struct VertexTrace {
   /// derivative of the throughput it starts with. A diffuse hit whose normal turns fast and whose
   /// sampled direction finds a bright mirror shows its derivative here, not at the mirror that
   /// collects the light (`added`). Summed over the vertices, with the camera's emission, it is the
-  /// interior term.
+  /// interior term. A vertex's own part includes its hit's motion whatever moves it: where an
+  /// earlier vertex's slide moves this hit along a fixed direction, that share is filed here.
   double arises = 0;
 };
 
