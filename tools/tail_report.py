@@ -10,7 +10,8 @@ sum of squares says which cause to attack first:
   of the throughput factor it passes on times all that later vertices collect; not `added`, which
   files a derivative under the vertex that collects the light, e.g. a mirror that brings a bright
   sky to a diffuse hit whose normal turns fast; the first vertex's includes an attached camera
-  ray's Jacobian term, whose share is reported too): its depth (segments before it), its |n_g . wo| in decades (grazing hits slide fast along their rays), the rate at which its
+  ray's Jacobian term, whose share is reported too): its depth (segments before it), its
+  |n_g . wo| in decades (grazing hits slide fast along their rays), the rate at which its
   shading normal turns along the slide, |dn_s/dtheta| / |dp/dtheta| in decades (per scene unit:
   large on small triangles whose vertex normals differ much, e.g. smoothed creases), and the
   surface it lies on;
