@@ -9,7 +9,7 @@
 #include "qsil/integrators/sample_trace.h"
 #include "qsil/integrators/surface_interaction.h"
 
-#include <array>
+#include <utility>
 #include <vector>
 
 namespace qsil {
@@ -24,9 +24,22 @@ struct VertexRecorder {
   SampleTrace* trace;
   int param;
   mutable double last = 0;  ///< channel-mean derivative of L at the previous call
-  /// Per recorded vertex, per channel: the throughput reaching it (value, derivative) and L when it
-  /// was reached (value, derivative), for `arises`.
-  mutable std::vector<std::array<double, 12>> at;
+  /// What `arises` needs of each recorded vertex, per channel (derivatives for `param`).
+  struct Reached {
+    Color beta, dbeta;  ///< the throughput reaching the vertex and its derivative
+    Color L, dL;        ///< L when the vertex was reached and its derivative
+  };
+  mutable std::vector<Reached> at;
+
+  /// The value and the derivative for `param` of a colour over duals.
+  static std::pair<Color, Color> split(const ColorT<Dual<N>>& c, int k) {
+    Color v, d;
+    for (int i = 0; i < 3; ++i) {
+      v[i] = c[i].value();
+      d[i] = c[i].derivatives()[k];
+    }
+    return {v, d};
+  }
 
   static double mean_derivative(const ColorT<Dual<N>>& L, int k) {
     return (L[0].derivatives()[k] + L[1].derivatives()[k] + L[2].derivatives()[k]) / 3.0;
@@ -41,14 +54,9 @@ struct VertexRecorder {
     else
       trace->vertices.back().added = now - last;
     last = now;
-    std::array<double, 12> a;
-    for (int c = 0; c < 3; ++c) {
-      a[size_t(c)] = beta[c].value();
-      a[size_t(3 + c)] = beta[c].derivatives()[param];
-      a[size_t(6 + c)] = L[c].value();
-      a[size_t(9 + c)] = L[c].derivatives()[param];
-    }
-    at.push_back(a);
+    const auto [b, db] = split(beta, param);
+    const auto [l, dl] = split(L, param);
+    at.push_back({b, db, l, dl});
     VertexTrace v;
     v.segments = seg;
     v.shape = si.shape;
@@ -83,23 +91,21 @@ struct VertexRecorder {
       trace->vertices.back().added = now - last;
     trace->interior = now;
     const size_t n = at.size();
-    for (int c = 0; c < 3; ++c) {
-      std::vector<double> a(n), da(n), g(n);
-      for (size_t k = 0; k < n; ++k) {
-        const bool next = k + 1 < n;
-        a[k] = (next ? at[k + 1][size_t(6 + c)] : L[c].value()) - at[k][size_t(6 + c)];
-        da[k] = (next ? at[k + 1][size_t(9 + c)] : L[c].derivatives()[param]) - at[k][size_t(9 + c)];
-        const double b = at[k][size_t(c)];
-        g[k] = b != 0 ? at[k][size_t(3 + c)] / b : 0.0;
-      }
-      double later = 0;  // sum of a_j over j > k
-      for (size_t k = n; k-- > 0;) {
-        double part = da[k] - g[k] * a[k];
-        if (k + 1 < n) part += (g[k + 1] - g[k]) * later;
-        later += a[k];
-        if (k == 0) part += g[0] * later;
-        trace->vertices[k].arises += part / 3.0;
-      }
+    const auto [l_end, dl_end] = split(L, param);
+    // Per vertex k, per channel: a_k, a'_k (what it collects) and g_k (its throughput's log-derivative).
+    std::vector<Color> a(n), da(n), g(n);
+    for (size_t k = 0; k < n; ++k) {
+      a[k] = (k + 1 < n ? at[k + 1].L : l_end) - at[k].L;
+      da[k] = (k + 1 < n ? at[k + 1].dL : dl_end) - at[k].dL;
+      g[k] = (at[k].beta != 0).select(at[k].dbeta / at[k].beta, 0.0);
+    }
+    Color later = Color::Zero();  // sum of a_j over j > k
+    for (size_t k = n; k-- > 0;) {
+      Color part = da[k] - g[k] * a[k];
+      if (k + 1 < n) part += (g[k + 1] - g[k]) * later;
+      later += a[k];
+      if (k == 0) part += g[0] * later;
+      trace->vertices[k].arises = part.mean();
     }
   }
 

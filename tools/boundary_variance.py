@@ -36,13 +36,12 @@ def leave_one_out_range(runs):
     n = runs.shape[0]
     if n < 3:
         raise ValueError(f"leave_one_out_range needs at least 3 seeds (got {n})")
-    total = runs.sum(axis=0)
-    total_sq = (runs * runs).sum(axis=0)
-    sums = []
-    for i in range(n):
-        s, q = total - runs[i], total_sq - runs[i] * runs[i]
-        # Variance of the other n - 1 seeds, per pixel (ddof 1), from their sums.
-        sums.append(float(np.maximum(q - s * s / (n - 1), 0.0).sum() / (n - 2)))
+    # Deviations d from the all-seed mean: the other seeds' deviations sum to -d_i, so their squared
+    # deviations about their own mean sum to sum_j d_j^2 - d_i^2 n / (n - 1) (no cancellation of
+    # large means).
+    d = runs - runs.mean(axis=0)
+    ss = (d * d).sum(axis=0)
+    sums = [float(np.maximum(ss - d[i] * d[i] * n / (n - 1), 0.0).sum() / (n - 2)) for i in range(n)]
     return min(sums), max(sums)
 
 

@@ -44,21 +44,32 @@ DirectRun run_direct(Method method, int threads, int keep = 8, CameraHits hits =
   return {e.run(o), e.layout()};
 }
 
+// A sample's interior term summed two ways, with the scale of the parts (for rounding bounds):
+// camera emission + Jacobian term + what each vertex adds, and camera emission + what arises at
+// each vertex.
+struct InteriorSums {
+  double added = 0, arises = 0, scale = 0;
+};
+InteriorSums interior_sums(const SampleTrace& s) {
+  InteriorSums r{s.camera_emission + s.camera_jacobian, s.camera_emission, std::abs(s.interior)};
+  for (const VertexTrace& v : s.vertices) {
+    r.added += v.added;
+    r.arises += v.arises;
+    r.scale += std::abs(v.added) + std::abs(v.arises);
+  }
+  return r;
+}
+
 TEST(LargestSamples, RetraceReproducesTheInteriorTerm) {
   const DirectRun none = run_direct(Method::None, 2);
   ASSERT_EQ(none.result.largest.size(), 8u);
   for (const SampleTrace& s : none.result.largest) {
     EXPECT_EQ(s.interior, s.value) << "pixel (" << s.x << ", " << s.y << ") sample " << s.sample;
     ASSERT_FALSE(s.vertices.empty());
-    double sum = s.camera_emission, arises = s.camera_emission, scale = std::abs(s.interior);
-    for (const VertexTrace& v : s.vertices) {
-      sum += v.added;
-      arises += v.arises;
-      scale += std::abs(v.added) + std::abs(v.arises);
-    }
-    EXPECT_NEAR(sum, s.interior, 1e-12 * std::abs(s.interior)) << "the vertices' parts sum to the interior term";
-    EXPECT_NEAR(arises, s.interior, 1e-12 * scale) << "so do the parts that arise at them";
     EXPECT_EQ(s.camera_jacobian, 0.0);
+    const InteriorSums sums = interior_sums(s);
+    EXPECT_NEAR(sums.added, s.interior, 1e-12 * std::abs(s.interior)) << "the vertices' parts sum to the interior term";
+    EXPECT_NEAR(sums.arises, s.interior, 1e-12 * sums.scale) << "so do the parts that arise at them";
   }
   // With the boundary term, the interior part of a sample is the same path's derivative. Camera
   // hits detached: at 16 x 16 the adaptive rule attaches Spot's sharpest smoothed creases, and an
@@ -83,14 +94,11 @@ TEST(LargestSamples, AnAttachedRaysJacobianArisesAtTheFirstVertex) {
   const DirectRun run = run_direct(Method::Quadric, 2, 32, CameraHits::Attached);
   int with_jacobian = 0;
   for (const SampleTrace& s : run.result.largest) {
-    double added = s.camera_emission + s.camera_jacobian, arises = s.camera_emission, scale = std::abs(s.interior);
-    for (const VertexTrace& v : s.vertices) {
-      added += v.added;
-      arises += v.arises;
-      scale += std::abs(v.added) + std::abs(v.arises);
-    }
-    EXPECT_NEAR(added, s.interior, 1e-12 * scale) << "pixel (" << s.x << ", " << s.y << ") sample " << s.sample;
-    EXPECT_NEAR(arises, s.interior, 1e-12 * scale) << "pixel (" << s.x << ", " << s.y << ") sample " << s.sample;
+    const InteriorSums sums = interior_sums(s);
+    EXPECT_NEAR(sums.added, s.interior, 1e-12 * sums.scale)
+        << "pixel (" << s.x << ", " << s.y << ") sample " << s.sample;
+    EXPECT_NEAR(sums.arises, s.interior, 1e-12 * sums.scale)
+        << "pixel (" << s.x << ", " << s.y << ") sample " << s.sample;
     with_jacobian += s.camera_jacobian != 0;
   }
   EXPECT_GT(with_jacobian, 0) << "no attached sample among the largest: the test sees nothing";
