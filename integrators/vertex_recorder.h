@@ -29,7 +29,7 @@ struct VertexRecorder {
     Color beta, dbeta;  ///< the throughput reaching the vertex and its derivative
     Color L, dL;        ///< L when the vertex was reached and its derivative
   };
-  mutable std::vector<Reached> at;
+  mutable std::vector<Reached> at = {};
 
   /// The value and the derivative for `param` of a colour over duals.
   static std::pair<Color, Color> split(const ColorT<Dual<N>>& c, int k) {
