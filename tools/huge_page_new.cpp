@@ -1,0 +1,72 @@
+/// @file huge_page_new.cpp
+/// The programs' global operator new (linked into `qsil`, the benchmarks and the test binary, not
+/// into the libraries or the Python module): a block of kHugePageBytes or more is aligned to 2 MiB
+/// and its whole 2 MiB pages are marked madvise(MADV_HUGEPAGE), so that where the kernel's
+/// transparent huge pages are in `madvise` mode (Debian's default) they are backed by huge pages;
+/// smaller blocks come from malloc as before.
+///
+/// Why: the edge forest, its edge arrays, the environment map's sampling tables and the film are
+/// large arrays that are written once and then read at random. With 4 KiB pages a set-up spends
+/// much of its time in first-touch page faults (23 % of `qsil forest`'s samples on a 1.31 M
+/// triangle mesh, in a virtual machine) and a render in TLB misses; huge pages take both down
+/// (docs/experiments/2026-11-29-huge-pages.md). glibc's own switch for this
+/// (GLIBC_TUNABLES=glibc.malloc.hugetlb=1) is read from the environment at start-up only, so a
+/// program cannot turn it on for itself.
+///
+/// Contract: the replaceable allocation functions of [new.delete.single] and [new.delete.array]
+/// (not the aligned ones, which libstdc++ serves with aligned_alloc and free): every block comes
+/// from malloc or posix_memalign and is released with free, so a block may be freed by any
+/// operator delete in the process. Where memory runs out the new_handler is called, then
+/// std::bad_alloc thrown (nothrow forms: nullptr). madvise's failure (a kernel without THP) is
+/// ignored: the block is then an ordinary one.
+
+#include <sys/mman.h>
+
+#include <cstddef>
+#include <cstdlib>
+#include <new>
+
+namespace {
+
+/// The page size of x86-64's and AArch64's (4 KiB granule) transparent huge pages, and the size
+/// from which a block gets them: smaller blocks would waste most of a huge page.
+constexpr std::size_t kHugePageBytes = std::size_t(2) << 20;
+
+void* allocate(std::size_t bytes) {
+  if (bytes == 0) bytes = 1;
+  for (;;) {
+    if (bytes >= kHugePageBytes) {
+      void* p = nullptr;
+      if (posix_memalign(&p, kHugePageBytes, bytes) == 0) {
+        // The whole huge pages of the block; its last partial page stays in 4 KiB pages, so that
+        // no more than the block is ever resident.
+        madvise(p, bytes & ~(kHugePageBytes - 1), MADV_HUGEPAGE);
+        return p;
+      }
+    } else if (void* p = std::malloc(bytes)) {
+      return p;
+    }
+    std::new_handler handler = std::get_new_handler();
+    if (!handler) throw std::bad_alloc();
+    handler();
+  }
+}
+
+void* allocate_nothrow(std::size_t bytes) noexcept {
+  try {
+    return allocate(bytes);
+  } catch (...) { return nullptr; }
+}
+
+}  // namespace
+
+void* operator new(std::size_t bytes) { return allocate(bytes); }
+void* operator new[](std::size_t bytes) { return allocate(bytes); }
+void* operator new(std::size_t bytes, const std::nothrow_t&) noexcept { return allocate_nothrow(bytes); }
+void* operator new[](std::size_t bytes, const std::nothrow_t&) noexcept { return allocate_nothrow(bytes); }
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete[](void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+void operator delete(void* p, const std::nothrow_t&) noexcept { std::free(p); }
+void operator delete[](void* p, const std::nothrow_t&) noexcept { std::free(p); }
