@@ -11,8 +11,11 @@ Three variances of the gradient across seeds, each summed over vertices and axes
   per-vertex   of g itself;
   large-steps  of (I + lam L)^-1 g, the gradient of Large Steps' u = (I + lam L) x (lam 19, L the
                combinatorial Laplacian; python/qsil_shape.py): what the shape optimiser steps with.
-and the median wall time of a run. Each configuration after the first is printed as a ratio to the
-first (same seeds: the same paths where the configurations share them).
+and the median wall time of a run. With 3 seeds or more, each variance is followed by its range when
+one seed is left out (each in turn; boundary_variance.leave_one_out_range): where one seed's rare
+sample carries a sum, that range spans a factor of several, and two configurations whose ratio lies
+within it are not ranked by this many seeds. Each configuration after the first is printed as a
+ratio to the first (same seeds: the same paths where the configurations share them).
 
 Configurations: adaptive, attached, detached (qsil.reverse's camera_hits, control variate on), and
 the same names with a trailing 0 (camera_control_spp=0).
@@ -29,6 +32,17 @@ import time
 import numpy as np
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from boundary_variance import leave_one_out_range  # noqa: E402 (the one leave-one-seed-out formula)
+
+
+def with_range(total, runs):
+    """`total` formatted, with the leave-one-seed-out range of runs (seeds x ...) where there are at
+    least 3 seeds."""
+    if len(runs) < 3:
+        return f"{total:.4g}"
+    lo, hi = leave_one_out_range(runs)
+    return f"{total:.4g} (one seed left out: {lo:.4g}..{hi:.4g})"
 
 
 def main():
@@ -92,8 +106,9 @@ def main():
                    steps=u.var(axis=0, ddof=1).sum(), seconds=float(np.median(seconds)))
         rows.append(row)
         print(f"{config:10s} projected {sums.mean():.4g} +- {sums.std(ddof=1) / np.sqrt(args.seeds):.3g} "
-              f"(variance {row['projected']:.4g}, largest |run - median| {np.abs(sums - np.median(sums)).max():.3g})  "
-              f"per-vertex {row['vertex']:.4g}  large-steps {row['steps']:.4g}  {row['seconds']:.3f} s", flush=True)
+              f"(variance {with_range(row['projected'], sums)}, largest |run - median| "
+              f"{np.abs(sums - np.median(sums)).max():.3g})  per-vertex {with_range(row['vertex'], g)}  "
+              f"large-steps {with_range(row['steps'], u)}  {row['seconds']:.3f} s", flush=True)
     first = rows[0]
     for row in rows[1:]:
         print(f"  {row['config']} / {first['config']}: projected {row['projected'] / first['projected']:.3f}, "
