@@ -407,7 +407,12 @@ WHY_MISSED = {
         "Jacobian; `docs/experiments/2026-11-29-seed-counts.md`). Detached, the same samples slide (32 seeds: "
         "adaptive 4058 against detached 4347 summed per-pixel variance, attached everywhere 26 620). The boundary term holds "
         "30 %, 93 % of it at depth 2 on the sphere light's (58 %) and the wing nut's (42 %) outlines, 43 % of it "
-        "chosen with pdf < 0.01."),
+        "chosen with pdf < 0.01. Split into cost and variance (2026-11-29, 32 seeds, 48², 64 spp, "
+        "`docs/experiments/2026-11-29-glossy-sphere-light-gap.md`): grad takes 5.7× the time of FD's two renders (its "
+        "boundary term 72 % of it, at its best rate) and has 3× FD's per-pixel variance at h0; without the second "
+        "bounce (max_depth 2, no caustic) FD's lead grows (9× the variance, 40× in all), so the caustic is not what "
+        "separates them: the boundary term's cost and the interior term at smoothed creases under a small bright "
+        "light are."),
     "wingnut FD": (
         "The interior term's tail on the wing nut's smoothed sharp creases. Decomposed 2026-11-28 "
         "(`tools/tail_report.py`, 8 seeds): the interior term holds all of the largest samples' squares, 98 % at the "
