@@ -1,14 +1,15 @@
 /// @file huge_page_new.cpp
-/// The programs' global operator new (linked into `qsil`, the benchmarks and the test binary, not
-/// into the libraries or the Python module): a block of kHugePageBytes or more is aligned to 2 MiB
-/// and its whole 2 MiB pages are marked madvise(MADV_HUGEPAGE), so that where the kernel's
-/// transparent huge pages are in `madvise` mode (Debian's default) they are backed by huge pages;
-/// smaller blocks come from malloc as before.
+/// The programs' global operator new (linked into `qsil`, `qsil-*`, the benchmarks and the test
+/// binary, not into the libraries or the Python module): a block of kHugePageBytes or more is
+/// aligned to 2 MiB and its whole 2 MiB pages are marked madvise(MADV_HUGEPAGE), so that where the
+/// kernel's transparent huge pages are in `madvise` mode (Debian's default) they are backed by huge
+/// pages; smaller blocks come from malloc as before.
 ///
-/// Why: the edge forest, its edge arrays, the environment map's sampling tables and the film are
-/// large arrays that are written once and then read at random. With 4 KiB pages a set-up spends
-/// much of its time in first-touch page faults (23 % of `qsil forest`'s samples on a 1.31 M
-/// triangle mesh, in a virtual machine) and a render in TLB misses; huge pages take both down
+/// Why: a set-up writes large arrays once (the mesh, the edge arrays, the forest's nodes and
+/// bounds, their temporaries). With 4 KiB pages it spends much of its time in first-touch page
+/// faults (23 % of `qsil forest`'s samples on a 1.31 M triangle mesh, in a virtual machine); with
+/// huge pages that set-up is 1.8x faster. Rendering did not measurably change: its large blocks are
+/// few, and the environment map's sampling tables are one small block per row
 /// (docs/experiments/2026-11-29-huge-pages.md). glibc's own switch for this
 /// (GLIBC_TUNABLES=glibc.malloc.hugetlb=1) is read from the environment at start-up only, so a
 /// program cannot turn it on for itself.
