@@ -365,7 +365,8 @@ class GradientEstimator final : public Estimator::Impl, private RenderSetup {
 /// their shapes), set up once.
 class FiniteDifferenceEstimator final : public Estimator::Impl {
  public:
-  FiniteDifferenceEstimator(const Scene& s, EstimatorConfig c) : Impl(s, std::move(c)) {
+  FiniteDifferenceEstimator(const Scene& s, EstimatorConfig c)
+      : Impl(s, std::move(c)), environment(std::make_unique<EnvironmentLight>(s.environment)) {
     const int K = layout.num_params();
     steps = config.fd_steps.empty() ? fd_steps(s, config.params, {}) : config.fd_steps;
     if (int(steps.size()) != K) throw Error("fd: one step per parameter expected");
@@ -376,12 +377,12 @@ class FiniteDifferenceEstimator final : public Estimator::Impl {
     // rounded to float alike on every side (no spurious motion of ulp size between them).
     const Vec3 local_origin = embree_local_origin(s);
     const std::optional<Regularization> reg = regularization_of(config);
-    sides.push_back(std::make_unique<Side>(s, local_origin, reg));
+    sides.push_back(std::make_unique<Side>(s, local_origin, reg, *environment));
     for (int k = 0; k < K; ++k) {
-      sides.push_back(
-          std::make_unique<Side>(displaced_scene(s, config.params, k, +steps[size_t(k)]), local_origin, reg));
-      sides.push_back(
-          std::make_unique<Side>(displaced_scene(s, config.params, k, -steps[size_t(k)]), local_origin, reg));
+      sides.push_back(std::make_unique<Side>(displaced_scene(s, config.params, k, +steps[size_t(k)]), local_origin, reg,
+                                             *environment));
+      sides.push_back(std::make_unique<Side>(displaced_scene(s, config.params, k, -steps[size_t(k)]), local_origin, reg,
+                                             *environment));
     }
     setup.structure = std::to_string(sides.size()) + " scenes (primal and displaced), each with a ray tracer";
   }
@@ -417,19 +418,27 @@ class FiniteDifferenceEstimator final : public Estimator::Impl {
   }
 
  private:
-  /// One side of a difference: a scene, its tracer and lights, and with regularised visibility
-  /// its SoftScene.
+  /// One side of a difference: a scene, its tracer and area lights (an emitter may be the shape
+  /// that moves), the environment shared by every side (parameters move shapes only, so every
+  /// side's environment is the primal scene's; one per side built 2K + 1 copies of a map's tables:
+  /// docs/experiments/2026-11-29-huge-pages.md, "Finite differences"), and with regularised
+  /// visibility its SoftScene.
   struct Side {
-    Side(Scene s, const Vec3& local_origin, const std::optional<Regularization>& reg)
-        : scene(std::move(s)), tracer(scene, local_origin), lights(scene), ctx(lights.context(scene, tracer)) {
+    Side(Scene s, const Vec3& local_origin, const std::optional<Regularization>& reg,
+         const EnvironmentLight& environment)
+        : scene(std::move(s)),
+          tracer(scene, local_origin),
+          area_lights(scene),
+          ctx(LightSetup::context_over(scene, tracer, environment, area_lights)) {
       if (reg) near.emplace(scene, *reg);
     }
     Scene scene;
     RayTracer tracer;
-    LightSetup lights;
+    AreaLights area_lights;
     PathContext ctx;
     std::optional<SoftScene> near;
   };
+  std::unique_ptr<const EnvironmentLight> environment;  ///< the primal scene's, shared by the sides
   std::vector<std::unique_ptr<Side>> sides;
 };
 

@@ -16,9 +16,16 @@ struct LightSetup {
   EnvironmentLight environment;
   AreaLights area_lights;
   explicit LightSetup(const Scene& scene) : environment(scene.environment), area_lights(scene) {}
-  /// The path context over these lights and `tracer`: the scene's resolved max depth; NEE picks
-  /// the environment with probability 1/2 when the scene has both kinds of light.
+  /// The path context over these lights and `tracer` (see context_over).
   PathContext context(const Scene& scene, const RayTracer& tracer) const {
+    return context_over(scene, tracer, environment, area_lights);
+  }
+  /// The path context over `environment` and `area_lights` (which must outlive it) and `tracer`:
+  /// the scene's resolved max depth; NEE picks the environment with probability 1/2 when the scene
+  /// has both kinds of light. For estimators whose scenes share one environment (finite
+  /// differences: the displaced scenes move shapes, never the environment).
+  static PathContext context_over(const Scene& scene, const RayTracer& tracer, const EnvironmentLight& environment,
+                                  const AreaLights& area_lights) {
     PathContext ctx;
     ctx.scene = &scene;
     ctx.tracer = &tracer;
