@@ -45,6 +45,15 @@ def leave_one_out_range(runs):
     return min(sums), max(sums)
 
 
+def with_range(total, runs):
+    """`total` formatted, with the leave-one-seed-out range of runs (seeds x ...) where there are at
+    least 3 seeds (leave_one_out_range)."""
+    if len(runs) < 3:
+        return f"{total:.4g}"
+    lo, hi = leave_one_out_range(runs)
+    return f"{total:.4g} (one seed left out: {lo:.4g}..{hi:.4g})"
+
+
 def summary(name, runs):
     """One line: per-pixel variance summed, its leave-one-seed-out range (leave_one_out_range; with
     at least 3 seeds), its top-1 % share, image sum +- s.e. (runs: seeds x H x W)."""
@@ -52,11 +61,7 @@ def summary(name, runs):
     flat = np.sort(var.ravel())[::-1]
     top = flat[:max(1, flat.size // 100)].sum() / flat.sum() if flat.sum() > 0 else float("nan")
     sums = runs.sum(axis=(1, 2))
-    loo = ""
-    if runs.shape[0] >= 3:
-        lo, hi = leave_one_out_range(runs)
-        loo = f" (one seed left out: {lo:.4g}..{hi:.4g})"
-    return (f"{name:9s} variance sum {var.sum():.4g}{loo}  top-1% share {top:.2f}  "
+    return (f"{name:9s} variance sum {with_range(var.sum(), runs)}  top-1% share {top:.2f}  "
             f"image sum {sums.mean():.4g} +- {sums.std(ddof=1) / np.sqrt(len(sums)):.3g}")
 
 

@@ -33,16 +33,7 @@ import numpy as np
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from boundary_variance import leave_one_out_range  # noqa: E402 (the one leave-one-seed-out formula)
-
-
-def with_range(total, runs):
-    """`total` formatted, with the leave-one-seed-out range of runs (seeds x ...) where there are at
-    least 3 seeds."""
-    if len(runs) < 3:
-        return f"{total:.4g}"
-    lo, hi = leave_one_out_range(runs)
-    return f"{total:.4g} (one seed left out: {lo:.4g}..{hi:.4g})"
+from boundary_variance import with_range  # noqa: E402 (the one leave-one-seed-out formula and its text)
 
 
 def main():
