@@ -80,8 +80,6 @@ EnvironmentLight::EnvironmentLight(const Environment& env) : type_(env.type) {
   distribution_ = Distribution2D(weights, width_, height_);
 }
 
-Color EnvironmentLight::texel(int x, int y) const { return texels_[size_t(y) * size_t(width_) + size_t(x)].radiance; }
-
 Color EnvironmentLight::eval(const Vec3& dir_world) const {
   switch (type_) {
     case Environment::Type::None: return Color::Zero();

@@ -87,35 +87,41 @@ Vec3 square_to_uniform_triangle(const Vec2& u) {
 
 Distribution1D::Distribution1D(std::span<const double> f) {
   if (f.empty()) throw std::invalid_argument("Distribution1D: no bins");
+  bins_.resize(f.size() + 1);
+  guide_.resize(f.size() + 1);
+  sum_ = build_bins(f, bins_.data(), guide_.data());
+  is_zero_ = !(sum_ > 0.0);
+}
+
+double Distribution1D::build_bins(std::span<const double> f, Bin* bins, int* guide) {
   for (size_t i = 0; i < f.size(); ++i)
     if (!(f[i] >= 0.0) || !std::isfinite(f[i]))
       throw std::invalid_argument("Distribution1D: weight " + std::to_string(i) + " is negative or not finite");
   const size_t n = f.size();
-  bins_.assign(n + 1, Bin{});
+  bins[0] = Bin{};
   for (size_t i = 0; i < n; ++i) {
-    bins_[i].f = f[i];
-    bins_[i + 1].cdf = bins_[i].cdf + f[i];
+    bins[i].f = f[i];
+    bins[i + 1] = Bin{bins[i].cdf + f[i], 0.0};
   }
-  sum_ = bins_[n].cdf;
-  is_zero_ = !(sum_ > 0.0);
-  if (is_zero_) {
+  const double sum = bins[n].cdf;
+  if (!(sum > 0.0)) {
     // Degenerate: keep a uniform CDF so that sample() still yields well-formed numbers.
-    for (size_t i = 0; i <= n; ++i) bins_[i].cdf = double(i) / double(n);
+    for (size_t i = 0; i <= n; ++i) bins[i].cdf = double(i) / double(n);
   } else {
     // Dividing the prefix sums by their total keeps them monotone and makes the CDF's last value
     // exactly 1; a zero-weight bin keeps exactly zero width.
-    for (size_t i = 1; i < n; ++i) bins_[i].cdf /= sum_;
-    bins_[n].cdf = 1.0;
+    for (size_t i = 1; i < n; ++i) bins[i].cdf /= sum;
+    bins[n].cdf = 1.0;
   }
-  // Guide table (the indexed search of Chen & Asau 1974): guide_[k] = the largest i with
-  // cdf[i] <= k/n, so the bin of u in [k/n, (k+1)/n) lies in [guide_[k], guide_[k+1]].
-  guide_.assign(n + 1, 0);
+  // Guide table (the indexed search of Chen & Asau 1974): guide[k] = the largest i with
+  // cdf[i] <= k/n, so the bin of u in [k/n, (k+1)/n) lies in [guide[k], guide[k+1]].
   size_t i = 0;
   for (size_t k = 0; k <= n; ++k) {
     const double level = double(k) / double(n);
-    while (i + 1 <= n && bins_[i + 1].cdf <= level) ++i;
-    guide_[k] = int(i);
+    while (i + 1 <= n && bins[i + 1].cdf <= level) ++i;
+    guide[k] = int(i);
   }
+  return sum;
 }
 
 std::vector<double> Distribution1D::cdf() const {
@@ -124,8 +130,7 @@ std::vector<double> Distribution1D::cdf() const {
   return c;
 }
 
-int Distribution1D::find_bin(double u) const {
-  const int n = size();
+int Distribution1D::find_bin(const Bin* bins, const int* guide, int n, double sum, double u) {
   // Largest i with cdf[i] <= u, clamped to [0, n-1]: searched between the guide table's bounds
   // (one or two steps for most u), and over the whole CDF when rounding of u n put u outside them
   // (the answer is the same as a binary search over the whole CDF, so sampling is unchanged).
@@ -134,33 +139,32 @@ int Distribution1D::find_bin(double u) const {
   const double un = u * double(n);
   if (un >= 0.0 && un < double(n)) {
     const size_t k = size_t(un);
-    const auto lo = bins_.begin() + guide_[k];
-    const auto hi = bins_.begin() + std::min<ptrdiff_t>(ptrdiff_t(n) + 1, ptrdiff_t(guide_[k + 1]) + 2);
-    i = int(std::upper_bound(lo, hi, u, below) - bins_.begin()) - 1;
-    const bool found = i >= 0 && bins_[size_t(i)].cdf <= u && (i == n || u < bins_[size_t(i) + 1].cdf);
+    const Bin* lo = bins + guide[k];
+    const Bin* hi = bins + std::min<ptrdiff_t>(ptrdiff_t(n) + 1, ptrdiff_t(guide[k + 1]) + 2);
+    i = int(std::upper_bound(lo, hi, u, below) - bins) - 1;
+    const bool found = i >= 0 && bins[i].cdf <= u && (i == n || u < bins[i + 1].cdf);
     if (!found) i = -1;
   }
-  if (i < 0) i = int(std::upper_bound(bins_.begin(), bins_.end(), u, below) - bins_.begin()) - 1;
+  if (i < 0) i = int(std::upper_bound(bins, bins + n + 1, u, below) - bins) - 1;
   i = std::clamp(i, 0, n - 1);
-  if (is_zero_ || bins_[size_t(i)].f > 0.0) return i;
+  if (!(sum > 0.0) || bins[i].f > 0.0) return i;
   // Rounding put u on a zero-width bin (u at or beyond the top of the CDF, or on a plateau):
   // move to the nearest bin of non-zero weight, preferring the one below (the CDF plateau is
   // reached from below), never a zero-probability bin and never an arbitrary fallback index.
   for (int j = i - 1; j >= 0; --j)
-    if (bins_[size_t(j)].f > 0.0) return j;
+    if (bins[j].f > 0.0) return j;
   for (int j = i + 1; j < n; ++j)
-    if (bins_[size_t(j)].f > 0.0) return j;
+    if (bins[j].f > 0.0) return j;
   return i;  // unreachable for a non-degenerate distribution
 }
 
-Distribution1D::Sample Distribution1D::sample(double u) const {
+Distribution1D::Sample Distribution1D::sample_bins(const Bin* bins, const int* guide, int n, double sum, double u) {
   Sample s;
-  const int n = size();
   if (n == 0) return s;
   u = std::clamp(u, 0.0, kOneMinusEpsilon);
-  const int i = find_bin(u);
-  const Bin& bin = bins_[size_t(i)];
-  const double width = bins_[size_t(i) + 1].cdf - bin.cdf;
+  const int i = find_bin(bins, guide, n, sum, u);
+  const Bin& bin = bins[i];
+  const double width = bins[i + 1].cdf - bin.cdf;
   double du = width > 0.0 ? (u - bin.cdf) / width : 0.5;
   du = std::clamp(du, 0.0, kOneMinusEpsilon);
   double x = (double(i) + du) / double(n);
@@ -169,11 +173,15 @@ Distribution1D::Sample Distribution1D::sample(double u) const {
   while (int(x * n) < i) x = std::nextafter(x, 1.0);
   s.x = x;
   s.index = i;
-  if (!is_zero_) {
-    s.pmf = bin.f / sum_;
-    s.pdf = bin.f / integral();
+  if (sum > 0.0) {
+    s.pmf = bin.f / sum;
+    s.pdf = bin.f / (sum / double(n));
   }
   return s;
+}
+
+Distribution1D::Sample Distribution1D::sample(double u) const {
+  return sample_bins(bins_.data(), guide_.data(), size(), sum_, u);
 }
 
 Distribution1D::Sample Distribution1D::sample_discrete(double u) const {
@@ -196,11 +204,14 @@ double Distribution1D::pdf(double x) const {
 Distribution2D::Distribution2D(std::span<const double> f, int nu, int nv) : nu_(nu), nv_(nv) {
   if (nu <= 0 || nv <= 0 || f.size() != size_t(nu) * size_t(nv))
     throw std::invalid_argument("Distribution2D: size mismatch");
-  conditional_.reserve(size_t(nv));
+  const size_t row = size_t(nu) + 1;
+  bins_.resize(row * size_t(nv));
+  guide_.resize(row * size_t(nv));
+  row_sum_.resize(size_t(nv));
   std::vector<double> row_integrals(static_cast<size_t>(nv));
-  for (int v = 0; v < nv; ++v) {
-    conditional_.emplace_back(f.subspan(size_t(v) * size_t(nu), size_t(nu)));
-    row_integrals[size_t(v)] = conditional_.back().integral();
+  for (size_t v = 0; v < size_t(nv); ++v) {
+    row_sum_[v] = Distribution1D::build_bins(f.subspan(v * size_t(nu), size_t(nu)), &bins_[v * row], &guide_[v * row]);
+    row_integrals[v] = row_sum_[v] / double(nu);  // Distribution1D::integral()
   }
   marginal_ = Distribution1D(row_integrals);
 }
@@ -210,7 +221,9 @@ Distribution2D::Sample Distribution2D::sample(const Vec2& u) const {
   if (nv_ == 0) return s;
   const Distribution1D::Sample row = marginal_.sample(u.y());
   // The marginal never picks a row of zero integral, so the conditional is non-degenerate.
-  const Distribution1D::Sample col = conditional_[size_t(row.index)].sample(u.x());
+  const size_t first = size_t(row.index) * (size_t(nu_) + 1);
+  const Distribution1D::Sample col =
+      Distribution1D::sample_bins(&bins_[first], &guide_[first], nu_, row_sum_[size_t(row.index)], u.x());
   s.p = Vec2(col.x, row.x);
   s.iu = col.index;
   s.iv = row.index;
@@ -222,7 +235,7 @@ double Distribution2D::pdf(const Vec2& p) const {
   if (marginal_.is_zero() || !(p.x() >= 0.0 && p.x() < 1.0 && p.y() >= 0.0 && p.y() < 1.0)) return 0.0;
   const int iu = std::min(int(p.x() * nu_), nu_ - 1);
   const int iv = std::min(int(p.y() * nv_), nv_ - 1);
-  return conditional_[size_t(iv)].weight(iu) / marginal_.integral();
+  return bins_[size_t(iv) * (size_t(nu_) + 1) + size_t(iu)].f / marginal_.integral();
 }
 
 }  // namespace qsil

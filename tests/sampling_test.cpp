@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <span>
 #include <vector>
 
 namespace qsil {
@@ -270,6 +271,38 @@ TEST(SamplingDistribution2D, SampleMatchesPdfChi2) {
   EXPECT_NEAR(pdf_integral, 1.0, 1e-12);
   const auto r = chi2_test(obs, exp, kSignificance);
   EXPECT_TRUE(r.passed) << r.message;
+}
+
+// The rows live in one array (Distribution2D's layout) but must sample as a Distribution1D of
+// their weights does, and the rows' integrals must weigh the marginal: the same cell, position
+// and density, bit for bit, as the marginal-then-conditional composition of 1D distributions.
+TEST(SamplingDistribution2D, RowsSampleAsTheirDistribution1D) {
+  const int nu = 7, nv = 6;
+  TestRng rng(31);
+  std::vector<double> f(size_t(nu * nv));
+  for (size_t i = 0; i < f.size(); ++i) f[i] = i % 5 == 1 ? 0.0 : rng.uniform() * (1 + int(i) % 3);
+  for (int x = 0; x < nu; ++x) f[size_t(2 * nu + x)] = 0.0;  // a row of zero weight
+  const Distribution2D d(f, nu, nv);
+  std::vector<Distribution1D> rows;
+  std::vector<double> integrals;
+  for (int v = 0; v < nv; ++v) {
+    rows.emplace_back(std::span<const double>(f).subspan(size_t(v * nu), size_t(nu)));
+    integrals.push_back(rows.back().integral());
+  }
+  const Distribution1D marginal(integrals);
+  EXPECT_EQ(d.integral(), marginal.integral());
+  std::vector<Vec2> us = {Vec2(0, 0), Vec2(std::nextafter(1.0, 0.0), std::nextafter(1.0, 0.0)), Vec2(0.5, 1.0 / 3)};
+  for (int i = 0; i < 2000; ++i) us.push_back(rng.uniform2());
+  for (const Vec2& u : us) {
+    const auto s = d.sample(u);
+    const auto row = marginal.sample(u.y());
+    const auto col = rows[size_t(row.index)].sample(u.x());
+    ASSERT_EQ(s.iv, row.index);
+    ASSERT_EQ(s.iu, col.index);
+    ASSERT_EQ(s.p, Vec2(col.x, row.x));
+    ASSERT_EQ(s.pdf, row.pdf * col.pdf);
+    ASSERT_EQ(d.pdf(s.p), rows[size_t(s.iv)].weight(s.iu) / marginal.integral());
+  }
 }
 
 TEST(SamplingDistribution2D, AllZeroIsDegenerate) {

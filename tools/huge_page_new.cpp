@@ -8,9 +8,10 @@
 /// Why: a set-up writes large arrays once (the mesh, the edge arrays, the forest's nodes and
 /// bounds, their temporaries). With 4 KiB pages it spends much of its time in first-touch page
 /// faults (23 % of `qsil forest`'s samples on a 1.31 M triangle mesh, in a virtual machine); with
-/// huge pages that set-up is 1.8x faster. Rendering did not measurably change: its large blocks are
-/// few, and the environment map's sampling tables are one small block per row
-/// (docs/experiments/2026-11-29-huge-pages.md). glibc's own switch for this
+/// huge pages that set-up is 1.8x faster (docs/experiments/2026-11-29-huge-pages.md). An
+/// environment map's sampling tables are two large blocks for the same reason (Distribution2D;
+/// docs/experiments/2026-11-29-envmap-setup.md). Rendering did not measurably change: its large
+/// blocks are few. glibc's own switch for this
 /// (GLIBC_TUNABLES=glibc.malloc.hugetlb=1) is read from the environment at start-up only, so a
 /// program cannot turn it on for itself.
 ///

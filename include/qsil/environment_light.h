@@ -71,7 +71,7 @@ class EnvironmentLight {
   int height() const { return height_; }
   /// The radiance of texel (x, y) (column x in [0, width()), row y in [0, height()), top row
   /// first), as eval() returns it: scaled, negative channels clamped to 0. EnvMap only.
-  Color texel(int x, int y) const;
+  Color texel(int x, int y) const { return texels_[size_t(y) * size_t(width_) + size_t(x)].radiance; }
   /// The map's rotation, map frame -> world (identity unless EnvMap).
   const Mat3& to_world() const { return to_world_; }
 

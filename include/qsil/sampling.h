@@ -121,7 +121,7 @@ class Distribution1D {
   std::vector<double> cdf() const;
 
  private:
-  int find_bin(double u) const;
+  friend class Distribution2D;  // its rows are sampled by the same code (sample_bins)
   /// One bin's CDF and weight side by side, so that a sample reads one or two cache lines where
   /// two arrays took two or three (an environment map's rows do not stay in cache;
   /// tools/bench/bench_envmap.cpp).
@@ -129,6 +129,12 @@ class Distribution1D {
     double cdf = 0;  ///< the normalised CDF at the bin's start (entry n: exactly 1)
     double f = 0;    ///< the bin's weight as given (entry n: 0)
   };
+  /// Fills bins[0..n] and guide[0..n] for the weights f (n = f.size() >= 1) and returns their sum;
+  /// throws as the constructor does. Distribution2D fills its rows, which live in one array, with it.
+  static double build_bins(std::span<const double> f, Bin* bins, int* guide);
+  /// The bin of u (find_bin) and sample() over n bins held elsewhere (a Distribution2D row).
+  static int find_bin(const Bin* bins, const int* guide, int n, double sum, double u);
+  static Sample sample_bins(const Bin* bins, const int* guide, int n, double sum, double u);
   std::vector<Bin> bins_;   ///< n + 1 entries
   std::vector<int> guide_;  ///< n + 1 entries: the largest i with cdf[i] <= k/n (find_bin)
   double sum_ = 0;
@@ -140,6 +146,10 @@ class Distribution1D {
 /// over rows then the conditional over the chosen row's columns (pbrt-v4 PiecewiseConstant2D).
 /// Never returns a cell of zero weight; an all-zero grid is degenerate (is_zero(), sample()
 /// returns pdf = 0, pdf() returns 0). Throws std::invalid_argument on bad weights or sizes.
+/// Each row is the Distribution1D of its weights (the same samples and densities, bit for bit);
+/// the rows' bins and guide tables are held in one array each, not one pair per row, so that an
+/// environment map's distribution is two large blocks (huge pages, tools/huge_page_new.cpp) rather
+/// than thousands of small ones, each first touched page by page.
 class Distribution2D {
  public:
   Distribution2D() = default;
@@ -165,8 +175,12 @@ class Distribution2D {
 
  private:
   int nu_ = 0, nv_ = 0;
-  std::vector<Distribution1D> conditional_;  ///< one per row
-  Distribution1D marginal_;                  ///< over rows, weights = row integrals
+  /// The conditional distribution of row v: bins [v (nu + 1), (v + 1)(nu + 1)) of bins_ and
+  /// guide_, and its weights' sum row_sum_[v] (Distribution1D's bins_, guide_ and sum_).
+  std::vector<Distribution1D::Bin> bins_;
+  std::vector<int> guide_;
+  std::vector<double> row_sum_;
+  Distribution1D marginal_;  ///< over rows, weights = row integrals
 };
 
 }  // namespace qsil
