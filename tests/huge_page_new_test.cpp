@@ -58,6 +58,35 @@ TEST(HugePageNew, LargeBlocksAreMarkedForTransparentHugePages) {
   EXPECT_NE(flags.find(" hg"), std::string::npos) << "madvise(MADV_HUGEPAGE) not applied: " << flags;
 }
 
+// Over-aligned types (alignas beyond malloc's 16 bytes) go through the aligned forms.
+TEST(HugePageNew, AlignedFormsKeepTheirAlignmentAndLargeBlocksGetHugePages) {
+  struct alignas(64) Record {
+    double x[8];
+  };
+  std::vector<Record> records(kHuge / sizeof(Record) + 3);
+  EXPECT_EQ(reinterpret_cast<std::uintptr_t>(records.data()) % kHuge, 0u);
+  if (kernel_has_transparent_huge_pages()) {
+    records[0].x[0] = 1;
+    const std::string flags = vm_flags_of(reinterpret_cast<std::uintptr_t>(records.data()));
+    EXPECT_NE(flags.find(" hg"), std::string::npos) << "madvise(MADV_HUGEPAGE) not applied: " << flags;
+  }
+  for (std::size_t alignment : {std::size_t(32), std::size_t(4096), 2 * kHuge})
+    for (std::size_t bytes : {std::size_t(0), std::size_t(100), kHuge + 5}) {
+      void* p = ::operator new(bytes, std::align_val_t(alignment));
+      EXPECT_EQ(reinterpret_cast<std::uintptr_t>(p) % alignment, 0u) << bytes << " bytes at " << alignment;
+      ::operator delete(p, std::align_val_t(alignment));
+      void* q = ::operator new[](bytes, std::align_val_t(alignment), std::nothrow);
+      ASSERT_NE(q, nullptr);
+      EXPECT_EQ(reinterpret_cast<std::uintptr_t>(q) % alignment, 0u) << bytes << " bytes at " << alignment;
+      ::operator delete[](q, std::align_val_t(alignment), std::nothrow);
+    }
+  const std::size_t impossible = std::size_t(1) << 62;
+  EXPECT_THROW(::operator delete(::operator new(impossible, std::align_val_t(64)), std::align_val_t(64)),
+               std::bad_alloc);
+  EXPECT_EQ(::operator new(impossible, std::align_val_t(64), std::nothrow), nullptr);
+  EXPECT_EQ(::operator new[](impossible, std::align_val_t(4 * kHuge), std::nothrow), nullptr);
+}
+
 TEST(HugePageNew, ExhaustionThrowsOrReturnsNull) {
   const std::size_t impossible = std::size_t(1) << 62;
   // The functions themselves: a new-expression's allocation may be elided (and is, under LTO).

@@ -15,15 +15,18 @@
 /// (GLIBC_TUNABLES=glibc.malloc.hugetlb=1) is read from the environment at start-up only, so a
 /// program cannot turn it on for itself.
 ///
-/// Contract: the replaceable allocation functions of [new.delete.single] and [new.delete.array]
-/// (not the aligned ones, which libstdc++ serves with aligned_alloc and free): every block comes
-/// from malloc or posix_memalign and is released with free, so a block may be freed by any
-/// operator delete in the process. Where memory runs out the new_handler is called, then
-/// std::bad_alloc thrown (nothrow forms: nullptr). madvise's failure (a kernel without THP) is
-/// ignored: the block is then an ordinary one.
+/// Contract: the replaceable allocation functions of [new.delete.single] and [new.delete.array],
+/// the aligned forms (std::align_val_t, for over-aligned types such as the environment map's texel
+/// records) included: every block comes from malloc or posix_memalign and is released with free,
+/// so a block may be freed by any operator delete in the process. An aligned block of 2 MiB or
+/// more whose alignment is at most 2 MiB is a large block as above (2 MiB alignment satisfies
+/// it); a smaller one, or a larger alignment, comes from posix_memalign as libstdc++'s own would.
+/// Where memory runs out the new_handler is called, then std::bad_alloc thrown (nothrow forms:
+/// nullptr). madvise's failure (a kernel without THP) is ignored: the block is then an ordinary one.
 
 #include <sys/mman.h>
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdlib>
 #include <new>
@@ -34,10 +37,14 @@ namespace {
 /// from which a block gets them: smaller blocks would waste most of a huge page.
 constexpr std::size_t kHugePageBytes = std::size_t(2) << 20;
 
-void* allocate(std::size_t bytes) {
+/// A block of `bytes` aligned to `alignment` (a power of two; 0: malloc's own alignment).
+void* allocate(std::size_t bytes, std::size_t alignment = 0) {
   if (bytes == 0) bytes = 1;
   for (;;) {
-    if (bytes >= kHugePageBytes) {
+    if (alignment > kHugePageBytes || (alignment != 0 && bytes < kHugePageBytes)) {
+      void* p = nullptr;
+      if (posix_memalign(&p, std::max(alignment, sizeof(void*)), bytes) == 0) return p;
+    } else if (bytes >= kHugePageBytes) {
       void* p = nullptr;
       if (posix_memalign(&p, kHugePageBytes, bytes) == 0) {
         // The whole huge pages of the block; its last partial page stays in 4 KiB pages, so that
@@ -54,9 +61,9 @@ void* allocate(std::size_t bytes) {
   }
 }
 
-void* allocate_nothrow(std::size_t bytes) noexcept {
+void* allocate_nothrow(std::size_t bytes, std::size_t alignment = 0) noexcept {
   try {
-    return allocate(bytes);
+    return allocate(bytes, alignment);
   } catch (...) { return nullptr; }
 }
 
@@ -72,3 +79,18 @@ void operator delete(void* p, std::size_t) noexcept { std::free(p); }
 void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
 void operator delete(void* p, const std::nothrow_t&) noexcept { std::free(p); }
 void operator delete[](void* p, const std::nothrow_t&) noexcept { std::free(p); }
+
+void* operator new(std::size_t bytes, std::align_val_t a) { return allocate(bytes, std::size_t(a)); }
+void* operator new[](std::size_t bytes, std::align_val_t a) { return allocate(bytes, std::size_t(a)); }
+void* operator new(std::size_t bytes, std::align_val_t a, const std::nothrow_t&) noexcept {
+  return allocate_nothrow(bytes, std::size_t(a));
+}
+void* operator new[](std::size_t bytes, std::align_val_t a, const std::nothrow_t&) noexcept {
+  return allocate_nothrow(bytes, std::size_t(a));
+}
+void operator delete(void* p, std::align_val_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::align_val_t) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
+void operator delete(void* p, std::align_val_t, const std::nothrow_t&) noexcept { std::free(p); }
+void operator delete[](void* p, std::align_val_t, const std::nothrow_t&) noexcept { std::free(p); }
