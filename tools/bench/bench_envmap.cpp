@@ -88,7 +88,10 @@ int main(int argc, char** argv) {
         const qsil::EnvironmentLight again(env);
         const std::optional<qsil::EnvironmentSun> sun = qsil::find_environment_sun(again);
         const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-        (r < 0 ? first_ms : build_ms) = r < 0 ? ms : std::min(build_ms, ms);
+        if (r < 0)
+          first_ms = ms;
+        else
+          build_ms = std::min(build_ms, ms);
         sun_checksum = sun ? sun->radiance + sun->half_angle + sun->axis.sum() : 0.0;
       }
       built.emplace(env);
