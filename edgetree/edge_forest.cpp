@@ -3,6 +3,7 @@
 
 #include "qsil/edgetree/edge_forest.h"
 
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_group.h>
 
@@ -15,14 +16,23 @@ namespace qsil::edgetree {
 
 namespace {
 
+/// fit_range's arrays, one set per thread of a fit, reused from node to node (a level's nodes
+/// together hold every edge: fresh arrays would be allocated, first touched and freed at every
+/// level).
+struct FitScratch {
+  std::vector<std::pair<int, const Vec4*>> faces;  // (face, its plane)
+  std::vector<Wedge> wedges;
+  std::vector<Vec4> planes;
+};
+
 // Fits one inner node from its edge range: its wedges, and its unique face planes in face order
 // (faces identified by index within the shape; each edge carries its faces' planes).
-NodeFit fit_range(const std::vector<Edge>& edges, const ForestNode& n, const NodeFit* parent,
-                  const NodeFitOptions& opt) {
-  std::vector<std::pair<int, const Vec4*>> faces;  // (face, its plane)
-  faces.reserve(size_t(2) * (n.edge_end - n.edge_begin));
-  std::vector<Wedge> wedges;
-  wedges.reserve(size_t(n.edge_end - n.edge_begin));
+NodeFit fit_range(const std::vector<Edge>& edges, const ForestNode& n, const NodeFit* parent, const NodeFitOptions& opt,
+                  FitScratch& scratch) {
+  auto& [faces, wedges, planes] = scratch;
+  faces.clear();
+  wedges.clear();
+  planes.clear();
   for (int i = n.edge_begin; i < n.edge_end; ++i) {
     const Edge& e = edges[size_t(i)];
     faces.push_back({e.f0, &e.q0});
@@ -30,8 +40,6 @@ NodeFit fit_range(const std::vector<Edge>& edges, const ForestNode& n, const Nod
     wedges.push_back({e.q0, e.q1});
   }
   std::sort(faces.begin(), faces.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-  std::vector<Vec4> planes;
-  planes.reserve(faces.size());
   for (size_t j = 0; j < faces.size(); ++j)
     if (j == 0 || faces[j].first != faces[j - 1].first) planes.push_back(*faces[j].second);
   return fit_node(planes, wedges, n.bp, parent, opt);
@@ -55,6 +63,10 @@ EdgeForest EdgeForest::fit(EdgeSet set, const NodeFitOptions& options) {
     ForestShapeStats& st = f.stats_[s];
     // ---- a bound slot per inner node, in node order
     const int bbase = int(f.bounds_.size());
+    int inner = 0;
+    for (auto [lb, le] : tree.levels)
+      for (int i = lb; i < le; ++i) inner += f.nodes_[size_t(i)].is_leaf() ? 0 : 1;
+    f.bounds_.reserve(f.bounds_.size() + size_t(inner));
     for (auto [lb, le] : tree.levels)
       for (int i = lb; i < le; ++i)
         if (!f.nodes_[size_t(i)].is_leaf()) {
@@ -63,12 +75,13 @@ EdgeForest EdgeForest::fit(EdgeSet set, const NodeFitOptions& options) {
         }
     // ---- fit inner nodes level by level (parents first, for inheritance)
     std::vector<NodeFit> fits(f.bounds_.size() - size_t(bbase));
+    tbb::enumerable_thread_specific<FitScratch> scratch;
     for (auto [lb, le] : tree.levels) {
       tbb::parallel_for(lb, le, [&](int i) {
         ForestNode& n = f.nodes_[size_t(i)];
         if (n.is_leaf()) return;
         const NodeFit* parent = n.parent >= 0 ? &fits[size_t(f.nodes_[size_t(n.parent)].bound - bbase)] : nullptr;
-        NodeFit fit = fit_range(f.edges_, n, parent, options);
+        NodeFit fit = fit_range(f.edges_, n, parent, options, scratch.local());
         n.flags |= fit.flags;
         f.bounds_[size_t(n.bound)] = fit.bound;
         fits[size_t(n.bound - bbase)] = std::move(fit);
@@ -122,11 +135,13 @@ RefitReport EdgeForest::refit(std::span<const ForestShapeInput> shapes) {
   // and log(box growth) of the refitted ones. Summed in node order afterwards (deterministic).
   std::vector<std::uint8_t> outcome(shapes_nodes_end_, 0);
   std::vector<double> log_growth(shapes_nodes_end_, 0.0);
+  tbb::enumerable_thread_specific<FitScratch> scratch;
   tbb::parallel_for(size_t(0), shapes_nodes_end_, [&](size_t i) {
     ForestNode& n = nodes_[i];
     if (n.bound < 0 || n.unrejectable()) return;  // an unrejectable node stays so: sound
     NodeBound& b = bounds_[size_t(n.bound)];
-    thread_local std::vector<Wedge> wedges;
+    FitScratch& sc = scratch.local();
+    std::vector<Wedge>& wedges = sc.wedges;
     wedges.clear();
     for (int k = n.edge_begin; k < n.edge_end; ++k) wedges.push_back({edges_[size_t(k)].q0, edges_[size_t(k)].q1});
     const NodeRefit r = refit_node(wedges, n.box_only(), b);
@@ -138,7 +153,7 @@ RefitReport EdgeForest::refit(std::span<const ForestShapeInput> shapes) {
     }
     // Fitted anew as at build, but with no parent to inherit from (a node with too few planes is
     // box-only, which is sound).
-    const NodeFit fit = fit_range(edges_, n, nullptr, options);
+    const NodeFit fit = fit_range(edges_, n, nullptr, options, sc);
     n.flags = std::uint16_t((n.flags & ~kFitFlags) | fit.flags);
     b = fit.bound;
     fitted_box_size_[size_t(n.bound)] = box_size(b);

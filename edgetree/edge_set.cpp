@@ -104,40 +104,51 @@ void permute_edges(std::vector<Edge>& edges, int ebase, const std::vector<EdgeBo
   }
 }
 
-/// Top-down 4-wide topology over edges [ebase, eend) of `edges` (reordered in place), appended
-/// to `nodes` breadth-first so that every level is a contiguous node range; the root is
-/// discarded, its children become `roots`. Nodes of an always-candidate tree carry kNodeAlways.
-/// Returns the node range of every level; `depth` receives the number of levels.
-std::vector<std::pair<int, int>> build_topology(std::vector<Edge>& edges, int ebase, int eend, int shape,
-                                                bool always, const EdgeSetOptions& opt, std::vector<ForestNode>& nodes,
-                                                std::vector<int>& roots, int& depth) {
+/// Edge idx of `set` as a forest edge, with its end points (world frame) from `mesh`.
+Edge forest_edge(const MeshEdgeSet& set, const TriangleMesh& mesh, int idx) {
+  Edge fe;
+  static_cast<MeshEdge&>(fe) = set.edges[idx];
+  fe.p0 = mesh.positions[fe.v0];
+  fe.p1 = mesh.positions[fe.v1];
+  return fe;
+}
+
+/// Top-down 4-wide topology over the edges of `refs` (their boxes; refs[k].index = k, the edge
+/// at position ebase + k of the tree's edge array), appended to `nodes` breadth-first so that
+/// every level is a contiguous node range; the root is discarded, its children become `roots`.
+/// Nodes of an always-candidate tree carry kNodeAlways. On return refs is in leaf order: the edge
+/// at ebase + refs[k].index goes to ebase + k; the nodes' B_p and L_w are not set (node_extents,
+/// once the edges are there). Returns the node range of every level; `depth` receives the number
+/// of levels.
+std::vector<std::pair<int, int>> build_levels(std::vector<EdgeBoxRef>& refs, int ebase, int shape, bool always,
+                                              const EdgeSetOptions& opt, std::vector<ForestNode>& nodes,
+                                              std::vector<int>& roots, int& depth) {
   std::vector<std::pair<int, int>> levels;
   depth = 0;
-  if (eend <= ebase) return levels;
+  const int n = int(refs.size());
+  if (n == 0) return levels;
   const int nbase = int(nodes.size());
   // The splits order small records (EdgeBoxRef, positions relative to ebase), not the edges;
   // the nodes of one level cover disjoint ranges, so a level's splits run in parallel.
-  std::vector<EdgeBoxRef> refs(size_t(eend - ebase));
-  tbb::parallel_for(0, eend - ebase, [&](int k) { refs[size_t(k)] = edge_box_ref(edges[size_t(ebase + k)], k); });
   std::vector<std::pair<int, int>> top;
-  if (eend - ebase <= opt.leaf_size)
-    top.push_back({0, eend - ebase});
+  if (n <= opt.leaf_size)
+    top.push_back({0, n});
   else
-    top = split4(refs, 0, eend - ebase, opt);
+    top = split4(refs, 0, n, opt);
   auto add_node = [&](int b, int e, int parent, int d) {
-    ForestNode n;
-    n.edge_begin = ebase + b;
-    n.edge_end = ebase + e;
-    n.parent = parent;
-    n.shape = shape;
-    n.depth = std::uint16_t(d);
-    if (always) n.flags |= kNodeAlways;
+    ForestNode node;
+    node.edge_begin = ebase + b;
+    node.edge_end = ebase + e;
+    node.parent = parent;
+    node.shape = shape;
+    node.depth = std::uint16_t(d);
+    if (always) node.flags |= kNodeAlways;
     if (e - b <= opt.leaf_size) {
-      n.flags |= kNodeLeaf;
-      n.first = ebase + b;
-      n.count = e - b;
+      node.flags |= kNodeLeaf;
+      node.first = ebase + b;
+      node.count = e - b;
     }
-    nodes.push_back(n);
+    nodes.push_back(node);
   };
   for (auto [b, e] : top) {
     roots.push_back(int(nodes.size()));
@@ -150,8 +161,9 @@ std::vector<std::pair<int, int>> build_topology(std::vector<Edge>& edges, int eb
     levels.push_back({level_begin, level_end});
     groups.assign(size_t(level_end - level_begin), {});
     tbb::parallel_for(level_begin, level_end, [&](int i) {
-      const ForestNode& n = nodes[size_t(i)];
-      if (!n.is_leaf()) groups[size_t(i - level_begin)] = split4(refs, n.edge_begin - ebase, n.edge_end - ebase, opt);
+      const ForestNode& node = nodes[size_t(i)];
+      if (!node.is_leaf())
+        groups[size_t(i - level_begin)] = split4(refs, node.edge_begin - ebase, node.edge_end - ebase, opt);
     });
     for (int i = level_begin; i < level_end; ++i) {
       if (nodes[size_t(i)].is_leaf()) continue;
@@ -163,47 +175,92 @@ std::vector<std::pair<int, int>> build_topology(std::vector<Edge>& edges, int eb
     level_begin = level_end;
     ++depth;
   }
-  permute_edges(edges, ebase, refs);
-  // ---- B_p and L_w of every node (edges are in their final order now): the leaves from their
-  // edges, then the inner nodes from their children, deepest level first; each step in parallel
-  tbb::parallel_for(nbase, int(nodes.size()), [&](int i) {
+  return levels;
+}
+
+/// B_p and L_w of the nodes of `levels` (build_levels), whose edges are in place in `edges`: the
+/// leaves from their edges, then the inner nodes from their children, deepest level first; each
+/// step in parallel.
+void node_extents(const std::vector<std::pair<int, int>>& levels, std::vector<ForestNode>& nodes,
+                  const std::vector<Edge>& edges) {
+  if (levels.empty()) return;
+  tbb::parallel_for(levels.front().first, levels.back().second, [&](int i) {
     if (nodes[size_t(i)].is_leaf()) node_extent(nodes[size_t(i)], edges);
   });
   for (auto level = levels.rbegin(); level != levels.rend(); ++level)
     tbb::parallel_for(level->first, level->second, [&](int i) {
       if (!nodes[size_t(i)].is_leaf()) node_extent_from_children(nodes[size_t(i)], nodes);
     });
+}
+
+/// build_levels over edges [ebase, eend) of `edges`, which it reorders in place into leaf order,
+/// then node_extents: for edges already in their array (a refit's promoted creases, the
+/// intersection curves). Returns the node range of every level; `depth` receives the number of
+/// levels.
+std::vector<std::pair<int, int>> build_topology(std::vector<Edge>& edges, int ebase, int eend, int shape, bool always,
+                                                const EdgeSetOptions& opt, std::vector<ForestNode>& nodes,
+                                                std::vector<int>& roots, int& depth) {
+  depth = 0;
+  if (eend <= ebase) return {};
+  std::vector<EdgeBoxRef> refs(size_t(eend - ebase));
+  tbb::parallel_for(0, eend - ebase, [&](int k) { refs[size_t(k)] = edge_box_ref(edges[size_t(ebase + k)], k); });
+  const auto levels = build_levels(refs, ebase, shape, always, opt, nodes, roots, depth);
+  permute_edges(edges, ebase, refs);
+  node_extents(levels, nodes, edges);
   return levels;
 }
 
-/// Edge idx of `set` as a forest edge, with its end points (world frame) from `mesh`.
-Edge forest_edge(const MeshEdgeSet& set, const TriangleMesh& mesh, int idx) {
-  Edge fe;
-  static_cast<MeshEdge&>(fe) = set.edges[idx];
-  fe.p0 = mesh.positions[fe.v0];
-  fe.p1 = mesh.positions[fe.v1];
-  return fe;
+/// The shape's edges set.edges[idx[k]] (k < idx.size()) as forest edges (forest_edge, and those
+/// with crease[k] marked as creases of a shape smooth-shaded unless face_normals), appended to
+/// `edges` (its capacity reserved) in tree order: as a tree over them (build_levels) when `tree`,
+/// else in the order given. Each edge is written once, in its place, in parallel. Returns the
+/// tree's levels (none without a tree); `depth` receives their number.
+std::vector<std::pair<int, int>> append_tree_edges(const MeshEdgeSet& set, const TriangleMesh& mesh,
+                                                   const std::vector<int>& idx, const std::vector<char>& crease,
+                                                   bool face_normals, bool tree, int shape, bool always,
+                                                   const EdgeSetOptions& opt, std::vector<Edge>& edges,
+                                                   std::vector<ForestNode>& nodes, std::vector<int>& roots,
+                                                   int& depth) {
+  depth = 0;
+  const int ebase = int(edges.size()), n = int(idx.size());
+  std::vector<EdgeBoxRef> refs(static_cast<size_t>(n));
+  tbb::parallel_for(0, n, [&](int k) {
+    const MeshEdge& e = set.edges[size_t(idx[size_t(k)])];
+    refs[size_t(k)] = edge_box_ref(mesh.positions[size_t(e.v0)], mesh.positions[size_t(e.v1)], k);
+  });
+  std::vector<std::pair<int, int>> levels;
+  if (tree) levels = build_levels(refs, ebase, shape, always, opt, nodes, roots, depth);
+  edges.resize(size_t(ebase + n));
+  tbb::parallel_for(0, n, [&](int k) {
+    const int from = refs[size_t(k)].index;
+    Edge& e = edges[size_t(ebase + k)];
+    e = forest_edge(set, mesh, idx[size_t(from)]);
+    if (crease[size_t(from)]) {
+      e.crease = true;
+      e.smooth_crease = !face_normals;
+    }
+  });
+  node_extents(levels, nodes, edges);
+  return levels;
 }
 
-/// Appends a shape's always-candidate edges to `always`: set.always (boundary, non-manifold,
-/// inconsistent), then the creases of `in` (all of them for a flat-shaded shape), marked in
-/// is_crease (one entry per edge of `set`) and counted in st.creases. Returns how many it appended.
-int append_shape_always_edges(const ForestShapeInput& in, const MeshEdgeSet& set, std::vector<char>& is_crease,
-                              ForestShapeStats& st, std::vector<Edge>& always) {
-  const TriangleMesh& mesh = *in.mesh;
+/// A shape's always-candidate edges, as indices into set.edges (`idx`) with a crease mark each
+/// (`crease`): set.always (boundary, non-manifold, inconsistent), then the creases of `in` (all of
+/// them for a flat-shaded shape), also marked in is_crease (one entry per edge of `set`) and
+/// counted in st.creases.
+void shape_always_edges(const ForestShapeInput& in, const MeshEdgeSet& set, std::vector<char>& is_crease,
+                        ForestShapeStats& st, std::vector<int>& idx, std::vector<char>& crease) {
   const CreaseSet creases = crease_rule(in);
-  const size_t before = always.size();
-  for (int idx : set.always) always.push_back(forest_edge(set, mesh, idx));
-  for (size_t idx = 0; idx < set.edges.size(); ++idx) {
-    if (is_crease_class(set.edges[idx].cls, creases)) {
-      is_crease[idx] = 1;
-      always.push_back(forest_edge(set, mesh, int(idx)));
-      always.back().crease = true;
-      always.back().smooth_crease = !in.face_normals;
+  idx.assign(set.always.begin(), set.always.end());
+  crease.assign(idx.size(), 0);
+  for (size_t k = 0; k < set.edges.size(); ++k) {
+    if (is_crease_class(set.edges[k].cls, creases)) {
+      is_crease[k] = 1;
+      idx.push_back(int(k));
+      crease.push_back(1);
       ++st.creases;
     }
   }
-  return int(always.size() - before);
 }
 
 /// Counts nodes[nbase, end) into st.nodes, st.leaves and st.inner_nodes.
@@ -261,33 +318,35 @@ EdgeSet EdgeSet::build(std::span<const ForestShapeInput> shapes, const EdgeSetOp
     st.edges_kept = int(set.kept.size());
     // ---- always-candidate edges: boundary, non-manifold, inconsistent, and the creases
     std::vector<char> is_crease(set.edges.size(), 0);
+    std::vector<int> idx;
+    std::vector<char> crease;
+    shape_always_edges(in, set, is_crease, st, idx, crease);
+    st.edges_always = int(idx.size());
     const int abase = int(f.always_.size());
-    st.edges_always = append_shape_always_edges(in, set, is_crease, st, f.always_);
-    const int aend = int(f.always_.size());
-    if (aend - abase > opt.always_tree_min_edges) {
-      const int n0 = int(f.nodes_.size());
-      int always_depth = 0;
-      build_topology(f.always_, abase, aend, in.shape, /*always=*/true, opt, f.nodes_, f.always_roots_, always_depth);
+    const bool always_tree = st.edges_always > opt.always_tree_min_edges;
+    const int n0 = int(f.nodes_.size());
+    int always_depth = 0;
+    append_tree_edges(set, mesh, idx, crease, in.face_normals, always_tree, in.shape, /*always=*/true, opt, f.always_,
+                      f.nodes_, f.always_roots_, always_depth);
+    if (always_tree)
       st.always_nodes = int(f.nodes_.size()) - n0;
-    } else {
-      for (int i = abase; i < aend; ++i) f.loose_always_edges_.push_back(i);
-    }
+    else
+      for (int i = abase; i < int(f.always_.size()); ++i) f.loose_always_edges_.push_back(i);
 
     // ---- silhouette tree edges: the kept edges that are not creases (a flat-shaded shape has
-    // none: its crease branch covers silhouettes too)
-    const int ebase = int(f.edges_.size());
+    // none: its crease branch covers silhouettes too); their topology and B_p, L_w of every node
+    idx.clear();
     if (!in.face_normals)
-      for (int idx : set.kept)
-        if (!is_crease[size_t(idx)]) f.edges_.push_back(forest_edge(set, mesh, idx));
-    const int eend = int(f.edges_.size());
-    st.edges_kept = eend - ebase;
-
-    // ---- topology and B_p, L_w of every node
+      for (int k : set.kept)
+        if (!is_crease[size_t(k)]) idx.push_back(k);
+    crease.assign(idx.size(), 0);
+    st.edges_kept = int(idx.size());
     const int nbase = int(f.nodes_.size());
     int depth = 0;
     const size_t roots_before = f.roots_.size();
     ShapeTree tree;
-    tree.levels = build_topology(f.edges_, ebase, eend, in.shape, /*always=*/false, opt, f.nodes_, f.roots_, depth);
+    tree.levels = append_tree_edges(set, mesh, idx, crease, in.face_normals, /*tree=*/true, in.shape,
+                                    /*always=*/false, opt, f.edges_, f.nodes_, f.roots_, depth);
     f.trees_.push_back(std::move(tree));
     st.roots = int(f.roots_.size() - roots_before);
     st.depth = depth;

@@ -3,6 +3,7 @@
 
 #include "qsil/edgetree/mesh_edges.h"
 
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
 #include <algorithm>
@@ -47,33 +48,39 @@ MeshEdgeSet build_mesh_edges(const TriangleMesh& mesh, int shape, const EdgeOpti
   MeshEdgeSet out;
   const int T = mesh.num_triangles();
   out.face_planes.resize(T);
-  for (int f = 0; f < T; ++f) out.face_planes[f] = face_plane(mesh, f);
+  tbb::parallel_for(0, T, [&](int f) { out.face_planes[size_t(f)] = face_plane(mesh, f); });
 
-  std::vector<HalfEdge> half;
-  half.reserve(size_t(3) * T);
-  for (int f = 0; f < T; ++f) {
-    const auto& t = mesh.triangles[f];
+  std::vector<HalfEdge> half(size_t(3) * T);
+  tbb::parallel_for(0, T, [&](int f) {
+    const auto& t = mesh.triangles[size_t(f)];
     for (int k = 0; k < 3; ++k) {
       const int u = t[k], v = t[(k + 1) % 3];
-      half.push_back({std::min(u, v), std::max(u, v), f, u < v});
+      half[size_t(3) * f + k] = {std::min(u, v), std::max(u, v), f, u < v};
     }
-  }
+  });
   tbb::parallel_sort(half.begin(), half.end());
 
-  for (size_t i = 0; i < half.size();) {
-    size_t j = i;
-    while (j < half.size() && half[j].a == half[i].a && half[j].b == half[i].b) ++j;
-    const int nf = int(j - i);
-    MeshEdge e;
+  // An edge per run of half-edges with one key: the runs first, then the edges from them in
+  // parallel (each from its run alone), so that the array is written once at its final size.
+  std::vector<size_t> run;  // first half-edge of every edge, then half.size()
+  run.reserve(half.size() / 2 + 1);
+  for (size_t i = 0; i < half.size(); ++i)
+    if (i == 0 || half[i].a != half[i - 1].a || half[i].b != half[i - 1].b) run.push_back(i);
+  run.push_back(half.size());
+  out.edges.resize(run.size() - 1);
+  tbb::parallel_for(size_t(0), out.edges.size(), [&](size_t k) {
+    const size_t i = run[k];
+    const int nf = int(run[k + 1] - i);
+    MeshEdge& e = out.edges[k];
     e.v0 = half[i].a;
     e.v1 = half[i].b;
     e.shape = shape;
     e.f0 = half[i].face;
-    e.q0 = out.face_planes[e.f0];
-    e.length = (mesh.positions[e.v1] - mesh.positions[e.v0]).norm();
+    e.q0 = out.face_planes[size_t(e.f0)];
+    e.length = (mesh.positions[size_t(e.v1)] - mesh.positions[size_t(e.v0)]).norm();
     if (nf >= 2) {
       e.f1 = half[i + 1].face;
-      e.q1 = out.face_planes[e.f1];
+      e.q1 = out.face_planes[size_t(e.f1)];
     }
     if (nf == 1) {
       e.cls = EdgeClass::Boundary;
@@ -84,18 +91,18 @@ MeshEdgeSet build_mesh_edges(const TriangleMesh& mesh, int shape, const EdgeOpti
     } else {
       e.cls = classify_interior_edge(mesh, e);
     }
-    out.counts[static_cast<int>(e.cls)]++;
-    const int idx = int(out.edges.size());
-    switch (e.cls) {
-      case EdgeClass::Convex: out.kept.push_back(idx); break;
+  });
+  for (size_t k = 0; k < out.edges.size(); ++k) {
+    const EdgeClass cls = out.edges[k].cls;
+    out.counts[static_cast<int>(cls)]++;
+    switch (cls) {
+      case EdgeClass::Convex: out.kept.push_back(int(k)); break;
       case EdgeClass::Concave:
-        if (options.keep_concave) out.kept.push_back(idx);
+        if (options.keep_concave) out.kept.push_back(int(k));
         break;
       case EdgeClass::Flat: break;
-      default: out.always.push_back(idx); break;
+      default: out.always.push_back(int(k)); break;
     }
-    out.edges.push_back(e);
-    i = j;
   }
   return out;
 }

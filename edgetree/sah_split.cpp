@@ -3,12 +3,59 @@
 
 #include "sah_split.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+
 #include <algorithm>
 #include <vector>
 
 namespace qsil::edgetree {
 
 namespace {
+
+/// Per-bucket edge counts and boxes (empty until the first edge).
+struct Buckets {
+  std::vector<int> cnt;
+  std::vector<Box3> box;
+  Buckets() = default;
+  explicit Buckets(int b) : cnt(size_t(b), 0), box(size_t(b)) {}
+  void join(const Buckets& o) {
+    if (o.cnt.empty()) return;
+    if (cnt.empty()) {
+      *this = o;
+      return;
+    }
+    for (size_t k = 0; k < cnt.size(); ++k) {
+      cnt[k] += o.cnt[k];
+      box[k].expand(o.box[k]);
+    }
+  }
+};
+
+void join(Box3& a, const Box3& b) { a.expand(b); }
+void join(Buckets& a, const Buckets& b) { a.join(b); }
+
+/// `add`(edge, acc) over every edge into a default-constructed T, in parallel when asked; T's
+/// join must be commutative and associative (exactly: the result may not depend on the order).
+template <class T, class Add>
+T reduce(std::span<const EdgeBoxRef> edges, bool parallel, const Add& add) {
+  if (!parallel) {
+    T acc;
+    for (const auto& e : edges) add(e, acc);
+    return acc;
+  }
+  return tbb::parallel_reduce(
+      tbb::blocked_range<size_t>(0, edges.size(), 4096), T(),
+      [&](const tbb::blocked_range<size_t>& r, T acc) {
+        for (size_t i = r.begin(); i < r.end(); ++i) add(edges[i], acc);
+        return acc;
+      },
+      [](T a, const T& b) {
+        join(a, b);
+        return a;
+      });
+}
+
 double box_area(const Box3& b) {
   if (b.empty()) return 0.0;
   const Vec3 e = b.extent();
@@ -16,10 +63,13 @@ double box_area(const Box3& b) {
 }
 }  // namespace
 
-int sah_split(std::span<EdgeBoxRef> edges, int buckets) {
+int sah_split(std::span<EdgeBoxRef> edges, int buckets, int parallel_from) {
   const int n = int(edges.size());
-  Box3 cb;
-  for (const auto& e : edges) cb.expand(0.5 * (e.lo + e.hi));
+  // The two passes over a large range (the top levels, which a level's parallel loop does not
+  // split) run in parallel: a box of exact minima and maxima (finite coordinates) and integer
+  // counts do not depend on the order of their terms, so the split is the serial one.
+  const bool parallel = n >= parallel_from;
+  const Box3 cb = reduce<Box3>(edges, parallel, [](const EdgeBoxRef& e, Box3& b) { b.expand(0.5 * (e.lo + e.hi)); });
   int axis = 0;
   cb.extent().maxCoeff(&axis);
   const double lo = cb.lo[axis], ext = cb.hi[axis] - cb.lo[axis];
@@ -37,14 +87,15 @@ int sah_split(std::span<EdgeBoxRef> edges, int buckets) {
     const double c = 0.5 * (e.lo[axis] + e.hi[axis]);
     return std::clamp(int(B * ((c - lo) / ext)), 0, B - 1);
   };
-  std::vector<int> cnt(B, 0);
-  std::vector<Box3> box(B);
-  for (const auto& e : edges) {
+  const Buckets bk = reduce<Buckets>(edges, parallel, [&](const EdgeBoxRef& e, Buckets& b) {
+    if (b.cnt.empty()) b = Buckets(B);
     const int k = bucket_of(e);
-    cnt[k]++;
-    box[k].expand(e.lo);
-    box[k].expand(e.hi);
-  }
+    b.cnt[k]++;
+    b.box[k].expand(e.lo);
+    b.box[k].expand(e.hi);
+  });
+  const std::vector<int> cnt = bk.cnt.empty() ? std::vector<int>(B, 0) : bk.cnt;
+  const std::vector<Box3> box = bk.box.empty() ? std::vector<Box3>(B) : bk.box;
   // Sweep: prefix from the left, suffix from the right.
   std::vector<double> left_cost(B, 0.0);
   std::vector<int> left_n(B, 0);

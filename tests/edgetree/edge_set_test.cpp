@@ -6,6 +6,7 @@
 /// and belongs to its shape, in a scene of several shapes of very different sizes.
 
 #include "qsil/edgetree/edge_set.h"
+#include "edgetree/sah_split.h"
 #include "qsil/scene.h"
 
 #include <gtest/gtest.h>
@@ -13,6 +14,8 @@
 #include <tbb/global_control.h>
 
 #include <algorithm>
+#include <climits>
+#include <cmath>
 #include <numeric>
 #include <random>
 #include <vector>
@@ -74,6 +77,36 @@ TEST(EdgeSetHierarchy, DoesNotDependOnTheThreadCount) {
       EXPECT_EQ(one.always_edges()[k].p0, two.always_edges()[k].p0);
       EXPECT_EQ(one.always_edges()[k].p1, two.always_edges()[k].p1);
     }
+  }
+}
+
+TEST(SahSplit, ParallelScanSplitsAsTheSerialOne) {
+  // 100 000 edges (above kParallelSplitEdges) whose density grows along x, in x order (so that a
+  // scan's chunks are slabs: a chunk counted wrongly moves the best split), split by the serial
+  // and by the parallel scan (2 threads): the same first part, and the same order of records.
+  tbb::global_control gc(tbb::global_control::max_allowed_parallelism, 2);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::vector<double> xs(100000);
+  for (double& x : xs) x = std::sqrt(0.5 * (u(rng) + 1.0));
+  std::sort(xs.begin(), xs.end());
+  std::vector<EdgeBoxRef> refs;
+  for (size_t k = 0; k < xs.size(); ++k) {
+    const Vec3 c(xs[k], 0.3 * u(rng), 0.3 * u(rng));
+    const Vec3 d = 0.01 * Vec3(u(rng), u(rng), u(rng));
+    refs.push_back(edge_box_ref(Vec3(c - d), Vec3(c + d), int(k)));
+  }
+  ASSERT_GE(int(refs.size()), kParallelSplitEdges);
+  for (int buckets : {2, 10, 32}) {
+    std::vector<EdgeBoxRef> serial = refs, parallel = refs;
+    const int m_serial = sah_split(serial, buckets, INT_MAX);
+    const int m_parallel = sah_split(parallel, buckets, 1);
+    EXPECT_EQ(m_serial, m_parallel) << buckets << " buckets";
+    EXPECT_GT(m_serial, 0);
+    EXPECT_LT(m_serial, int(refs.size()));
+    bool same = true;
+    for (size_t k = 0; k < refs.size(); ++k) same = same && serial[k].index == parallel[k].index;
+    EXPECT_TRUE(same) << buckets << " buckets";
   }
 }
 
