@@ -6,6 +6,8 @@
 #include "qsil/error.h"
 #include "qsil/vertex_normals.h"
 
+#include <tbb/parallel_for.h>
+
 #include <sstream>
 
 namespace qsil {
@@ -144,16 +146,23 @@ SceneVelocities compute_velocities(const Scene& scene, const std::vector<Paramet
   v.position.resize(scene.shapes.size());
   v.normal.resize(scene.shapes.size());
   v.moving.assign(scene.shapes.size(), false);
+  // The arrays are zeroed, filled and lifted in parallel (per vertex; a million-vertex mesh's
+  // arrays are hundreds of MB, whose first touch is most of their cost).
   for (size_t s = 0; s < scene.shapes.size(); ++s) {
-    const TriangleMesh& mesh = scene.shapes[s].mesh;
-    v.position[s].assign(mesh.positions.size(), SceneVelocities::Block::Zero());
-    v.normal[s].assign(mesh.positions.size(), SceneVelocities::Block::Zero());
+    const size_t n = scene.shapes[s].mesh.positions.size();
+    v.position[s].resize(n);  // uninitialised (a fixed-size Eigen matrix), zeroed below
+    v.normal[s].resize(n);
+    tbb::parallel_for(size_t(0), n, [&](size_t i) {
+      v.position[s][i].setZero();
+      v.normal[s][i].setZero();
+    });
   }
   for (size_t k = 0; k < params.size(); ++k) {
     const ParameterSpec& p = params[k];
     const TriangleMesh& mesh = scene.shapes[p.shape].mesh;
     auto& vel = v.position[p.shape];
-    for (int i = 0; i < mesh.num_vertices(); ++i) vel[i].col(k) = vertex_velocity(p, i, mesh.positions[i]);
+    tbb::parallel_for(0, mesh.num_vertices(),
+                      [&](int i) { vel[size_t(i)].col(k) = vertex_velocity(p, i, mesh.positions[size_t(i)]); });
     v.moving[p.shape] = true;
   }
   // Normal velocities: forward-mode derivative of the area-weighted vertex normals.
@@ -161,7 +170,8 @@ SceneVelocities compute_velocities(const Scene& scene, const std::vector<Paramet
     if (!v.moving[s] || scene.shapes[s].face_normals) continue;
     const TriangleMesh& mesh = scene.shapes[s].mesh;
     std::vector<Vec3T<Dual<kMaxParameters>>> pos(mesh.positions.size());
-    for (size_t i = 0; i < pos.size(); ++i) pos[i] = lift<kMaxParameters>(mesh.positions[i], v.position[s][i]);
+    tbb::parallel_for(size_t(0), pos.size(),
+                      [&](size_t i) { pos[i] = lift<kMaxParameters>(mesh.positions[i], v.position[s][i]); });
     const auto n = vertex_normals_t(mesh, pos);
     for (size_t i = 0; i < n.size(); ++i)
       for (int r = 0; r < 3; ++r) v.normal[s][i].row(r) = n[i][r].derivatives().transpose();

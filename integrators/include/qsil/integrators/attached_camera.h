@@ -43,10 +43,13 @@
 #include "qsil/integrators/path_tracer.h"
 #include "qsil/scene.h"
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <queue>
+#include <span>
 #include <string>
 #include <type_traits>
 #include <utility>
@@ -197,18 +200,38 @@ struct CameraAttachment {
   }
 };
 
+/// The vertices next to each vertex of a mesh, compressed: vertex v's are next[first[v]] ..
+/// next[first[v + 1] - 1], one entry per triangle edge at v (an interior edge is listed twice), in
+/// triangle order.
+struct VertexNeighbours {
+  std::vector<int> first;  ///< num_vertices + 1 offsets into next
+  std::vector<int> next;   ///< 6 per triangle
+  explicit VertexNeighbours(const TriangleMesh& m) : first(m.positions.size() + 1, 0) {
+    for (const Eigen::Vector3i& t : m.triangles)
+      for (int k = 0; k < 3; ++k) first[size_t(t[k]) + 1] += 2;
+    for (size_t v = 1; v < first.size(); ++v) first[v] += first[v - 1];
+    next.resize(size_t(first.back()));
+    std::vector<int> fill(first.begin(), first.end() - 1);
+    for (const Eigen::Vector3i& t : m.triangles)
+      for (int e = 0; e < 3; ++e) {
+        const int i = t[e], j = t[(e + 1) % 3];
+        next[size_t(fill[size_t(i)]++)] = j;
+        next[size_t(fill[size_t(j)]++)] = i;
+      }
+  }
+  std::span<const int> of(int v) const {
+    return {next.data() + first[size_t(v)], size_t(first[size_t(v) + 1] - first[size_t(v)])};
+  }
+};
+
 /// Raises `a` (per vertex of `m`, in [0, 1]) to its smallest values with a_j >= a_i - len_ij /
-/// (pixel_i kAttachedRampPixels) along every edge (i, j) of `m`, pixel_i > 0 (pixel: a pixel's
-/// width at each vertex, scene units; 0 behind the camera, where a vertex raises no neighbour).
-/// Best-first from the strongest vertex (Dijkstra's order on 1 - a), O(E log V).
-inline void attachment_ramp(const TriangleMesh& m, const std::vector<double>& pixel, std::vector<double>& a) {
+/// (pixel_i kAttachedRampPixels) along every edge (i, j) of `m` (`next`: its vertices'
+/// neighbours), pixel_i > 0 (pixel: a pixel's width at each vertex, scene units; 0 behind the
+/// camera, where a vertex raises no neighbour). Best-first from the strongest vertex (Dijkstra's
+/// order on 1 - a), O(E log V).
+inline void attachment_ramp(const TriangleMesh& m, const VertexNeighbours& next, const std::vector<double>& pixel,
+                            std::vector<double>& a) {
   const size_t n = m.positions.size();
-  std::vector<std::vector<int>> next(n);
-  for (const Eigen::Vector3i& t : m.triangles)
-    for (int e = 0; e < 3; ++e) {
-      next[size_t(t[e])].push_back(t[(e + 1) % 3]);
-      next[size_t(t[(e + 1) % 3])].push_back(t[e]);
-    }
   std::priority_queue<std::pair<double, int>> queue;
   for (size_t v = 0; v < n; ++v)
     if (a[v] > 0) queue.push({a[v], int(v)});
@@ -216,7 +239,7 @@ inline void attachment_ramp(const TriangleMesh& m, const std::vector<double>& pi
     const auto [value, i] = queue.top();
     queue.pop();
     if (value < a[size_t(i)] || !(pixel[size_t(i)] > 0)) continue;  // stale entry, or behind the camera
-    for (const int j : next[size_t(i)]) {
+    for (const int j : next.of(i)) {
       const double len = (m.positions[size_t(i)] - m.positions[size_t(j)]).norm();
       const double raised = value - len / (pixel[size_t(i)] * kAttachedRampPixels);
       if (raised > a[size_t(j)]) {
@@ -247,32 +270,31 @@ inline CameraAttachment camera_attachment(const Scene& scene, const std::vector<
     const bool diffuse = b.type == BSDFDesc::Type::Diffuse;
     const double alpha = diffuse ? kDiffuseLobeWidth : std::max(b.alpha, 1e-3);
     const TriangleMesh& m = shape.mesh;
-    std::vector<double> pixel(m.positions.size(), 0.0);  // s: a pixel's width at the vertex (0 behind)
-    for (size_t v = 0; v < pixel.size(); ++v)
-      pixel[v] = std::max(0.0, cam.to_camera(m.positions[v]).z()) * pixel_angle;
-    std::vector<double> turn(m.positions.size(), 0.0);
-    for (const Eigen::Vector3i& t : m.triangles)
-      for (int e = 0; e < 3; ++e) {
-        const int i = t[e], j = t[(e + 1) % 3];
-        const double len = (m.positions[size_t(i)] - m.positions[size_t(j)]).norm();
-        const Vec3 &ni = m.normals[size_t(i)], &nj = m.normals[size_t(j)];
+    const VertexNeighbours next(m);
+    // Per vertex, in parallel: s, a pixel's width at the vertex (0 behind), then the turn (the
+    // largest over its edges; an edge's length and angle are the same from either end, bit for bit)
+    // and the strength before the ramp.
+    std::vector<double> pixel(m.positions.size(), 0.0);
+    tbb::parallel_for(size_t(0), pixel.size(),
+                      [&](size_t v) { pixel[v] = std::max(0.0, cam.to_camera(m.positions[v]).z()) * pixel_angle; });
+    std::vector<double> a(m.positions.size(), 0.0);
+    tbb::parallel_for(0, int(a.size()), [&](int v) {
+      const double sv = pixel[size_t(v)];
+      double turn = 0.0;
+      for (const int j : next.of(v)) {
+        const double len = (m.positions[size_t(v)] - m.positions[size_t(j)]).norm();
+        const Vec3 &ni = m.normals[size_t(v)], &nj = m.normals[size_t(j)];
         const double angle = std::atan2(ni.cross(nj).norm(), ni.dot(nj));
         if (!(len > 0)) continue;
-        for (const int v : {i, j}) {
-          const double sv = pixel[size_t(v)];
-          turn[size_t(v)] = std::max(turn[size_t(v)], diffuse ? angle * std::min(std::sqrt(sv / len), sv / len) : angle * sv / len);
-        }
+        turn = std::max(turn, diffuse ? angle * std::min(std::sqrt(sv / len), sv / len) : angle * sv / len);
       }
-    std::vector<double> a(m.positions.size(), 0.0);
-    bool any = false;
-    for (size_t v = 0; v < a.size(); ++v) {
-      if (!(pixel[v] > 0)) continue;
-      const double x = std::clamp((turn[v] / alpha - kAttachedTurnStart) / (kAttachedTurnFull - kAttachedTurnStart),
-                                  0.0, 1.0);
-      a[v] = x * x * (3.0 - 2.0 * x);
-      any = any || a[v] > 0;
-    }
-    if (any) attachment_ramp(m, pixel, a);
+      if (!(sv > 0)) return;
+      const double x =
+          std::clamp((turn / alpha - kAttachedTurnStart) / (kAttachedTurnFull - kAttachedTurnStart), 0.0, 1.0);
+      a[size_t(v)] = x * x * (3.0 - 2.0 * x);
+    });
+    const bool any = std::any_of(a.begin(), a.end(), [](double x) { return x > 0; });
+    if (any) attachment_ramp(m, next, pixel, a);
     if (any) out.strength[s] = std::move(a);
   }
   return out;
