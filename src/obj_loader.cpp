@@ -11,11 +11,14 @@
 #define TINYOBJLOADER_IMPLEMENTATION
 #include <tiny_obj_loader.h>
 
+#include <tbb/parallel_sort.h>
+
 #include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
 #include <fstream>
+#include <numeric>
 #include <string_view>
 #include <system_error>
 #include <unordered_map>
@@ -25,16 +28,6 @@ namespace qsil {
 std::vector<Vec3> vertex_normals(const TriangleMesh& mesh) { return vertex_normals_t<double>(mesh, mesh.positions); }
 
 namespace {
-
-/// Hash of a position for welding. Positions equal under == weld, so -0.0 and 0.0 must hash alike
-/// (x + 0.0 is +0.0 for both); coordinates are finite here (checked before welding).
-struct PositionHash {
-  size_t operator()(const std::array<double, 3>& p) const {
-    size_t h = 0;
-    for (double x : p) h = h * 0x9E3779B97F4A7C15ull + std::hash<double>{}(x + 0.0);
-    return h;
-  }
-};
 
 /// Hash of a (position index, normal index) pair.
 struct IndexPairHash {
@@ -115,11 +108,38 @@ TriangleMesh load_obj(const std::filesystem::path& path, bool weld, std::vector<
   // Welding: identical positions map to one vertex, so that faces on either side of a UV or
   // normal seam share their edge (the edge forest needs mesh adjacency). Without welding, each
   // distinct (position, normal) index pair becomes a vertex.
-  // Hash maps (vertices are numbered in the order first met, as before with ordered maps).
-  std::unordered_map<std::array<double, 3>, int, PositionHash> by_position;
+  // Vertices are numbered in the order first met. Welding: the file's vertices sorted by position
+  // (in parallel; ties by index), so that each run of equal positions (==: -0.0 and 0.0 alike)
+  // names its first vertex as every member's representative; a face corner then finds its mesh
+  // vertex by the representative's index.
+  std::vector<int> representative, welded;
+  if (weld) {
+    const auto& xs = attrib.vertices;
+    auto less = [&](int a, int b) {
+      for (int c = 0; c < 3; ++c) {
+        const double u = xs[3 * size_t(a) + c], v = xs[3 * size_t(b) + c];
+        if (u < v) return true;
+        if (v < u) return false;
+      }
+      return a < b;
+    };
+    auto same = [&](int a, int b) {
+      return xs[3 * size_t(a)] == xs[3 * size_t(b)] && xs[3 * size_t(a) + 1] == xs[3 * size_t(b) + 1] &&
+             xs[3 * size_t(a) + 2] == xs[3 * size_t(b) + 2];
+    };
+    std::vector<int> order(nv);
+    std::iota(order.begin(), order.end(), 0);
+    tbb::parallel_sort(order.begin(), order.end(), less);
+    representative.resize(nv);
+    for (size_t k = 0; k < nv;) {
+      size_t j = k;
+      while (j < nv && same(order[j], order[k])) representative[size_t(order[j++])] = order[k];
+      k = j;
+    }
+    welded.assign(nv, -1);
+  }
   std::unordered_map<std::pair<int, int>, int, IndexPairHash> by_pair;
-  by_position.reserve(nv);
-  by_pair.reserve(nv);
+  if (!weld) by_pair.reserve(nv);
   auto vertex_of = [&](const tinyobj::index_t& idx) -> int {
     if (idx.vertex_index < 0 || size_t(idx.vertex_index) >= nv)
       throw Error(name + ": face refers to vertex " + std::to_string(idx.vertex_index + 1) + " of " +
@@ -127,9 +147,12 @@ TriangleMesh load_obj(const std::filesystem::path& path, bool weld, std::vector<
     const Vec3 p(attrib.vertices[3 * idx.vertex_index], attrib.vertices[3 * idx.vertex_index + 1],
                  attrib.vertices[3 * idx.vertex_index + 2]);
     if (weld) {
-      auto [it, inserted] = by_position.try_emplace({p.x(), p.y(), p.z()}, mesh.num_vertices());
-      if (inserted) mesh.positions.push_back(p);
-      return it->second;
+      int& v = welded[size_t(representative[size_t(idx.vertex_index)])];
+      if (v < 0) {
+        v = mesh.num_vertices();
+        mesh.positions.push_back(p);
+      }
+      return v;
     }
     const int nidx = has_normals ? idx.normal_index : -1;
     auto [it, inserted] = by_pair.try_emplace({idx.vertex_index, nidx}, mesh.num_vertices());
@@ -143,6 +166,9 @@ TriangleMesh load_obj(const std::filesystem::path& path, bool weld, std::vector<
     }
     return it->second;
   };
+  size_t corners = 0;
+  for (const auto& shape : shapes) corners += shape.mesh.indices.size();
+  mesh.triangles.reserve(corners / 3);
   size_t degenerate = 0;
   for (const auto& shape : shapes) {
     const auto& ids = shape.mesh.indices;
