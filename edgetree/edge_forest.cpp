@@ -20,28 +20,39 @@ namespace {
 /// together hold every edge: fresh arrays would be allocated, first touched and freed at every
 /// level).
 struct FitScratch {
-  std::vector<std::pair<int, const Vec4*>> faces;  // (face, its plane)
+  std::vector<std::pair<int, const Vec4*>> faces;  // (face, its plane), each face once
   std::vector<Wedge> wedges;
   std::vector<Vec4> planes;
+  std::vector<int> stamp;  // per face + 1: the last node (`node`) that listed it
+  int node = 0;
 };
 
 // Fits one inner node from its edge range: its wedges, and its unique face planes in face order
 // (faces identified by index within the shape; each edge carries its faces' planes).
 NodeFit fit_range(const std::vector<Edge>& edges, const ForestNode& n, const NodeFit* parent, const NodeFitOptions& opt,
                   FitScratch& scratch) {
-  auto& [faces, wedges, planes] = scratch;
+  auto& [faces, wedges, planes, stamp, node] = scratch;
   faces.clear();
   wedges.clear();
   planes.clear();
+  ++node;
+  // A face is listed once, by its first edge (every edge of a face carries the same plane); the
+  // faces are then sorted, a third as many as the edges' two sides.
+  auto list = [&](int face, const Vec4& plane) {
+    const size_t k = size_t(face + 1);  // a missing face is -1
+    if (k >= stamp.size()) stamp.resize(std::max(k + 1, 2 * stamp.size()), 0);
+    if (stamp[k] == node) return;
+    stamp[k] = node;
+    faces.push_back({face, &plane});
+  };
   for (int i = n.edge_begin; i < n.edge_end; ++i) {
     const Edge& e = edges[size_t(i)];
-    faces.push_back({e.f0, &e.q0});
-    faces.push_back({e.f1, &e.q1});
+    list(e.f0, e.q0);
+    list(e.f1, e.q1);
     wedges.push_back({e.q0, e.q1});
   }
   std::sort(faces.begin(), faces.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-  for (size_t j = 0; j < faces.size(); ++j)
-    if (j == 0 || faces[j].first != faces[j - 1].first) planes.push_back(*faces[j].second);
+  for (const auto& f : faces) planes.push_back(*f.second);
   return fit_node(planes, wedges, n.bp, parent, opt);
 }
 
