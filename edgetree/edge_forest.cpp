@@ -68,16 +68,17 @@ EdgeForest EdgeForest::build(std::span<const ForestShapeInput> shapes, const For
 EdgeForest EdgeForest::fit(EdgeSet set, const NodeFitOptions& options) {
   EdgeForest f;
   static_cast<EdgeSet&>(f) = std::move(set);
+  size_t inner = 0;  // every tree's inner nodes: the bounds' array is sized once
+  for (const ShapeTree& tree : f.trees_)
+    for (auto [lb, le] : tree.levels)
+      for (int i = lb; i < le; ++i) inner += f.nodes_[size_t(i)].is_leaf() ? 0 : 1;
+  f.bounds_.reserve(f.bounds_.size() + inner);
   for (size_t s = 0; s < f.trees_.size(); ++s) {
     const auto t0 = std::chrono::steady_clock::now();
     const ShapeTree& tree = f.trees_[s];
     ForestShapeStats& st = f.stats_[s];
     // ---- a bound slot per inner node, in node order
     const int bbase = int(f.bounds_.size());
-    int inner = 0;
-    for (auto [lb, le] : tree.levels)
-      for (int i = lb; i < le; ++i) inner += f.nodes_[size_t(i)].is_leaf() ? 0 : 1;
-    f.bounds_.reserve(f.bounds_.size() + size_t(inner));
     for (auto [lb, le] : tree.levels)
       for (int i = lb; i < le; ++i)
         if (!f.nodes_[size_t(i)].is_leaf()) {

@@ -28,7 +28,7 @@ std::uint64_t triangle_hash(const TriangleMesh& mesh) {
 CreaseSet crease_rule(const ForestShapeInput& in) { return in.face_normals ? CreaseSet::All : in.creases; }
 
 /// Whether an interior edge of class `cls` is a crease under rule `creases` (as
-/// append_shape_always_edges decides).
+/// shape_always_edges decides).
 bool is_crease_class(EdgeClass cls, CreaseSet creases) {
   return (cls == EdgeClass::Concave && creases != CreaseSet::None) ||
          (cls == EdgeClass::Convex && creases == CreaseSet::All);
@@ -113,13 +113,13 @@ Edge forest_edge(const MeshEdgeSet& set, const TriangleMesh& mesh, int idx) {
   return fe;
 }
 
-/// Top-down 4-wide topology over the edges of `refs` (their boxes; refs[k].index = k, the edge
-/// at position ebase + k of the tree's edge array), appended to `nodes` breadth-first so that
-/// every level is a contiguous node range; the root is discarded, its children become `roots`.
-/// Nodes of an always-candidate tree carry kNodeAlways. On return refs is in leaf order: the edge
-/// at ebase + refs[k].index goes to ebase + k; the nodes' B_p and L_w are not set (node_extents,
-/// once the edges are there). Returns the node range of every level; `depth` receives the number
-/// of levels.
+/// Top-down 4-wide topology over the edges of `refs` (their boxes, refs[k].index = k: the tree's
+/// k-th edge, which will sit at position ebase + k of the tree's edge array once in leaf order),
+/// appended to `nodes` breadth-first so that every level is a contiguous node range; the root is
+/// discarded, its children become `roots`. Nodes of an always-candidate tree carry kNodeAlways. On
+/// return refs is in leaf order: the edge that was k-th as given (k = refs[j].index) goes to
+/// ebase + j; the nodes' B_p and L_w are not set (node_extents, once the edges are there). Returns the node range of
+/// every level; `depth` receives the number of levels.
 std::vector<std::pair<int, int>> build_levels(std::vector<EdgeBoxRef>& refs, int ebase, int shape, bool always,
                                               const EdgeSetOptions& opt, std::vector<ForestNode>& nodes,
                                               std::vector<int>& roots, int& depth) {

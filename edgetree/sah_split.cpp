@@ -35,8 +35,9 @@ struct Buckets {
 void join(Box3& a, const Box3& b) { a.expand(b); }
 void join(Buckets& a, const Buckets& b) { a.join(b); }
 
-/// `add`(edge, acc) over every edge into a default-constructed T, in parallel when asked; T's
-/// join must be commutative and associative (exactly: the result may not depend on the order).
+/// `add`(edge, acc) over every edge into a default-constructed T, in parallel when asked (the
+/// deterministic reduction: the same chunks and joins whatever the threads do); T's join must be
+/// commutative and associative (exactly, for finite coordinates: the result is the serial one).
 template <class T, class Add>
 T reduce(std::span<const EdgeBoxRef> edges, bool parallel, const Add& add) {
   if (!parallel) {
@@ -44,7 +45,7 @@ T reduce(std::span<const EdgeBoxRef> edges, bool parallel, const Add& add) {
     for (const auto& e : edges) add(e, acc);
     return acc;
   }
-  return tbb::parallel_reduce(
+  return tbb::parallel_deterministic_reduce(
       tbb::blocked_range<size_t>(0, edges.size(), 4096), T(),
       [&](const tbb::blocked_range<size_t>& r, T acc) {
         for (size_t i = r.begin(); i < r.end(); ++i) add(edges[i], acc);

@@ -40,7 +40,9 @@ inline EdgeBoxRef edge_box_ref(const Edge& e, int index) { return edge_box_ref(e
 /// area(box of part A) * |A| + area(box of part B) * |B|, with boxes of the edges' endpoints.
 /// If every centroid falls in one bucket (or the centroids coincide), splits at the median along
 /// that axis (ties broken by the original order). Deterministic: a range of `parallel_from` edges
-/// or more is scanned in parallel with the same result (the partition itself is serial).
+/// or more is scanned in parallel, in the same chunks whatever the threads do, and with finite
+/// coordinates (minima, maxima and counts do not depend on order) with the serial scan's result;
+/// the partition itself is serial.
 int sah_split(std::span<EdgeBoxRef> edges, int buckets = 10, int parallel_from = kParallelSplitEdges);
 
 }  // namespace qsil::edgetree

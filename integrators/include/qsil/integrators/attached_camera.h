@@ -48,6 +48,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <queue>
 #include <span>
 #include <string>
@@ -206,7 +207,11 @@ struct CameraAttachment {
 struct VertexNeighbours {
   std::vector<int> first;  ///< num_vertices + 1 offsets into next
   std::vector<int> next;   ///< 6 per triangle
+  /// Throws qsil::Error for a mesh of more than INT_MAX / 6 triangles (int offsets).
   explicit VertexNeighbours(const TriangleMesh& m) : first(m.positions.size() + 1, 0) {
+    if (m.triangles.size() > size_t(std::numeric_limits<int>::max() / 6))
+      throw Error("camera attachment: " + std::to_string(m.triangles.size()) +
+                  " triangles in one mesh, more than its neighbour table holds");
     for (const Eigen::Vector3i& t : m.triangles)
       for (int k = 0; k < 3; ++k) first[size_t(t[k]) + 1] += 2;
     for (size_t v = 1; v < first.size(); ++v) first[v] += first[v - 1];
@@ -272,8 +277,9 @@ inline CameraAttachment camera_attachment(const Scene& scene, const std::vector<
     const TriangleMesh& m = shape.mesh;
     const VertexNeighbours next(m);
     // Per vertex, in parallel: s, a pixel's width at the vertex (0 behind), then the turn (the
-    // largest over its edges; an edge's length and angle are the same from either end, bit for bit)
-    // and the strength before the ramp.
+    // largest over its edges; an edge's length and angle are taken from its smaller vertex index,
+    // so that both ends see the same numbers under any floating-point contraction) and the
+    // strength before the ramp.
     std::vector<double> pixel(m.positions.size(), 0.0);
     tbb::parallel_for(size_t(0), pixel.size(),
                       [&](size_t v) { pixel[v] = std::max(0.0, cam.to_camera(m.positions[v]).z()) * pixel_angle; });
@@ -282,8 +288,9 @@ inline CameraAttachment camera_attachment(const Scene& scene, const std::vector<
       const double sv = pixel[size_t(v)];
       double turn = 0.0;
       for (const int j : next.of(v)) {
-        const double len = (m.positions[size_t(v)] - m.positions[size_t(j)]).norm();
-        const Vec3 &ni = m.normals[size_t(v)], &nj = m.normals[size_t(j)];
+        const int lo = std::min(v, j), hi = std::max(v, j);
+        const double len = (m.positions[size_t(lo)] - m.positions[size_t(hi)]).norm();
+        const Vec3 &ni = m.normals[size_t(lo)], &nj = m.normals[size_t(hi)];
         const double angle = std::atan2(ni.cross(nj).norm(), ni.dot(nj));
         if (!(len > 0)) continue;
         turn = std::max(turn, diffuse ? angle * std::min(std::sqrt(sv / len), sv / len) : angle * sv / len);
