@@ -13,40 +13,33 @@ namespace qsil::edgetree {
 
 namespace {
 
-/// Per-bucket edge counts and boxes (empty until the first edge).
+/// Per-bucket edge counts and boxes.
 struct Buckets {
   std::vector<int> cnt;
   std::vector<Box3> box;
-  Buckets() = default;
   explicit Buckets(int b) : cnt(size_t(b), 0), box(size_t(b)) {}
-  void join(const Buckets& o) {
-    if (o.cnt.empty()) return;
-    if (cnt.empty()) {
-      *this = o;
-      return;
-    }
-    for (size_t k = 0; k < cnt.size(); ++k) {
-      cnt[k] += o.cnt[k];
-      box[k].expand(o.box[k]);
-    }
-  }
 };
 
 void join(Box3& a, const Box3& b) { a.expand(b); }
-void join(Buckets& a, const Buckets& b) { a.join(b); }
+void join(Buckets& a, const Buckets& b) {
+  for (size_t k = 0; k < a.cnt.size(); ++k) {
+    a.cnt[k] += b.cnt[k];
+    a.box[k].expand(b.box[k]);
+  }
+}
 
-/// `add`(edge, acc) over every edge into a default-constructed T, in parallel when asked (the
-/// deterministic reduction: the same chunks and joins whatever the threads do); T's join must be
-/// commutative and associative (exactly, for finite coordinates: the result is the serial one).
+/// `add`(edge, acc) over every edge into `identity`, in parallel when asked (the deterministic
+/// reduction: the same chunks and joins whatever the threads do); T's join must be commutative and
+/// associative (exactly, for finite coordinates: the result is the serial one).
 template <class T, class Add>
-T reduce(std::span<const EdgeBoxRef> edges, bool parallel, const Add& add) {
+T reduce(std::span<const EdgeBoxRef> edges, bool parallel, const T& identity, const Add& add) {
   if (!parallel) {
-    T acc;
+    T acc = identity;
     for (const auto& e : edges) add(e, acc);
     return acc;
   }
   return tbb::parallel_deterministic_reduce(
-      tbb::blocked_range<size_t>(0, edges.size(), 4096), T(),
+      tbb::blocked_range<size_t>(0, edges.size(), 4096), identity,
       [&](const tbb::blocked_range<size_t>& r, T acc) {
         for (size_t i = r.begin(); i < r.end(); ++i) add(edges[i], acc);
         return acc;
@@ -70,7 +63,7 @@ int sah_split(std::span<EdgeBoxRef> edges, int buckets, int parallel_from) {
   // split) run in parallel: a box of exact minima and maxima (finite coordinates) and integer
   // counts do not depend on the order of their terms, so the split is the serial one.
   const bool parallel = n >= parallel_from;
-  const Box3 cb = reduce<Box3>(edges, parallel, [](const EdgeBoxRef& e, Box3& b) { b.expand(0.5 * (e.lo + e.hi)); });
+  const Box3 cb = reduce(edges, parallel, Box3(), [](const EdgeBoxRef& e, Box3& b) { b.expand(0.5 * (e.lo + e.hi)); });
   int axis = 0;
   cb.extent().maxCoeff(&axis);
   const double lo = cb.lo[axis], ext = cb.hi[axis] - cb.lo[axis];
@@ -88,15 +81,12 @@ int sah_split(std::span<EdgeBoxRef> edges, int buckets, int parallel_from) {
     const double c = 0.5 * (e.lo[axis] + e.hi[axis]);
     return std::clamp(int(B * ((c - lo) / ext)), 0, B - 1);
   };
-  const Buckets bk = reduce<Buckets>(edges, parallel, [&](const EdgeBoxRef& e, Buckets& b) {
-    if (b.cnt.empty()) b = Buckets(B);
+  const auto [cnt, box] = reduce(edges, parallel, Buckets(B), [&](const EdgeBoxRef& e, Buckets& b) {
     const int k = bucket_of(e);
     b.cnt[k]++;
     b.box[k].expand(e.lo);
     b.box[k].expand(e.hi);
   });
-  const std::vector<int> cnt = bk.cnt.empty() ? std::vector<int>(B, 0) : bk.cnt;
-  const std::vector<Box3> box = bk.box.empty() ? std::vector<Box3>(B) : bk.box;
   // Sweep: prefix from the left, suffix from the right.
   std::vector<double> left_cost(B, 0.0);
   std::vector<int> left_n(B, 0);
